@@ -170,7 +170,7 @@ class ControllerConfig:
     velocity_feedforward: bool = True  # joint velocity target from the trajectory's foot velocity (J⁻¹ v)
     gravity_compensation: bool = True  # stance feedforward τ = Jᵀ f, f = weight shared by stance feet
     heading_gain: float = 0.5  # step-length correction per rad of yaw error (left/right asymmetry)
-    lateral_gain: float = 0.5  # foot y shift per m of lateral drift, toward the path
+    lateral_gain: float = 0.5  # rad of heading set-point per m of lateral drift, back toward the path
     speed_gain: float = 0.0  # step-length correction per m/s of speed error (0 = open loop)
 
     def __post_init__(self) -> None:
@@ -274,3 +274,72 @@ def override(cfg: Any, assignments: list[str]) -> Any:
 
 def replace(cfg: Any, **changes: Any) -> Any:
     return dataclasses.replace(cfg, **changes)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Reward (paper Eq. 10–11) and state estimation
+# ---------------------------------------------------------------------------------------------------------
+
+REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Weights of the reward terms, Eq. (10); defaults are the paper's Eq. (11): A…E = −2, −20, −50, 25, −0.2.
+
+    Each weight multiplies an unweighted term of `cyberdog.core.rewards`; a weight of 0 turns its term off.
+    Penalties (speed, y_offset, fuselage, energy) must be ≤ 0 and the keep-moving bonus ≥ 0, so that a sign
+    slip cannot reward the robot for drifting. Stage 1 of the paper's training ignores energy (E = 0,
+    `STAGE1_REWARD`); stage 2 adds it (`STAGE2_REWARD`).
+    """
+
+    speed: float = -2.0  # A, per (m/s)², on r_v = (v_target − v_x)²
+    y_offset: float = -20.0  # B, per m², on r_yoffset = y²
+    fuselage: float = -50.0  # C, per m², on r_Fuselage stable = (z − z_nominal)²
+    keep_moving: float = 25.0  # D, on r_Keep moving = Ts / Tf (sums to D over a full episode)
+    energy: float = -0.2  # E, per J, on r_E = Σ_ij ∫|τ_ij · θ̇_ij| dt over the step (Eq. 7)
+    z_nominal: float = 0.30  # m, body height the fuselage term measures from (= RobotConfig.body_height)
+
+    @property
+    def weights(self) -> dict[str, float]:
+        """Weights by term name, in the order of Eq. (10)."""
+        return {n: getattr(self, n) for n in REWARD_TERM_NAMES}
+
+    def __post_init__(self) -> None:
+        for n in REWARD_TERM_NAMES:
+            v = getattr(self, n)
+            rule = ">= 0 and finite (a bonus)" if n == "keep_moving" else "<= 0 and finite (a penalty)"
+            ok = math.isfinite(v) and (v >= 0 if n == "keep_moving" else v <= 0)
+            _check(ok, f"RewardConfig.{n}", rule, v)
+        _check(0 < self.z_nominal <= 0.5 and math.isfinite(self.z_nominal), "RewardConfig.z_nominal",
+               "in (0, 0.5] m", self.z_nominal)
+
+
+STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0
+STAGE2_REWARD = RewardConfig()  # stage 2: Eq. (11) with the energy term, E = −0.2
+
+
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """Simulated IMU and the body-velocity Kalman filter (beyond the paper, which reads true states).
+
+    Sensor numbers are assumptions [G] typical of a MEMS IMU such as the Bosch BMI088 sampled at 1 kHz
+    (accelerometer noise density ≈ 160 µg/√Hz, gyroscope ≈ 0.014 °/s/√Hz, times √(500 Hz bandwidth)), with
+    the turn-on bias left after a standstill calibration. `noise=False` gives ideal sensors.
+    """
+
+    noise: bool = False  # add white noise and bias to the simulated IMU (False: ideal sensors)
+    accelerometer_noise_std: float = 0.05  # m/s², white noise per sample [G: ≈ 0.035 for a BMI088]
+    gyroscope_noise_std: float = 0.005  # rad/s, white noise per sample [G: ≈ 0.0055 for a BMI088]
+    accelerometer_bias_std: float = 0.05  # m/s², constant bias drawn at each reset [G: after calibration]
+    accelerometer_bias_walk: float = 0.001  # m/s² per √s, bias random walk [G]
+    gyroscope_bias_std: float = 0.002  # rad/s, constant bias drawn at each reset [G: after calibration]
+    gyroscope_bias_walk: float = 1e-4  # rad/s per √s, bias random walk [G]
+    leg_velocity_noise_std: float = 0.1  # m/s, leg-odometry velocity error (slip, contact timing): filter R [G]
+    process_noise_std: float = 0.5  # m/s², acceleration error per predict (noise, bias, attitude): filter Q [G]
+    initial_velocity_std: float = 0.1  # m/s, filter's initial uncertainty after reset [G]
+
+    def __post_init__(self) -> None:
+        _non_negative(self, "accelerometer_noise_std", "gyroscope_noise_std", "accelerometer_bias_std",
+                      "accelerometer_bias_walk", "gyroscope_bias_std", "gyroscope_bias_walk")
+        _positive(self, "leg_velocity_noise_std", "process_noise_std", "initial_velocity_std")

@@ -1,0 +1,36 @@
+"""Plain-text, Markdown, CSV and JSON output of result rows (lists of flat dicts)."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+
+def _fmt(v) -> str:
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def markdown_table(rows: list[dict], columns: list[str] | None = None) -> str:
+    """A Markdown table of `rows` (one dict per row), columns in the given or first row's order."""
+    if not rows:
+        return "(no rows)"
+    columns = columns or list(rows[0])
+    lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
+    lines += ["| " + " | ".join(_fmt(r.get(c, "")) for c in columns) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def write_rows(rows: list[dict], folder: Path, stem: str) -> None:
+    """Write rows as `<stem>.csv`, `<stem>.json` and `<stem>.md` in `folder`."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if rows:
+        with open(folder / f"{stem}.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    (folder / f"{stem}.json").write_text(json.dumps(rows, indent=2))
+    (folder / f"{stem}.md").write_text(markdown_table(rows) + "\n")

@@ -1,0 +1,137 @@
+"""One scripted walk: the trot controller drives the simulated CyberDog; energy and gait metrics are recorded.
+
+This is the experiment behind `evaluate.py baselines` and the trajectory comparison (paper Section 4.1):
+walk `duration` seconds at the commanded speed, integrate Eq. (7) at every physics step, and report speed,
+drift, posture and energy.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cyberdog.config import WalkConfig
+from cyberdog.control.trot import TrotController
+from cyberdog.core import energy as en
+from cyberdog.core.trajectories import FootTrajectory
+from cyberdog.sim.robot import Robot
+
+FALL_HEIGHT = 0.15  # m, body centre below this = fallen
+FALL_TILT = 0.8  # rad, |roll| or |pitch| above this = fallen
+CONTACT_CHECK_EVERY = 10  # physics steps between checks of which links touch the ground
+
+
+@dataclass
+class WalkResult:
+    """Metrics of one walk (SI units) and, if recorded, its traces at the physics rate."""
+
+    speed_command: float  # m/s
+    duration: float  # s walked (shorter than asked if the robot fell)
+    fell: bool
+    mean_speed: float  # m/s, forward, over the last half of the walk (last 5 s of 10 s)
+    lateral_drift: float  # m, |y| at the end
+    height_min: float  # m, body centre
+    height_max: float  # m
+    max_roll: float  # rad, |roll|
+    max_pitch: float  # rad, |pitch|
+    distance: float  # m, forward displacement
+    energy: float  # J, Eq. (7) Σ∫|τ·ω|dt over the walk
+    energy_per_joint: np.ndarray  # (12,) J
+    electrical_energy: float  # J, with copper loss, friction loss and driver efficiency
+    cost_of_transport: float  # E / (m g d)
+    peak_torque: float  # N·m, max |τ| over joints and time
+    peak_joint_speed: float  # rad/s
+    non_foot_contacts: list  # link names other than feet that touched the ground
+    traces: dict = field(default_factory=dict)  # t, tau, dq, q, power, base_position, contacts
+
+    @property
+    def energy_per_100m(self) -> float:
+        """J per 100 m of forward travel."""
+        return en.energy_per_100m(self.energy, self.distance)
+
+    @property
+    def speed_ok(self) -> bool:
+        """Mean speed within ±5 % of the command (the issues' acceptance band)."""
+        return abs(self.mean_speed - self.speed_command) <= 0.05 * self.speed_command
+
+    def summary(self) -> dict:
+        return {
+            "speed_command_mps": self.speed_command, "mean_speed_mps": self.mean_speed,
+            "lateral_drift_m": self.lateral_drift, "height_min_m": self.height_min,
+            "height_max_m": self.height_max, "max_roll_rad": self.max_roll, "max_pitch_rad": self.max_pitch,
+            "fell": self.fell, "duration_s": self.duration, "distance_m": self.distance,
+            "energy_J": self.energy, "energy_per_100m_kJ": self.energy_per_100m / 1e3,
+            "electrical_energy_J": self.electrical_energy, "cost_of_transport": self.cost_of_transport,
+            "peak_torque_Nm": self.peak_torque, "peak_joint_speed_radps": self.peak_joint_speed,
+            "non_foot_contacts": ",".join(self.non_foot_contacts), "speed_ok": self.speed_ok,
+        }
+
+
+def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | None = None,
+         robot: Robot | None = None, record: bool = False) -> WalkResult:
+    """Walk `duration` s at `cfg.gait.speed` with the trot controller; reuse `robot` if given."""
+    if not duration > 0:
+        raise ValueError(f"duration must be > 0 s, got {duration!r}")
+    own_robot = robot is None
+    robot = robot or Robot(cfg.robot, cfg.actuator, cfg.sim)
+    try:
+        return _walk(cfg, duration, TrotController(cfg, trajectory), robot, record)
+    finally:
+        if own_robot:
+            robot.close()
+
+
+def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, record: bool) -> WalkResult:
+    dt = cfg.sim.physics_dt
+    n_steps = int(round(duration / dt))
+    robot.reset()
+    ctrl.reset()
+    foot_links = set(robot.foot_link_names)
+    n_rec = n_steps if record else 0
+    tau_log, dq_log = np.zeros((n_steps, 12)), np.zeros((n_steps, 12))
+    q_log, pos_log = np.zeros((n_rec, 12)), np.zeros((n_rec, 3))
+    contact_log = np.zeros((n_rec, 4), dtype=bool)
+    vx_log, rpy_log, z_log = np.zeros(n_steps), np.zeros((n_steps, 3)), np.zeros(n_steps)
+    start = robot.read_state().base_position.copy()
+    bad_contacts: set[str] = set()
+    fell = False
+    steps_done = 0
+    for k in range(n_steps):
+        s = robot.read_state()
+        yaw, y = s.base_rpy[2], s.base_position[1] - start[1]
+        tau_cmd = ctrl.torque(k * dt, s.q, s.dq, yaw=yaw, lateral_offset=y,
+                              forward_speed=s.base_linear_velocity_world[0])
+        tau = robot.step(tau_cmd)
+        tau_log[k], dq_log[k] = tau, s.dq
+        vx_log[k], rpy_log[k], z_log[k] = s.base_linear_velocity_world[0], s.base_rpy, s.base_position[2]
+        if record:
+            q_log[k], pos_log[k] = s.q, s.base_position
+            contact_log[k] = robot.foot_contacts()
+        if k % CONTACT_CHECK_EVERY == 0:
+            bad_contacts |= robot.ground_contact_links() - foot_links
+        steps_done = k + 1
+        if s.base_position[2] < FALL_HEIGHT or np.max(np.abs(s.base_rpy[:2])) > FALL_TILT:
+            fell = True
+            break
+    end = robot.read_state().base_position
+    n = steps_done
+    tau_log, dq_log, vx_log, rpy_log, z_log = tau_log[:n], dq_log[:n], vx_log[:n], rpy_log[:n], z_log[:n]
+    e_joint = en.joint_energy(tau_log, dq_log, dt)
+    distance = float(end[0] - start[0])
+    e_elec = float(np.sum(en.electrical_power(tau_log, dq_log, cfg.actuator, cfg.energy)) * dt)
+    mass = cfg.robot.total_mass
+    result = WalkResult(
+        speed_command=ctrl.speed, duration=n * dt, fell=fell,
+        mean_speed=float(np.mean(vx_log[n // 2:])) if n else 0.0,
+        lateral_drift=float(abs(end[1] - start[1])),
+        height_min=float(z_log.min()), height_max=float(z_log.max()),
+        max_roll=float(np.max(np.abs(rpy_log[:, 0]))), max_pitch=float(np.max(np.abs(rpy_log[:, 1]))),
+        distance=distance, energy=float(e_joint.sum()), energy_per_joint=e_joint, electrical_energy=e_elec,
+        cost_of_transport=en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, distance),
+        peak_torque=float(np.max(np.abs(tau_log))), peak_joint_speed=float(np.max(np.abs(dq_log))),
+        non_foot_contacts=sorted(bad_contacts))
+    if record:
+        result.traces = {"t": np.arange(n) * dt, "tau": tau_log, "dq": dq_log, "q": q_log[:n],
+                         "power": np.abs(tau_log * dq_log), "base_position": pos_log[:n],
+                         "contacts": contact_log[:n]}
+    return result

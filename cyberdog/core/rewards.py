@@ -1,0 +1,88 @@
+"""Reward of the paper's Eq. (10)–(11): one small named function per term, weights in `RewardConfig`. Pure Python.
+
+    r_t = A·r_v + B·r_yoffset + C·r_Fuselage stable + D·r_Keep moving + E·r_E        (10)
+    r_t = −2·r_v − 20·r_yoffset − 50·r_Fuselage stable + 25·r_Keep moving − 0.2·r_E   (11)
+
+The functions here return the **unweighted** terms (all ≥ 0); `weighted_terms` multiplies them by the weights
+of a `RewardConfig`, and `total_reward` is the sum of exactly those weighted terms, so an environment can
+report them in `info` and a test can check that they add up to the reward. A weight of 0 turns a term off
+(the paper's stage 1 sets the energy weight E = 0).
+"""
+from __future__ import annotations
+
+import math
+
+from cyberdog.config import REWARD_TERM_NAMES, RewardConfig
+
+
+def speed_term(v_x: float, v_target: float) -> float:
+    """r_v = (v_target − v_x)², (m/s)²: squared error of the forward body speed.
+
+    The paper writes r_v = (v0 − v_x)² but calls v0 the measured and v_x the target speed; here v_x is the
+    measured forward speed and v_target the commanded one (the square makes the order irrelevant).
+    """
+    return (v_target - v_x) ** 2
+
+
+def y_offset_term(y: float) -> float:
+    """r_yoffset = y², m²: sideways drift of the body from the straight line it should walk along."""
+    return y ** 2
+
+
+def fuselage_term(z: float, z_nominal: float) -> float:
+    """r_Fuselage stable = ẑ² = (z − z_nominal)², m²: the body's height deviation (trunk vibration)."""
+    return (z - z_nominal) ** 2
+
+
+def keep_moving_term(sample_time: float, episode_time: float) -> float:
+    """r_Keep moving = Ts / Tf: agent sample time over episode length; summed over a full episode it is 1.
+
+    A constant bonus per step survived, which rewards not falling (the episode ends when the robot falls).
+    """
+    if not (episode_time > 0 and math.isfinite(episode_time)):
+        raise ValueError(f"episode_time (Tf) must be > 0 and finite, got {episode_time!r}")
+    if not (sample_time >= 0 and math.isfinite(sample_time)):
+        raise ValueError(f"sample_time (Ts) must be >= 0 and finite, got {sample_time!r}")
+    return sample_time / episode_time
+
+
+def energy_term(step_energy_J: float) -> float:
+    """r_E, J: mechanical energy spent over the agent step, Σ_ij ∫|τ_ij · θ̇_ij| dt (Eq. 7 over one step).
+
+    The paper's text writes ∫τ·θ̇ dt over the 10 s episode; the absolute value of Eq. (7) is used so that
+    negative (braking) work is not counted as a gain. The integral itself is computed by the caller over
+    the physics steps of the agent step (the energy layer), and passed in here.
+    """
+    if not (step_energy_J >= 0 and math.isfinite(step_energy_J)):
+        raise ValueError(f"step_energy_J must be >= 0 and finite, got {step_energy_J!r}")
+    return float(step_energy_J)
+
+
+def reward_terms(*, v_x: float, v_target: float, y: float, z: float, z_nominal: float,
+                 sample_time: float, episode_time: float, step_energy_J: float) -> dict[str, float]:
+    """The five unweighted terms of Eq. (10), keyed by `REWARD_TERM_NAMES` (speed, y_offset, fuselage,
+    keep_moving, energy), in that order."""
+    terms = {
+        "speed": speed_term(v_x, v_target),
+        "y_offset": y_offset_term(y),
+        "fuselage": fuselage_term(z, z_nominal),
+        "keep_moving": keep_moving_term(sample_time, episode_time),
+        "energy": energy_term(step_energy_J),
+    }
+    return {n: float(terms[n]) for n in REWARD_TERM_NAMES}
+
+
+def weighted_terms(terms: dict[str, float], cfg: RewardConfig) -> dict[str, float]:
+    """Each term times its weight (A…E of Eq. 10); the values sum to the reward (`total_reward`)."""
+    missing = [n for n in REWARD_TERM_NAMES if n not in terms]
+    unknown = sorted(set(terms) - set(REWARD_TERM_NAMES))
+    if missing or unknown:
+        raise ValueError(f"reward terms must be exactly {list(REWARD_TERM_NAMES)}; "
+                         f"missing {missing}, unknown {unknown}")
+    weights = cfg.weights
+    return {n: weights[n] * terms[n] for n in REWARD_TERM_NAMES}
+
+
+def total_reward(terms: dict[str, float], cfg: RewardConfig) -> float:
+    """r_t of Eq. (10): the sum, in the order of Eq. (10), of `weighted_terms(terms, cfg)`."""
+    return float(sum(weighted_terms(terms, cfg).values()))
