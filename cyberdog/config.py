@@ -343,3 +343,69 @@ class EstimatorConfig:
         _non_negative(self, "accelerometer_noise_std", "gyroscope_noise_std", "accelerometer_bias_std",
                       "accelerometer_bias_walk", "gyroscope_bias_std", "gyroscope_bias_walk")
         _positive(self, "leg_velocity_noise_std", "process_noise_std", "initial_velocity_std")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The learning environment (paper Section 3, Tables 3-4)
+# ---------------------------------------------------------------------------------------------------------
+
+ACTION_MODES = ("torque", "residual")
+OBSERVATION_SOURCES = ("true", "estimated")
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
+
+    walk: WalkConfig = field(default_factory=WalkConfig)  # robot, actuator, sim, gait, PID, controller, energy
+    reward: RewardConfig = field(default_factory=RewardConfig)  # Eq. (11) weights (stage 2 by default)
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+    control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)
+    episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
+    action_mode: str = "residual"  # "torque": the paper's, the action is the joint torque; "residual": added to the trot controller's
+    action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit)
+    joint_range_deg: float = 45.0  # ± around the standing pose (Table 4 "joint control range")
+    joint_stop_stiffness: float = 200.0  # N·m/rad, virtual end stop beyond the joint range
+    joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
+    target_speed: float = 1.0  # m/s, commanded forward speed v_x (fixed unless a range is given)
+    target_speed_range: Tuple[float, ...] = ()  # (low, high) m/s: sample the command per episode; () = fixed
+    observation_source: str = "true"  # "true" simulator state, or "estimated" body velocity (Kalman filter)
+    joint_noise: bool = False  # add encoder noise to observed joint angles and velocities
+    joint_angle_noise_std: float = 0.002  # rad [G]
+    joint_velocity_noise_std: float = 0.05  # rad/s [G]
+    latency: float = 0.0  # s, actuation latency (torque reaches the joint this much later); 0 = off
+    mass_scale_range: Tuple[float, ...] = ()  # (low, high): scale every link mass per episode; () = off
+    fall_height: float = 0.15  # m, body centre below this = fallen
+    fall_tilt_deg: float = 45.0  # |roll| or |pitch| above this = fallen
+    estimator_dt: float = 0.005  # s, Kalman filter period (IMU averaged over it), multiple of physics_dt
+
+    @property
+    def decimation(self) -> int:
+        """Physics steps per agent step."""
+        return int(round(self.control_dt / self.walk.sim.physics_dt))
+
+    @property
+    def max_episode_steps(self) -> int:
+        return int(round(self.episode_time / self.control_dt))
+
+    def __post_init__(self) -> None:
+        _positive(self, "control_dt", "episode_time", "action_scale", "joint_range_deg", "fall_height",
+                  "fall_tilt_deg", "estimator_dt")
+        _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping", "latency",
+                      "joint_angle_noise_std", "joint_velocity_noise_std")
+        dt = self.walk.sim.physics_dt
+        _check(abs(self.control_dt / dt - round(self.control_dt / dt)) < 1e-6 and self.control_dt >= dt,
+               "EnvConfig.control_dt", f"a whole multiple of physics_dt ({dt} s)", self.control_dt)
+        _check(abs(self.estimator_dt / dt - round(self.estimator_dt / dt)) < 1e-6 and self.estimator_dt >= dt,
+               "EnvConfig.estimator_dt", f"a whole multiple of physics_dt ({dt} s)", self.estimator_dt)
+        _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
+               self.action_mode)
+        _check(self.observation_source in OBSERVATION_SOURCES, "EnvConfig.observation_source",
+               f"one of {OBSERVATION_SOURCES}", self.observation_source)
+        r = self.target_speed_range
+        _check(len(r) == 0 or (len(r) == 2 and 0 <= r[0] <= r[1]), "EnvConfig.target_speed_range",
+               "() or (low, high) with 0 <= low <= high (m/s)", r)
+        m = self.mass_scale_range
+        _check(len(m) == 0 or (len(m) == 2 and 0 < m[0] <= m[1]), "EnvConfig.mass_scale_range",
+               "() or (low, high) with 0 < low <= high", m)
+        _check(self.joint_range_deg <= 180, "EnvConfig.joint_range_deg", "in (0, 180]", self.joint_range_deg)
