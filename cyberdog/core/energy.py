@@ -1,0 +1,237 @@
+"""Energy model: the paper's mechanical energy (Eq. 7), an electrical model beyond it, and the battery (Eq. 13).
+
+Pure numpy. Arrays of joint values have 12 joints on the last axis, leg-major (LF abad, hip, knee, RF …).
+
+Paper (Section 2.2). Mechanical power per joint P_ij = |τ_ij · θ̇_ij| (W) and E = Σ_ij ∫ P_ij dt (J), Eq. (7).
+Negative work (a joint braking) counts as spent, as the absolute value says.
+
+Beyond the paper (its own omissions, Section 4.2: "thermal power and joint friction loss"). Per joint:
+    τ_m   = τ + b·ω + f_c·sign(ω)  if friction is NOT simulated (the real motor must also overcome it);
+            τ                      if friction IS simulated (ActuatorConfig.friction): the applied torque
+                                   already includes what overcomes friction, adding it again would count twice;
+    P_out = τ_m·ω + (τ_m / (N·K_T))²·R    shaft power + copper loss (motor current i = τ_m / (N·K_T));
+    P_in  = P_out / η if P_out > 0, P_out·η if P_out < 0 (driver efficiency η both ways);
+    P_in  clipped to ≥ 0 per joint unless `regeneration` (no energy flows back, nor between joints: an upper
+          bound; with regeneration the signed powers are summed on the bus and may recharge the pack).
+    Robot: P_el = Σ_joints P_in + idle_power.
+Constants: gear ratio N, K_T, R, b, f_c from ActuatorConfig (Xiaomi's controller files; K_T and R are Mini
+Cheetah values, low confidence); η, idle power, pack capacity from EnergyConfig (assumptions [G] there).
+
+Integration: the rectangle rule at the physics step dt, E += P_k·dt with τ_k the torque applied during step k
+and ω_k the joint speed read at the same step; exact for torques held constant over a step (how the
+simulation applies them) and first-order accurate otherwise.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, EnergyConfig
+
+N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)  # 12
+J_PER_WH = 3600.0
+
+
+def _joint_arrays(tau: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:
+    tau, omega = np.asarray(tau, dtype=float), np.asarray(omega, dtype=float)
+    if tau.shape != omega.shape or tau.shape[-1:] != (N_JOINTS,):
+        raise ValueError(f"tau and omega must have the same shape (..., {N_JOINTS}), got {tau.shape}, "
+                         f"{omega.shape}")
+    return tau, omega
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Paper: mechanical power and energy, Eq. (7)
+# ---------------------------------------------------------------------------------------------------------
+
+def mechanical_power(tau: Any, omega: Any) -> np.ndarray:
+    """Eq. (7): per-joint mechanical power |τ·ω|, W, shape of the inputs (..., 12)."""
+    tau, omega = _joint_arrays(tau, omega)
+    return np.abs(tau * omega)
+
+
+def joint_energy(tau: Any, omega: Any, dt: float) -> np.ndarray:
+    """Eq. (7): (12,) energy per joint, J, of samples tau, omega (n, 12) taken every dt s (rectangle rule)."""
+    _check_dt(dt)
+    return mechanical_power(tau, omega).reshape(-1, N_JOINTS).sum(axis=0) * dt
+
+
+def per_leg(joint_values: Any) -> np.ndarray:
+    """(..., 4) sums over each leg's 3 joints (LF, RF, LH, RH) of (..., 12) values."""
+    v = np.asarray(joint_values, dtype=float)
+    return v.reshape(v.shape[:-1] + (len(LEG_NAMES), len(JOINT_NAMES))).sum(axis=-1)
+
+
+def per_joint_type(joint_values: Any) -> np.ndarray:
+    """(..., 3) sums over the 4 legs per joint type (abad, hip, knee) of (..., 12) values."""
+    v = np.asarray(joint_values, dtype=float)
+    return v.reshape(v.shape[:-1] + (len(LEG_NAMES), len(JOINT_NAMES))).sum(axis=-2)
+
+
+def energy_per_100m(energy_J: float, distance_m: float) -> float:
+    """Energy per 100 m travelled, J (the paper's prototype walks 100 m, Section 4.2)."""
+    _check_distance(distance_m)
+    return energy_J * 100.0 / distance_m
+
+
+def cost_of_transport(energy_J: float, mass_kg: float, gravity: float, distance_m: float) -> float:
+    """Dimensionless cost of transport E / (m·g·d)."""
+    _check_distance(distance_m)
+    if not (mass_kg > 0 and gravity > 0):
+        raise ValueError(f"mass and gravity must be > 0, got {mass_kg!r} kg, {gravity!r} m/s²")
+    return energy_J / (mass_kg * gravity * distance_m)
+
+
+def _check_dt(dt: float) -> None:
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be > 0 s and finite, got {dt!r}")
+
+
+def _check_distance(distance_m: float) -> None:
+    if not (np.isfinite(distance_m) and distance_m > 0):
+        raise ValueError(f"distance must be > 0 m and finite, got {distance_m!r}")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Beyond the paper: electrical power (copper loss, friction, driver efficiency, idle power)
+# ---------------------------------------------------------------------------------------------------------
+
+def friction_torque(omega: Any, actuator: ActuatorConfig) -> np.ndarray:
+    """Joint friction torque b·ω + f_c·sign(ω), N·m (viscous + Coulomb, ActuatorConfig)."""
+    omega = np.asarray(omega, dtype=float)
+    return actuator.viscous_damping * omega + actuator.dry_friction * np.sign(omega)
+
+
+def copper_loss(tau: Any, actuator: ActuatorConfig) -> np.ndarray:
+    """Winding (Joule) loss (τ / (N·K_T))²·R, W, for joint torque τ (N·m) through gear ratio N."""
+    current = np.asarray(tau, dtype=float) / (actuator.gear_ratio * actuator.motor_kt)  # A
+    return current * current * actuator.motor_resistance
+
+
+def motor_torque(tau: Any, omega: Any, actuator: ActuatorConfig) -> np.ndarray:
+    """Torque the real actuator delivers: τ plus friction when the simulation did not model friction."""
+    tau, omega = _joint_arrays(tau, omega)
+    return tau if actuator.friction else tau + friction_torque(omega, actuator)
+
+
+def electrical_joint_power(tau: Any, omega: Any, actuator: ActuatorConfig, energy: EnergyConfig) -> np.ndarray:
+    """(..., 12) power drawn from the bus per joint, W (see the module docstring); idle power excluded."""
+    tau_m = motor_torque(tau, omega, actuator)
+    p_out = tau_m * np.asarray(omega, dtype=float) + copper_loss(tau_m, actuator)
+    eta = energy.driver_efficiency
+    p_in = np.where(p_out > 0, p_out / eta, p_out * eta)
+    return p_in if energy.regeneration else np.maximum(p_in, 0.0)
+
+
+def electrical_power(tau: Any, omega: Any, actuator: ActuatorConfig, energy: EnergyConfig) -> np.ndarray:
+    """(...) total electrical power of the robot, W: Σ joints + idle_power."""
+    return electrical_joint_power(tau, omega, actuator, energy).sum(axis=-1) + energy.idle_power
+
+
+def electrical_energy(tau: Any, omega: Any, dt: float, actuator: ActuatorConfig, energy: EnergyConfig) -> float:
+    """Electrical energy, J, of samples tau, omega (n, 12) taken every dt s (rectangle rule)."""
+    _check_dt(dt)
+    return float(np.sum(electrical_power(tau, omega, actuator, energy)) * dt)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Battery (paper Section 4.2, Eq. 13)
+# ---------------------------------------------------------------------------------------------------------
+
+def battery_capacity_J(cfg: EnergyConfig) -> float:
+    """Pack energy at full charge, J (EnergyConfig.battery_capacity_wh, an assumption)."""
+    return cfg.battery_capacity_wh * J_PER_WH
+
+
+def battery_percent_used(energy_electrical_J: float, cfg: EnergyConfig) -> float:
+    """Share of the full pack, %, that `energy_electrical_J` drains."""
+    return 100.0 * energy_electrical_J / battery_capacity_J(cfg)
+
+
+def power_consumption(initial_percent: float, remaining_percent: float) -> float:
+    """Eq. (13): P_C = E_f − E_n, percentage points of charge used (E_f the initial, E_n the remaining)."""
+    return initial_percent - remaining_percent
+
+
+def remaining_percent(energy_electrical_J: float, cfg: EnergyConfig) -> float:
+    """E_n, %, after drawing `energy_electrical_J` from a pack starting at E_f = 100·usable_fraction (95 %)."""
+    return 100.0 * cfg.usable_fraction - battery_percent_used(energy_electrical_J, cfg)
+
+
+def range_at_full_charge(energy_J: float, distance_m: float, cfg: EnergyConfig) -> float:
+    """Distance, m, walkable on the usable capacity at the measured rate: distance / energy × usable energy.
+
+    Compare: the paper's CyberDog walked 3600 m (cycloid) and 3924 m (learned trajectory) at 1 m/s.
+    """
+    _check_distance(distance_m)
+    if not energy_J > 0:
+        raise ValueError(f"energy must be > 0 J to give a range, got {energy_J!r}")
+    return distance_m / energy_J * cfg.usable_fraction * battery_capacity_J(cfg)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Accumulator used inside the simulation loop
+# ---------------------------------------------------------------------------------------------------------
+
+class EnergyMeter:
+    """Accumulates Eq. (7) per joint at every physics step (rectangle rule at dt) and, if `actuator` and
+    `energy` configs are given, the electrical energy too. `record_power` keeps the trace P(t) = Σ_j |τ_j ω_j|
+    (W) and its sample times (s, the start of each step)."""
+
+    def __init__(self, dt: float, record_power: bool = False, actuator: ActuatorConfig | None = None,
+                 energy: EnergyConfig | None = None) -> None:
+        _check_dt(dt)
+        if (actuator is None) != (energy is None):
+            raise ValueError("give both actuator and energy configs for electrical energy, or neither")
+        self.dt = float(dt)
+        self.record_power = record_power
+        self.actuator, self.energy = actuator, energy
+        self.reset()
+
+    def reset(self) -> None:
+        self.joint_energy_J = np.zeros(N_JOINTS)  # J, mechanical, Eq. (7)
+        self.electrical_energy_J = 0.0  # J, stays 0 without actuator/energy configs
+        self.steps = 0
+        self._power: list[float] = []
+
+    def update(self, tau: Any, omega: Any) -> float:
+        """Add one physics step of torques tau (12,) N·m and joint speeds omega (12,) rad/s; returns P, W."""
+        p = mechanical_power(tau, omega)
+        if p.shape != (N_JOINTS,):
+            raise ValueError(f"EnergyMeter.update takes one step of shape ({N_JOINTS},), got {p.shape}")
+        self.joint_energy_J += p * self.dt
+        if self.actuator is not None:
+            self.electrical_energy_J += float(electrical_power(tau, omega, self.actuator, self.energy)) * self.dt
+        total = float(p.sum())
+        if self.record_power:
+            self._power.append(total)
+        self.steps += 1
+        return total
+
+    @property
+    def time_s(self) -> float:
+        return self.steps * self.dt
+
+    @property
+    def total_energy_J(self) -> float:
+        """Eq. (7) summed over the 12 joints, J."""
+        return float(self.joint_energy_J.sum())
+
+    @property
+    def leg_energy_J(self) -> np.ndarray:
+        return per_leg(self.joint_energy_J)
+
+    @property
+    def joint_type_energy_J(self) -> np.ndarray:
+        return per_joint_type(self.joint_energy_J)
+
+    @property
+    def power_trace(self) -> np.ndarray:
+        """(n,) P(t), W (empty unless record_power)."""
+        return np.asarray(self._power)
+
+    @property
+    def power_times(self) -> np.ndarray:
+        """(n,) start time of each recorded step, s."""
+        return np.arange(len(self._power)) * self.dt

@@ -1,0 +1,80 @@
+"""Joint-space PID (paper Figure 8) over the 12 joints, with anti-windup. Pure numpy.
+
+Joint order leg-major (LF abad, hip, knee, RF abad, …; `cyberdog.config.JOINT_NAMES`). Run once per physics
+step of length dt:
+
+    e = q_target − q,  ė = dq_target − dq
+    I ← clamp(I + ki·e·dt, ±integral_limit)     (skipped per joint while the output saturates, see below)
+    τ = clamp(kp·e + I + kd·ė, ±torque_limit)
+
+Anti-windup: the integral term is kept as a torque (N·m) and clamped to ±integral_limit; and a joint does not
+integrate while its output, computed with the previous integral, is at or past ±torque_limit in the
+direction of its error (conditional integration), so that a long saturation does not store torque that would
+overshoot once the error shrinks.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from cyberdog.config import JOINT_NAMES, LEG_NAMES, PIDConfig
+
+N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)  # 12
+
+
+def per_joint(gain: Any, name: str = "gain") -> np.ndarray:
+    """(12,) array from a scalar, a per-joint-type triple (abad, hip, knee) tiled over the 4 legs, or (12,)."""
+    g = np.asarray(gain, dtype=float)
+    if g.ndim == 0:
+        g = np.full(N_JOINTS, float(g))
+    elif g.shape == (len(JOINT_NAMES),):
+        g = np.tile(g, len(LEG_NAMES))
+    elif g.shape != (N_JOINTS,):
+        raise ValueError(f"{name} must be a scalar, 3 values (abad, hip, knee) or 12 values, got shape {g.shape}")
+    if not np.all(np.isfinite(g)) or np.any(g < 0):
+        raise ValueError(f"{name} must be non-negative and finite, got {g.tolist()}")
+    return g
+
+
+class JointPID:
+    """PID torque for 12 joints; gains in N·m/rad (kp), N·m/(rad·s) (ki), N·m·s/rad (kd)."""
+
+    def __init__(self, kp: Any, ki: Any, kd: Any, integral_limit: float, dt: float,
+                 torque_limit: float) -> None:
+        self.kp = per_joint(kp, "kp")
+        self.ki = per_joint(ki, "ki")
+        self.kd = per_joint(kd, "kd")
+        self.integral_limit = per_joint(integral_limit, "integral_limit")  # N·m
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be > 0 s and finite, got {dt!r}")
+        if not torque_limit > 0:  # np.inf allowed: no saturation
+            raise ValueError(f"torque_limit must be > 0 N·m, got {torque_limit!r}")
+        self.dt = float(dt)  # s
+        self.torque_limit = float(torque_limit)  # N·m
+        self.integral = np.zeros(N_JOINTS)  # N·m, the integral term ki·∫e dt
+
+    @classmethod
+    def from_config(cls, pid_cfg: PIDConfig, dt: float, torque_limit: float) -> "JointPID":
+        """Gains per joint type from `PIDConfig`, physics step dt (s), torque clip (N·m, ActuatorConfig)."""
+        return cls(pid_cfg.kp, pid_cfg.ki, pid_cfg.kd, pid_cfg.integral_limit, dt, torque_limit)
+
+    def reset(self) -> None:
+        """Clear the integral (start of an episode or walk)."""
+        self.integral[:] = 0.0
+
+    def torque(self, q_target: Any, q: Any, dq_target: Any, dq: Any) -> np.ndarray:
+        """(12,) joint torque, N·m, for joint targets and measurements (rad, rad/s); advances the integral."""
+        arrays = [np.asarray(a, dtype=float) for a in (q_target, q, dq_target, dq)]
+        for name, a in zip(("q_target", "q", "dq_target", "dq"), arrays):
+            if a.shape != (N_JOINTS,):
+                raise ValueError(f"{name} must have shape ({N_JOINTS},), got {a.shape}")
+        q_target, q, dq_target, dq = arrays
+        error = q_target - q  # rad
+        error_rate = dq_target - dq  # rad/s
+        pd = self.kp * error + self.kd * error_rate
+        unclipped = pd + self.integral
+        saturated = (np.abs(unclipped) >= self.torque_limit) & (np.sign(unclipped) == np.sign(error))
+        step = np.where(saturated, 0.0, self.ki * error * self.dt)
+        self.integral = np.clip(self.integral + step, -self.integral_limit, self.integral_limit)
+        return np.clip(pd + self.integral, -self.torque_limit, self.torque_limit)
