@@ -1,0 +1,70 @@
+"""Joint actuator model: torque clip, torque–speed envelope and joint friction. Pure numpy.
+
+PyBullet does not enforce the URDF effort or velocity limits under TORQUE_CONTROL (measured, see
+`shared/robot/NOTES.md`), so the limits of the CyberDog's actuators are applied here, in one place, before
+the torque reaches the simulator.
+
+Sources (parameter file `shared/robot/cyberdog1_parameters.yaml`):
+- torque command limit 25 N·m: the paper's Table 4 (Xiaomi's software limit is 23.9994 N·m [X]);
+- torque–speed envelope: full torque up to n1 = 11.4145 rad/s, falling linearly to zero at n2 = 20.9136 rad/s
+  (joint speed; `cyberdog.hpp` [X]); it limits the torque only while the motor drives the joint
+  (motoring, τ·ω > 0); a braking torque (τ·ω < 0) is only clipped;
+- joint friction: viscous 0.01 N·m·s/rad and dry (Coulomb) 0.246 N·m [X], off by default because the
+  paper ignores it (its Section 2).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cyberdog.config import ActuatorConfig
+
+DRY_FRICTION_SMOOTHING = 0.01  # rad/s: the Coulomb term is dry_friction · tanh(ω / this), smooth through 0
+
+
+class ActuatorModel:
+    """Turns joint torque commands into the torques the 12 actuators produce, and their friction.
+
+    Works on arrays of any shape (normally (12,)); inputs are not modified.
+    """
+
+    def __init__(self, config: ActuatorConfig):
+        self.config = config
+        self.torque_limit = float(config.torque_limit)
+        self._n1 = float(config.full_torque_speed)
+        self._n2 = float(config.zero_torque_speed)
+
+    def torque_envelope(self, joint_velocity: np.ndarray) -> np.ndarray:
+        """Largest |τ| (N·m) available while motoring at joint speed ω: torque_limit up to full_torque_speed,
+        linearly down to 0 at zero_torque_speed, 0 beyond ([X] n1, n2)."""
+        speed = np.abs(np.asarray(joint_velocity, dtype=float))
+        fraction = np.minimum(np.maximum((self._n2 - speed) / (self._n2 - self._n1), 0.0), 1.0)
+        return self.torque_limit * fraction
+
+    def motor_torque(self, torque_command: np.ndarray, joint_velocity: np.ndarray) -> np.ndarray:
+        """Torque (N·m) the motors produce for a command at joint velocities ω (rad/s).
+
+        1. clip to ±torque_limit;
+        2. if `torque_speed_curve`: where the motor drives the joint (τ·ω > 0), limit |τ| to
+           `torque_envelope(ω)`; braking torques keep the clipped value.
+        """
+        limit = self.torque_limit
+        tau = np.minimum(np.maximum(np.asarray(torque_command, dtype=float), -limit), limit)  # np.clip is slower
+        if self.config.torque_speed_curve:
+            omega = np.asarray(joint_velocity, dtype=float)
+            envelope = self.torque_envelope(omega)
+            tau = np.where(tau * omega > 0.0, np.minimum(np.maximum(tau, -envelope), envelope), tau)
+        return tau
+
+    def friction_torque(self, joint_velocity: np.ndarray) -> np.ndarray:
+        """Joint friction torque (N·m), opposing motion: −(b·ω + f_dry·tanh(ω / 0.01 rad/s)) with
+        b = viscous_damping and f_dry = dry_friction ([X] cyberdog.hpp); zeros when `friction` is off."""
+        omega = np.asarray(joint_velocity, dtype=float)
+        if not self.config.friction:
+            return np.zeros_like(omega)
+        c = self.config
+        return -(c.viscous_damping * omega + c.dry_friction * np.tanh(omega / DRY_FRICTION_SMOOTHING))
+
+    def joint_torque(self, torque_command: np.ndarray, joint_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(motor torque, motor torque + friction torque): what the motors produce and what acts on the joints."""
+        motor = self.motor_torque(torque_command, joint_velocity)
+        return motor, motor + self.friction_torque(joint_velocity)

@@ -1,0 +1,290 @@
+"""The CyberDog in its own PyBullet world: loading, joint map, actuator model, torque stepping, state reads.
+
+One `Robot` owns one `BulletClient` (never the global connection), a ground plane and the robot. It is the
+only place in the project where pybullet is called. Facts it relies on (measured, `shared/robot/NOTES.md`):
+
+- TORQUE_CONTROL lasts for ONE stepSimulation, and repeated calls within a step add up: `step` applies the
+  torque exactly once and steps once. The default velocity motors are disabled at load.
+- PyBullet enforces neither the URDF effort nor velocity limits under torque control: the clip and the
+  torque–speed envelope are applied by `cyberdog.core.actuator.ActuatorModel`.
+- getJointStates reports no applied torque under TORQUE_CONTROL: `step` returns the motor torque it applied.
+- The URDF is loaded with URDF_USE_INERTIA_FROM_FILE (otherwise inertia is recomputed from the collision
+  shapes) and reset by setting state, not by reloading (0.5 s).
+- PyBullet's "base pose" (get/resetBasePositionAndOrientation, getBaseVelocity) is the pose of the trunk's
+  INERTIAL frame: its centre of mass, rotated onto the principal axes of inertia (about 1.1 deg of pitch for
+  this trunk). Every base pose and velocity in this class is converted to the trunk's URDF link frame (the
+  body frame of `cyberdog.core.kinematics`), both when read and when reset.
+
+Friction: Bullet multiplies the two bodies' friction coefficients, so every robot link gets lateral friction
+1.0 and the plane gets `SimConfig.ground_friction`; the foot–ground coefficient is then exactly that value.
+All arrays are numpy, SI units; joint arrays are (12,) in the order LF, RF, LH, RH × abad, hip, knee.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pybullet
+import pybullet_data
+from pybullet_utils.bullet_client import BulletClient
+
+from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig, SimConfig
+from cyberdog.core.actuator import ActuatorModel
+from cyberdog.core.kinematics import standing_joint_angles
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+SPAWN_CLEARANCE = 0.002  # m, default base height above robot.body_height so the feet start just off the ground
+N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """One snapshot of the robot, read after the last physics step."""
+
+    time: float  # s, simulated time since the last reset
+    q: np.ndarray  # (12,) joint angles, rad
+    dq: np.ndarray  # (12,) joint velocities, rad/s
+    base_position: np.ndarray  # (3,) body origin in the world, m
+    base_quaternion: np.ndarray  # (4,) body orientation, x y z w
+    base_rpy: np.ndarray  # (3,) roll, pitch, yaw, rad (PyBullet's convention)
+    base_linear_velocity_world: np.ndarray  # (3,) m/s
+    base_angular_velocity_world: np.ndarray  # (3,) rad/s
+    base_linear_velocity_body: np.ndarray  # (3,) m/s, in the body frame
+    base_angular_velocity_body: np.ndarray  # (3,) rad/s, in the body frame
+    rotation_matrix: np.ndarray  # (3, 3) body → world (v_world = R v_body)
+
+
+def resolve_path(path: str) -> Path:
+    """An absolute path as given; a relative one relative to the repository root."""
+    p = Path(path)
+    return p if p.is_absolute() else REPO_ROOT / p
+
+
+class Robot:
+    """CyberDog on a flat plane, driven by joint torques at every physics step (see the module docstring)."""
+
+    def __init__(self, robot: RobotConfig, actuator: ActuatorConfig, sim: SimConfig, gui: bool = False):
+        for name, value, cls in (("robot", robot, RobotConfig), ("actuator", actuator, ActuatorConfig),
+                                 ("sim", sim, SimConfig)):
+            if not isinstance(value, cls):
+                raise TypeError(f"Robot({name}=...) must be a {cls.__name__}, got {type(value).__name__}")
+        urdf = resolve_path(robot.urdf)
+        if not urdf.is_file():
+            raise FileNotFoundError(f"RobotConfig.urdf: no file {urdf} (generate it: python tools/make_urdf.py)")
+        self.robot_config, self.actuator_config, self.sim_config = robot, actuator, sim
+        self.actuator = ActuatorModel(actuator)
+        self.dt = sim.physics_dt
+        self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        c = self.client
+        c.setGravity(0.0, 0.0, -sim.gravity)
+        c.setPhysicsEngineParameter(fixedTimeStep=sim.physics_dt, numSolverIterations=sim.solver_iterations,
+                                    numSubSteps=0, deterministicOverlappingPairs=1)
+        self.plane_id = c.loadURDF(str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True)
+        c.changeDynamics(self.plane_id, -1, lateralFriction=sim.ground_friction)
+        self.body_id = c.loadURDF(str(urdf), [0.0, 0.0, robot.body_height], flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
+
+        # link and joint maps
+        self.link_names = {-1: c.getBodyInfo(self.body_id)[0].decode()}
+        joint_by_name = {}
+        for i in range(c.getNumJoints(self.body_id)):
+            info = c.getJointInfo(self.body_id, i)
+            joint_by_name[info[1].decode()] = i
+            self.link_names[i] = info[12].decode()
+        link_by_name = {name: i for i, name in self.link_names.items()}
+        try:
+            self.joint_ids = [joint_by_name[f"{leg}_{j}_joint"] for leg in LEG_NAMES for j in JOINT_NAMES]
+            self.foot_link_ids = [link_by_name[f"{leg}_foot"] for leg in LEG_NAMES]
+        except KeyError as err:
+            raise ValueError(f"{urdf}: missing joint or link {err}; expected the names of tools/make_urdf.py") from None
+        self.joint_names = [f"{leg}_{j}_joint" for leg in LEG_NAMES for j in JOINT_NAMES]
+
+        # no default velocity motors, no damping, unit link friction (see the module docstring)
+        c.setJointMotorControlArray(self.body_id, self.joint_ids, pybullet.VELOCITY_CONTROL, forces=[0.0] * N_JOINTS)
+        for link in self.link_names:
+            c.changeDynamics(self.body_id, link, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
+                             lateralFriction=1.0)
+        self._nominal_dynamics = {}  # link → (mass, principal inertia diagonal) as loaded
+        for link in self.link_names:
+            info = c.getDynamicsInfo(self.body_id, link)
+            self._nominal_dynamics[link] = (info[0], info[2])
+        self.mass_scale = 1.0
+        inertial_pos, inertial_orn = c.getDynamicsInfo(self.body_id, -1)[3:5]  # inertial frame in the link frame
+        self._link_to_inertial = (inertial_pos, inertial_orn)
+        self._inertial_to_link = c.invertTransform(inertial_pos, inertial_orn)
+
+        # bound functions for the per-step path (BulletClient's __getattr__ costs a lookup per call)
+        self._set_motors = c.setJointMotorControlArray
+        self._step_simulation = c.stepSimulation
+        self._get_joint_states = c.getJointStates
+        self._get_base_pose = c.getBasePositionAndOrientation
+        self._get_base_velocity = c.getBaseVelocity
+        self._get_matrix = c.getMatrixFromQuaternion
+        self._get_euler = c.getEulerFromQuaternion
+        self._multiply_transforms = c.multiplyTransforms
+        self._joint_cache: tuple[np.ndarray, np.ndarray] | None = None
+        self.step_count = 0
+        self._closed = False
+        self.reset()
+
+    # ------------------------------------------------------------------------------------------------------
+    # reset and step
+    # ------------------------------------------------------------------------------------------------------
+
+    def reset(self, joint_angles: np.ndarray | None = None, base_position=None, base_yaw: float = 0.0) -> None:
+        """Put the robot at rest: joint angles (12,) (default: standing pose at robot.body_height), body origin
+        at base_position (default (0, 0, body_height + 2 mm)) with yaw base_yaw (rad); all velocities zero."""
+        if joint_angles is None:
+            q = standing_joint_angles(self.robot_config).reshape(N_JOINTS)
+        else:
+            q = np.asarray(joint_angles, dtype=float).reshape(-1)
+            if q.shape != (N_JOINTS,) or not np.all(np.isfinite(q)):
+                raise ValueError(f"joint_angles must be {N_JOINTS} finite angles (rad), got {joint_angles!r}")
+        if base_position is None:
+            base_position = (0.0, 0.0, self.robot_config.body_height + SPAWN_CLEARANCE)
+        pos = np.asarray(base_position, dtype=float)
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)) or not math.isfinite(base_yaw):
+            raise ValueError(f"base_position must be 3 finite numbers (m) and base_yaw finite, "
+                             f"got {base_position!r}, {base_yaw!r}")
+        c = self.client
+        quat = (0.0, 0.0, math.sin(base_yaw / 2.0), math.cos(base_yaw / 2.0))
+        com_pos, com_quat = c.multiplyTransforms(pos.tolist(), quat, *self._link_to_inertial)
+        c.resetBasePositionAndOrientation(self.body_id, com_pos, com_quat)
+        c.resetBaseVelocity(self.body_id, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        for j, angle in zip(self.joint_ids, q):
+            c.resetJointState(self.body_id, j, float(angle), 0.0)
+        self._joint_cache = None
+        self.step_count = 0
+
+    def step(self, torque_command: np.ndarray) -> np.ndarray:
+        """Apply joint torque commands (12,) N·m for one physics step; return the motor torque applied (12,).
+
+        The actuator model clips the command and applies the torque–speed envelope at the current joint
+        velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
+        """
+        tau = np.asarray(torque_command, dtype=float)
+        if tau.shape != (N_JOINTS,):
+            raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
+        if not np.all(np.isfinite(tau)):
+            raise ValueError(f"torque_command must be finite, got {tau!r}")
+        dq = self._joint_states()[1]
+        motor, joint = self.actuator.joint_torque(tau, dq)
+        self._set_motors(self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, forces=joint.tolist())
+        self._step_simulation()
+        self._joint_cache = None
+        self.step_count += 1
+        return motor
+
+    @property
+    def time(self) -> float:
+        """Simulated time since the last reset, s."""
+        return self.step_count * self.dt
+
+    # ------------------------------------------------------------------------------------------------------
+    # state reads
+    # ------------------------------------------------------------------------------------------------------
+
+    def _joint_states(self) -> tuple[np.ndarray, np.ndarray]:
+        """(q, dq) from one getJointStates call, cached until the next step or reset (do not modify)."""
+        if self._joint_cache is None:
+            states = self._get_joint_states(self.body_id, self.joint_ids)
+            self._joint_cache = (np.array([s[0] for s in states]), np.array([s[1] for s in states]))
+        return self._joint_cache
+
+    def joint_angles(self) -> np.ndarray:
+        return self._joint_states()[0].copy()
+
+    def joint_velocities(self) -> np.ndarray:
+        return self._joint_states()[1].copy()
+
+    def base_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Position (3,) and quaternion (x y z w) of the trunk's link frame (the body frame) in the world."""
+        pos, quat = self._multiply_transforms(*self._get_base_pose(self.body_id), *self._inertial_to_link)
+        return np.array(pos), np.array(quat)
+
+    def read_state(self) -> RobotState:
+        """Joint and body state; body values are of the trunk's link frame (see the module docstring)."""
+        q, dq = self._joint_states()
+        com_pos, com_quat = self._get_base_pose(self.body_id)
+        pos, quat = self._multiply_transforms(com_pos, com_quat, *self._inertial_to_link)
+        lin_com, ang = self._get_base_velocity(self.body_id)
+        rot = np.array(self._get_matrix(quat)).reshape(3, 3)  # body → world
+        # velocity of the link-frame origin: v_com + ω × (p_link − p_com) (np.cross is slow on 3-vectors)
+        rx, ry, rz = pos[0] - com_pos[0], pos[1] - com_pos[1], pos[2] - com_pos[2]
+        wx, wy, wz = ang
+        lin = np.array((lin_com[0] + wy * rz - wz * ry, lin_com[1] + wz * rx - wx * rz,
+                        lin_com[2] + wx * ry - wy * rx))
+        pos, ang = np.array(pos), np.array(ang)
+        return RobotState(time=self.time, q=q.copy(), dq=dq.copy(), base_position=pos,
+                          base_quaternion=np.array(quat), base_rpy=np.array(self._get_euler(quat)),
+                          base_linear_velocity_world=lin, base_angular_velocity_world=ang,
+                          base_linear_velocity_body=lin @ rot, base_angular_velocity_body=ang @ rot, rotation_matrix=rot)
+
+    def _ground_contacts(self) -> list:
+        return self.client.getContactPoints(bodyA=self.body_id, bodyB=self.plane_id)
+
+    @property
+    def foot_link_names(self) -> list[str]:
+        """Names of the four foot links, LF, RF, LH, RH."""
+        return [self.link_names[i] for i in self.foot_link_ids]
+
+    def foot_contacts(self) -> np.ndarray:
+        """(4,) bool: each foot (LF, RF, LH, RH) touches the ground."""
+        touching = {pt[3] for pt in self._ground_contacts()}
+        return np.array([link in touching for link in self.foot_link_ids])
+
+    def foot_contact_forces(self) -> np.ndarray:
+        """(4,) normal force of the ground on each foot, N (0 in the air)."""
+        force = dict.fromkeys(self.foot_link_ids, 0.0)
+        for pt in self._ground_contacts():
+            if pt[3] in force:
+                force[pt[3]] += pt[9]
+        return np.array([force[link] for link in self.foot_link_ids])
+
+    def ground_contact_links(self) -> set[str]:
+        """Names of the robot's links touching the ground (in a healthy gait: feet only)."""
+        return {self.link_names[pt[3]] for pt in self._ground_contacts()}
+
+    def foot_positions_world(self) -> np.ndarray:
+        """(4, 3) foot-sphere centres in the world, m."""
+        states = self.client.getLinkStates(self.body_id, self.foot_link_ids, computeForwardKinematics=1)
+        return np.array([s[4] for s in states])
+
+    def total_mass(self) -> float:
+        """Sum of the link masses as PyBullet holds them, kg."""
+        return float(sum(self.client.getDynamicsInfo(self.body_id, link)[0] for link in self.link_names))
+
+    def set_mass_scale(self, scale: float) -> None:
+        """Scale every link's mass and inertia by `scale` relative to the URDF (e.g. 0.95..1.05)."""
+        if not (math.isfinite(scale) and 0.5 <= scale <= 2.0):
+            raise ValueError(f"mass scale must be in [0.5, 2.0], got {scale!r}")
+        for link, (mass, inertia) in self._nominal_dynamics.items():
+            self.client.changeDynamics(self.body_id, link, mass=mass * scale,
+                                       localInertiaDiagonal=[i * scale for i in inertia])
+        self.mass_scale = float(scale)
+
+    # ------------------------------------------------------------------------------------------------------
+    # rendering and teardown
+    # ------------------------------------------------------------------------------------------------------
+
+    def render(self, width: int = 320, height: int = 240, distance: float = 1.2, yaw_deg: float = 45.0,
+               pitch_deg: float = -20.0) -> np.ndarray:
+        """(height, width, 3) uint8 RGB image from a camera that follows the body (TinyRenderer, no GPU)."""
+        c = self.client
+        target = self.base_pose()[0].tolist()
+        view = c.computeViewMatrixFromYawPitchRoll(target, distance, yaw_deg, pitch_deg, 0.0, 2)
+        proj = c.computeProjectionMatrixFOV(60.0, width / height, 0.01, 20.0)
+        _, _, rgba, _, _ = c.getCameraImage(width, height, view, proj, renderer=pybullet.ER_TINY_RENDERER)
+        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.client.disconnect()
+
+    def __enter__(self) -> "Robot":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
