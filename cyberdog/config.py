@@ -171,10 +171,13 @@ class ControllerConfig:
     gravity_compensation: bool = True  # stance feedforward τ = Jᵀ f, f = weight shared by stance feet
     heading_gain: float = 0.5  # step-length correction per rad of yaw error (left/right asymmetry)
     lateral_gain: float = 0.5  # rad of heading set-point per m of lateral drift, back toward the path
-    speed_gain: float = 0.0  # step-length correction per m/s of speed error (0 = open loop)
+    speed_gain: float = 1.0  # 1/s, integral gain on the speed error (m/s) that corrects the step length; 0 = open loop
+    max_speed_correction: float = 0.3  # share of the commanded speed the speed integral may add or remove
+    lateral_placement_gain: float = 0.05  # s, swing-foot y shift per m/s of sideways body speed (Raibert-style)
 
     def __post_init__(self) -> None:
-        _non_negative(self, "heading_gain", "lateral_gain", "speed_gain")
+        _non_negative(self, "heading_gain", "lateral_gain", "speed_gain", "max_speed_correction",
+                      "lateral_placement_gain")
 
 
 @dataclass(frozen=True)

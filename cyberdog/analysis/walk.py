@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cyberdog.config import WalkConfig
-from cyberdog.control.trot import TrotController
+from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
 from cyberdog.core.trajectories import FootTrajectory
 from cyberdog.sim.robot import Robot
@@ -98,9 +98,7 @@ def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, 
     steps_done = 0
     for k in range(n_steps):
         s = robot.read_state()
-        yaw, y = s.base_rpy[2], s.base_position[1] - start[1]
-        tau_cmd = ctrl.torque(k * dt, s.q, s.dq, yaw=yaw, lateral_offset=y,
-                              forward_speed=s.base_linear_velocity_world[0])
+        tau_cmd = ctrl.torque(k * dt, s.q, s.dq, BodyFeedback.from_state(s, start))
         tau = robot.step(tau_cmd)
         tau_log[k], dq_log[k] = tau, s.dq
         vx_log[k], rpy_log[k], z_log[k] = s.base_linear_velocity_world[0], s.base_rpy, s.base_position[2]

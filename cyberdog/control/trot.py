@@ -10,7 +10,11 @@ NOTES' measurement on a similar robot found plain PD tracking reached only about
 - stance gravity compensation: each stance foot pushes down with the body weight shared among the stance
   feet, τ = Jᵀ f with f = (0, 0, −m g / n_stance) (virtual work: τ·q̇ = f·ṗ, f the force the foot exerts);
 - heading correction: left and right step lengths differ in proportion to the yaw error, and the heading
-  set-point leans back toward the straight path in proportion to the lateral drift.
+  set-point leans back toward the straight path in proportion to the lateral drift;
+- speed integral: the step length is corrected by the integral of the forward-speed error, because the
+  feet slip and the body sags, so S = v·T_stance alone walks a few per cent off the command;
+- sideways foot placement in proportion to the body's sideways speed (Raibert's foot-placement idea), which
+  damps the roll/sway that otherwise topples the trot at 1.2–1.4 m/s.
 """
 from __future__ import annotations
 
@@ -23,6 +27,26 @@ from cyberdog.core import kinematics as kin
 from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
 from cyberdog.core.trajectories import FootTrajectory, make_trajectory
+
+MAX_ATTITUDE_SHIFT = 0.03  # m, bound on the sideways foot-placement shift of the foot targets
+
+
+@dataclass
+class BodyFeedback:
+    """What the controller measures of the body (true or estimated), world-aligned where it matters."""
+
+    yaw: float = 0.0  # rad
+    lateral_offset: float = 0.0  # m, y from the straight line
+    forward_speed: float | None = None  # m/s; None: no speed feedback
+    lateral_speed: float = 0.0  # m/s, body-frame y velocity
+
+    @classmethod
+    def from_state(cls, state, start: np.ndarray, forward_speed: float | None = None) -> "BodyFeedback":
+        """From a robot state (`cyberdog.sim.robot.RobotState`); `forward_speed` replaces the true speed
+        (e.g. by the Kalman estimate); `start` is the body position the straight line starts from."""
+        v = float(state.base_linear_velocity_world[0]) if forward_speed is None else float(forward_speed)
+        return cls(yaw=float(state.base_rpy[2]), lateral_offset=float(state.base_position[1] - start[1]),
+                   forward_speed=v, lateral_speed=float(state.base_linear_velocity_body[1]))
 
 
 @dataclass
@@ -39,7 +63,7 @@ class TrotTargets:
 class TrotController:
     """Diagonal trot (LF+RH, then RF+LH) that walks straight at `cfg.gait.speed`.
 
-    `torque(t, q, dq, yaw, lateral_offset)` returns the joint torque command (12,) in N·m.
+    `torque(t, q, dq, body)` returns the joint torque command (12,) in N·m.
     A custom trajectory (e.g. the learned one) can replace the one named in the config.
     """
 
@@ -53,61 +77,69 @@ class TrotController:
         self.stand_height = self.robot.body_height - self.robot.foot_radius  # m, hip joint → foot centre
         self.body_weight = self.robot.total_mass * cfg.sim.gravity  # N
         self.speed = cfg.gait.speed
+        self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
 
     def reset(self) -> None:
         self.pid.reset()
+        self.speed_correction = 0.0
 
     def set_speed(self, speed: float) -> None:
         if not np.isfinite(speed) or speed < 0:
             raise ValueError(f"speed must be >= 0 and finite, got {speed!r}")
         self.speed = float(speed)
 
-    def step_lengths(self, yaw: float, lateral_offset: float, forward_speed: float | None) -> np.ndarray:
-        """(4,) step length S per leg, m: S = v·stance_time, skewed left/right to hold the heading."""
+    def step_lengths(self, body: BodyFeedback) -> np.ndarray:
+        """(4,) step length S per leg, m: S = v·stance_time, corrected for speed, skewed to hold the heading."""
         c = self.cfg.controller
-        S = self.speed * self.gait.stance_time
-        if forward_speed is not None and c.speed_gain > 0:
-            S += c.speed_gain * (self.speed - forward_speed) * self.gait.stance_time
+        if body.forward_speed is not None and c.speed_gain > 0:
+            limit = c.max_speed_correction * self.speed
+            self.speed_correction = float(np.clip(
+                self.speed_correction + c.speed_gain * (self.speed - body.forward_speed) * self.cfg.sim.physics_dt,
+                -limit, limit))
+        S = (self.speed + self.speed_correction) * self.gait.stance_time
         # heading set-point turns back toward the path (y = 0); positive yaw error → lengthen left steps
-        heading_error = yaw + c.lateral_gain * lateral_offset
+        heading_error = body.yaw + c.lateral_gain * body.lateral_offset
         skew = np.clip(c.heading_gain * heading_error, -0.5, 0.5)
         return np.maximum(S * (1.0 + skew * kin.LEFT_RIGHT), 0.0)
 
-    def targets(self, t: float, yaw: float = 0.0, lateral_offset: float = 0.0,
-                forward_speed: float | None = None) -> TrotTargets:
-        g = self.gait
+    def targets(self, t: float, body: BodyFeedback | None = None) -> TrotTargets:
+        """Foot and joint targets at time t (s) for the measured body state."""
+        g, c = self.gait, self.cfg.controller
+        body = body or BodyFeedback()
         phases = self.scheduler.leg_phases(t)
-        S = self.step_lengths(yaw, lateral_offset, forward_speed)
+        S = self.step_lengths(body)
         xz = np.empty((4, 2))
         vxz = np.empty((4, 2))
         for leg in range(4):  # legs may have different step lengths (heading correction)
             p, v = self.trajectory.position_velocity(phases[leg], S[leg], g.lift_height, g.swing_time,
                                                      g.stance_time)
             xz[leg], vxz[leg] = np.ravel(p), np.ravel(v)
-        foot = np.stack([xz[:, 0], kin.LEFT_RIGHT * self.robot.l1, xz[:, 1] - self.stand_height], axis=-1)
+        # sideways foot placement against the body's sideways speed
+        dy = float(np.clip(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT,
+                           MAX_ATTITUDE_SHIFT))
+        foot = np.stack([xz[:, 0], kin.LEFT_RIGHT * self.robot.l1 + dy, xz[:, 1] - self.stand_height],
+                        axis=-1)
         foot_vel = np.stack([vxz[:, 0], np.zeros(4), vxz[:, 1]], axis=-1)
         q = kin.inverse_kinematics(foot, self.robot)
-        if self.cfg.controller.velocity_feedforward:
+        if c.velocity_feedforward:
             dq = np.linalg.solve(kin.jacobian(q, self.robot), foot_vel[..., None])[..., 0]
         else:
             dq = np.zeros((4, 3))
         return TrotTargets(foot, foot_vel, q.ravel(), dq.ravel(), self.scheduler.in_swing(t))
 
-    def torque(self, t: float, q: np.ndarray, dq: np.ndarray, yaw: float = 0.0, lateral_offset: float = 0.0,
-               forward_speed: float | None = None) -> np.ndarray:
+    def torque(self, t: float, q: np.ndarray, dq: np.ndarray, body: BodyFeedback | None = None) -> np.ndarray:
         """Joint torque command (12,), N·m: PID on the IK targets plus the feedforward terms."""
-        tgt = self.targets(t, yaw, lateral_offset, forward_speed)
+        tgt = self.targets(t, body)
         tau = self.pid.torque(tgt.joint_angles, q, tgt.joint_velocities, dq)
         if self.cfg.controller.gravity_compensation:
-            tau = tau + self.gravity_feedforward(q, ~tgt.in_swing)
+            tau = tau + self.stance_feedforward(q, ~tgt.in_swing)
         return tau
 
-    def gravity_feedforward(self, q: np.ndarray, stance: np.ndarray) -> np.ndarray:
+    def stance_feedforward(self, q: np.ndarray, stance: np.ndarray) -> np.ndarray:
         """τ = Jᵀ f per stance leg, f = (0, 0, −m g / n_stance): the stance legs carry the body."""
         n = int(np.count_nonzero(stance))
         if n == 0:
             return np.zeros(12)
         J = kin.jacobian(np.reshape(q, (4, 3)), self.robot)
-        f = np.array([0.0, 0.0, -self.body_weight / n])
-        tau = np.einsum("lij,i->lj", J, f) * stance[:, None]
+        tau = J[:, 2, :] * (-self.body_weight / n * stance)[:, None]  # Jᵀ (0, 0, f_z)
         return tau.ravel()

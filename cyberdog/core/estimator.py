@@ -87,14 +87,17 @@ class SimulatedIMU:
 
 
 def leg_odometry_velocity(q: np.ndarray, dq: np.ndarray, contacts: np.ndarray,
-                          body_angular_velocity: np.ndarray, robot_cfg: RobotConfig) -> np.ndarray:
+                          body_angular_velocity: np.ndarray, robot_cfg: RobotConfig,
+                          rolling: bool = True) -> np.ndarray:
     """(3,) body-frame linear velocity of the body from the stance legs, m/s; NaN when no foot is in contact.
 
     A stance foot stands still in the world: 0 = v_body + ω × p_foot + J(q)·dq (all in the body frame, p_foot
     from the body centre), so each stance foot gives v_body = −(J(q)·dq + ω × p_foot); the estimates of the
     feet in contact are averaged. q, dq: (12,) or (4, 3) joint angles (rad) and speeds (rad/s) in the order
     LF, RF, LH, RH × (abad, hip, knee); contacts: (4,) bool; body_angular_velocity: (3,) rad/s, body frame.
-    The foot sphere's rolling is ignored (an error of at most the foot radius × its angular speed).
+    With `rolling` (default) the foot sphere rolls on the ground instead of standing still: its centre moves
+    at ω_foot × (0, 0, r) = (ω_foot,y·r, 0, 0), with ω_foot,y = body pitch rate + hip + knee speeds. Ignoring
+    it biased the forward estimate by about −6 % in a 1 m/s trot (r = 18 mm, ω_foot ≈ −3 rad/s).
     """
     q = np.asarray(q, dtype=float).reshape(4, 3)
     dq = np.asarray(dq, dtype=float).reshape(4, 3)
@@ -105,6 +108,8 @@ def leg_odometry_velocity(q: np.ndarray, dq: np.ndarray, contacts: np.ndarray,
     p_foot = abad_offsets(robot_cfg) + foot_position(q, robot_cfg)  # (4, 3) body frame
     v_foot_rel = np.einsum("lij,lj->li", jacobian(q, robot_cfg), dq)  # (4, 3) foot velocity w.r.t. body
     v_body = -(v_foot_rel + np.cross(w, p_foot))
+    if rolling:
+        v_body[:, 0] += (w[1] + dq[:, 1] + dq[:, 2]) * robot_cfg.foot_radius
     return v_body[contacts].mean(axis=0)
 
 

@@ -1,0 +1,265 @@
+"""`CyberDog-v0`: the paper's MDP (Section 3, Eq. 10–11, Tables 3–4) as a gymnasium environment."""
+from __future__ import annotations
+
+import dataclasses
+from collections import deque
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from cyberdog import config as C
+from cyberdog.control.trot import BodyFeedback, TrotController
+from cyberdog.core import kinematics as kin
+from cyberdog.core import rewards
+from cyberdog.core.estimator import SimulatedIMU, VelocityEstimator, leg_odometry_velocity
+from cyberdog.sim.robot import Robot
+
+REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
+
+# Observation layout: (name, size, low, high); bounds are generous physical limits, values are clipped to them.
+OBSERVATION_LAYOUT = (
+    ("body_height", 1, 0.0, 1.0),  # m, z of the body centre
+    ("lateral_offset", 1, -5.0, 5.0),  # m, y from the straight line walked
+    ("body_rpy", 3, -np.pi, np.pi),  # rad, roll, pitch, yaw
+    ("body_linear_velocity", 3, -10.0, 10.0),  # m/s, body frame (true or estimated)
+    ("body_angular_velocity", 3, -50.0, 50.0),  # rad/s, body frame
+    ("joint_angles", 12, -2 * np.pi, 2 * np.pi),  # rad
+    ("joint_velocities", 12, -100.0, 100.0),  # rad/s
+    ("joint_torques", 12, -100.0, 100.0),  # N·m, motor torque applied at the last physics step
+    ("target_speed", 1, 0.0, 10.0),  # m/s
+    ("gait_phase", 2, -1.0, 1.0),  # sin, cos of the trot phase (LF leg)
+)
+
+
+class CyberDogEnv(gym.Env):
+    """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
+    body height, survival and energy.
+
+    **Timing.** Physics at 1 kHz (`walk.sim.physics_dt`); the agent acts every Ts = 25 ms (`control_dt`,
+    25 physics steps); an episode lasts Tf = 10 s = 400 steps (registered `max_episode_steps=400`, Table 4).
+    The torque, or the trot controller's PID that produces it, is applied at every physics step.
+
+    **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
+    `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
+    - `action_mode="torque"` (the paper's, Table 3): the action is the joint torque;
+    - `action_mode="residual"` (default): the action is added to the torque of the diagonal trot controller
+      (trajectory + IK + PID), so that a policy learns corrections to a walking gait — practical on a CPU.
+    Table 4's joint control range (±45°) is enforced around the standing pose by a virtual end stop: beyond
+    the range a spring-damper torque (`joint_stop_stiffness`, `joint_stop_damping`) pushes the joint back.
+    (The default lift height in the env is 0.10 m so that the trot stays inside that range; the paper's
+    0.15 m needs about 51° of knee flexion.)
+
+    **Observation** (50,), float32, clipped to finite bounds (`OBSERVATION_LAYOUT`):
+
+    | slice | content | unit |
+    |---|---|---|
+    | 0 | body height z | m |
+    | 1 | lateral offset y | m |
+    | 2:5 | roll, pitch, yaw | rad |
+    | 5:8 | body linear velocity, body frame (true, or Kalman estimate) | m/s |
+    | 8:11 | body angular velocity, body frame | rad/s |
+    | 11:23 | joint angles | rad |
+    | 23:35 | joint velocities | rad/s |
+    | 35:47 | joint torques (last physics step) | N·m |
+    | 47 | commanded speed | m/s |
+    | 48:50 | sin, cos of the gait phase | – |
+
+    The paper's model has 111 observations in these groups (torso position, orientation, joint angles,
+    3-D velocities, angular velocities, joint velocities, joint torques, Section 2); its full list is not
+    given. We keep one entry per physical quantity (no forward position x, which is unbounded) and add the
+    command and phase the policy needs to be speed- and gait-aware.
+
+    **Reward**, Eq. (10): r = A·(v_cmd − v_x)² + B·y² + C·(z − z_nom)² + D·Ts/Tf + E·Σ∫|τ·ω|dt, with
+    (A, B, C, D, E) = (−2, −20, −50, 25, −0.2) (Eq. 11; `reward="stage1"` sets E = 0). `info` carries every
+    term unweighted (`reward_terms`) and weighted (`reward_weighted`), which sum to the reward, plus
+    `step_energy_J`, `forward_speed` (true) and `forward_speed_used` (what the reward saw).
+
+    **Episode end.** `terminated` when the body falls below `fall_height` (0.15 m), tilts beyond
+    `fall_tilt_deg` (45°) in roll or pitch, or the state is not finite; `truncated` only by the time limit
+    of the registration.
+
+    **Options** (keyword arguments of `gymnasium.make("CyberDog-v0", ...)`): `config` (an `EnvConfig`),
+    `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array" or "human"), and any
+    top-level `EnvConfig` field, e.g. `action_mode="torque"`, `target_speed=1.2`,
+    `observation_source="estimated"`.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 40}
+
+    def __init__(self, config: C.EnvConfig | None = None, reward: str | C.RewardConfig | None = None,
+                 render_mode: str | None = None, **overrides: Any):
+        cfg = config or C.EnvConfig(walk=C.WalkConfig(gait=C.GaitConfig(lift_height=0.10)))
+        if reward is not None:
+            if isinstance(reward, str):
+                if reward not in REWARD_PRESETS:
+                    raise ValueError(f"reward must be one of {sorted(REWARD_PRESETS)} or a RewardConfig, "
+                                     f"got {reward!r}")
+                reward = REWARD_PRESETS[reward]
+            overrides["reward"] = reward
+        unknown = sorted(set(overrides) - {f.name for f in dataclasses.fields(C.EnvConfig)})
+        if unknown:
+            raise ValueError(f"unknown CyberDog-v0 option(s) {unknown}")
+        self.cfg = cfg = dataclasses.replace(cfg, **overrides) if overrides else cfg
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
+        self.render_mode = render_mode
+        walk = cfg.walk
+        self.dt = walk.sim.physics_dt
+        self.decimation = cfg.decimation
+        self.robot = Robot(walk.robot, walk.actuator, walk.sim, gui=(render_mode == "human"))
+        self.controller = TrotController(walk)
+        self.base_masses = None
+        # virtual end stops: ±joint_range around the standing pose, inside the URDF limits
+        q_stand = kin.standing_joint_angles(walk.robot).ravel()
+        lo, hi = kin.joint_limits(walk.robot)
+        r = np.deg2rad(cfg.joint_range_deg)
+        self.q_stand = q_stand
+        self.q_low, self.q_high = np.maximum(q_stand - r, lo), np.minimum(q_stand + r, hi)
+        self.fall_tilt = np.deg2rad(cfg.fall_tilt_deg)
+        self.latency_steps = int(round(cfg.latency / self.dt))
+        low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _ in OBSERVATION_LAYOUT])
+        high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_ in OBSERVATION_LAYOUT])
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (12,), dtype=np.float32)
+        self.estimator_every = int(round(cfg.estimator_dt / self.dt))
+        self._state = None
+
+    # ----------------------------------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        cfg = self.cfg
+        options = options or {}
+        if "target_speed" in options:
+            self.target_speed = float(options["target_speed"])
+            if not (np.isfinite(self.target_speed) and self.target_speed >= 0):
+                raise ValueError(f"target_speed must be >= 0 m/s, got {options['target_speed']!r}")
+        elif cfg.target_speed_range:
+            self.target_speed = float(self.np_random.uniform(*cfg.target_speed_range))
+        else:
+            self.target_speed = cfg.target_speed
+        if cfg.mass_scale_range:
+            self.robot.set_mass_scale(float(self.np_random.uniform(*cfg.mass_scale_range)))
+        self.controller.set_speed(self.target_speed)
+        self.controller.reset()
+        self.robot.reset()
+        sensor_rng = np.random.default_rng(self.np_random.integers(2 ** 63))
+        self.imu = SimulatedIMU(cfg.estimator, sensor_rng, cfg.estimator_dt, cfg.walk.sim.gravity)
+        self.estimator = VelocityEstimator(cfg.estimator, cfg.estimator_dt, cfg.walk.sim.gravity)
+        self.noise_rng = sensor_rng
+        self.t = 0.0
+        self.steps = 0
+        self.torque_queue = deque([np.zeros(12)] * self.latency_steps)
+        self.last_torque = np.zeros(12)
+        self._state = self.robot.read_state()
+        self.start_position = self._state.base_position.copy()
+        self._prev_world_velocity = self._state.base_linear_velocity_world.copy()
+        self._velocity_estimate_world = self._state.base_linear_velocity_world.copy()
+        return self._observation(), {"target_speed": self.target_speed}
+
+    def step(self, action):
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (12,):
+            raise ValueError(f"action must have shape (12,), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action must be finite, got {a.tolist()}")
+        tau_action = np.clip(a, -1.0, 1.0) * self.cfg.action_scale
+        residual = self.cfg.action_mode == "residual"
+        step_energy = 0.0
+        s = self._state
+        for _ in range(self.decimation):
+            tau = tau_action
+            if residual:
+                v_known = (self._velocity_estimate_world[0] if self.cfg.observation_source == "estimated"
+                           else None)
+                tau = tau + self.controller.torque(self.t, s.q, s.dq,
+                                                   BodyFeedback.from_state(s, self.start_position, v_known))
+            tau = tau + self._joint_stop_torque(s.q, s.dq)
+            if self.latency_steps:
+                self.torque_queue.append(tau)
+                tau = self.torque_queue.popleft()
+            applied = self.robot.step(tau)
+            step_energy += float(np.abs(applied * s.dq).sum()) * self.dt  # Eq. (7), rectangle rule
+            self.t += self.dt
+            s = self.robot.read_state()
+            self.steps += 1
+            if self.steps % self.estimator_every == 0:
+                self._update_estimator(s)
+        self._state, self.last_torque = s, applied
+        return self._finish_step(s, step_energy)
+
+    def _finish_step(self, s, step_energy: float):
+        cfg = self.cfg
+        v_true = float(s.base_linear_velocity_world[0])
+        v_used = float(self._velocity_estimate_world[0]) if cfg.observation_source == "estimated" else v_true
+        y = float(s.base_position[1] - self.start_position[1])
+        terms = rewards.reward_terms(v_x=v_used, v_target=self.target_speed, y=y, z=float(s.base_position[2]),
+                                     z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
+                                     episode_time=cfg.episode_time, step_energy_J=step_energy)
+        weighted = rewards.weighted_terms(terms, cfg.reward)
+        reward = float(sum(weighted.values()))
+        finite = np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.base_position))
+        fallen = s.base_position[2] < cfg.fall_height or np.max(np.abs(s.base_rpy[:2])) > self.fall_tilt
+        terminated = bool(fallen or not finite)
+        info = {"reward_terms": terms, "reward_weighted": weighted, "step_energy_J": step_energy,
+                "forward_speed": v_true, "forward_speed_used": v_used, "target_speed": self.target_speed,
+                "velocity_estimate": self._velocity_estimate_world.copy(), "fallen": bool(fallen),
+                "time": self.t}
+        if self.render_mode == "human":
+            self.render()
+        return self._observation(), reward, terminated, False, info
+
+    # ----------------------------------------------------------------------------------------------------
+    def _joint_stop_torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """Spring-damper beyond ±joint_range of the standing pose (Table 4's joint control range)."""
+        over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
+        if not over.any():
+            return np.zeros(12)
+        return -self.cfg.joint_stop_stiffness * over - self.cfg.joint_stop_damping * dq * (over != 0)
+
+    def _update_estimator(self, s) -> None:
+        """Kalman filter step at `estimator_dt`: simulated IMU + leg odometry of the stance feet."""
+        dt = self.cfg.estimator_dt
+        R = s.rotation_matrix
+        v_world = s.base_linear_velocity_world
+        accel_world = (v_world - self._prev_world_velocity) / dt
+        self._prev_world_velocity = v_world.copy()
+        imu = self.imu.measure(accel_world, s.base_angular_velocity_world, R, frame="world")
+        contacts = self.robot.foot_contacts()
+        q, dq = self._noisy_joints(s.q, s.dq)
+        leg_v = leg_odometry_velocity(q, dq, contacts, imu.gyroscope, self.cfg.walk.robot)
+        self._velocity_estimate_world = self.estimator.update(imu, leg_v, R)
+
+    def _noisy_joints(self, q: np.ndarray, dq: np.ndarray):
+        if not self.cfg.joint_noise:
+            return q, dq
+        c = self.cfg
+        return (q + self.noise_rng.normal(0, c.joint_angle_noise_std, 12),
+                dq + self.noise_rng.normal(0, c.joint_velocity_noise_std, 12))
+
+    def _observation(self) -> np.ndarray:
+        s = self._state
+        q, dq = self._noisy_joints(s.q, s.dq)
+        if self.cfg.observation_source == "estimated":
+            v_body = s.rotation_matrix.T @ self._velocity_estimate_world
+        else:
+            v_body = s.base_linear_velocity_body
+        phase = 2 * np.pi * self.controller.scheduler.leg_phases(self.t)[0]
+        obs = np.concatenate([
+            [s.base_position[2], s.base_position[1] - self.start_position[1]], s.base_rpy, v_body,
+            s.base_angular_velocity_body, q, dq, self.last_torque, [self.target_speed],
+            [np.sin(phase), np.cos(phase)]]).astype(np.float32)
+        obs = np.nan_to_num(obs, nan=0.0)
+        return np.clip(obs, self.observation_space.low, self.observation_space.high)
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            return self.robot.render(320, 240)
+        return None
+
+    def close(self):
+        if getattr(self, "robot", None) is not None:
+            self.robot.close()
+            self.robot = None

@@ -1,0 +1,134 @@
+"""CyberDog-v0 (issue: the learning environment): API checks, determinism, errors, the trot under zero residual."""
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import cyberdog  # noqa: F401  (registers CyberDog-v0)
+from cyberdog import config as C
+from cyberdog.envs.cyberdog_env import CyberDogEnv
+
+
+@pytest.fixture(scope="module")
+def residual_episode():
+    """One full 10 s episode at 1.0 m/s with zero residual action and the estimated, noisy velocity."""
+    env = gym.make("CyberDog-v0", observation_source="estimated", estimator=C.EstimatorConfig(noise=True),
+                   joint_noise=True)
+    env.reset(seed=0)
+    speeds, estimates, rewards, infos = [], [], [], []
+    steps, terminated, truncated = 0, False, False
+    while not (terminated or truncated):
+        _, r, terminated, truncated, info = env.step(np.zeros(12, dtype=np.float32))
+        speeds.append(info["forward_speed"])
+        estimates.append(info["velocity_estimate"][0])
+        rewards.append(r)
+        infos.append(info)
+        steps += 1
+    env.close()
+    return dict(steps=steps, terminated=terminated, truncated=truncated, speeds=np.array(speeds),
+                estimates=np.array(estimates), rewards=rewards, infos=infos)
+
+
+@pytest.mark.parametrize("mode", ["torque", "residual"])
+def test_gymnasium_env_checker_passes_without_warnings(mode):
+    from gymnasium.utils.env_checker import check_env
+    env = CyberDogEnv(action_mode=mode)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env, skip_render_check=True)
+    env.close()
+
+
+def test_torchrl_gym_wrapper_specs():
+    from torchrl.envs import GymWrapper
+    from torchrl.envs.utils import check_env_specs
+    env = GymWrapper(CyberDogEnv(episode_time=0.25))
+    check_env_specs(env)
+    env.close()
+
+
+def test_registered_time_limit_is_table4():
+    env = gym.make("CyberDog-v0")
+    assert env.spec.max_episode_steps == 400
+    assert env.unwrapped.cfg.max_episode_steps == 400
+    env.close()
+
+
+def test_zero_residual_trot_walks_the_whole_episode_at_the_command(residual_episode):
+    ep = residual_episode
+    assert ep["steps"] == 400 and ep["truncated"] and not ep["terminated"]
+    mean_speed = ep["speeds"][200:].mean()  # last 5 s
+    assert abs(mean_speed - 1.0) <= 0.05, mean_speed
+
+
+def test_velocity_estimate_rms_error_below_0_1(residual_episode):
+    err = residual_episode["estimates"] - residual_episode["speeds"]
+    rms = float(np.sqrt(np.mean(err[8:] ** 2)))  # after the first 0.2 s
+    print(f"forward-velocity estimate RMS error: {rms:.4f} m/s")
+    assert rms < 0.1
+
+
+def test_weighted_terms_sum_to_reward(residual_episode):
+    for r, info in zip(residual_episode["rewards"], residual_episode["infos"]):
+        assert r == pytest.approx(sum(info["reward_weighted"].values()), abs=1e-9)
+        for name, w in C.STAGE2_REWARD.weights.items():
+            assert info["reward_weighted"][name] == pytest.approx(w * info["reward_terms"][name])
+    assert residual_episode["infos"][0]["step_energy_J"] > 0
+
+
+def _rollout(seed, n, **options):
+    env = CyberDogEnv(**options)
+    obs, _ = env.reset(seed=seed)
+    actions = np.random.default_rng(123).uniform(-0.1, 0.1, (n, 12)).astype(np.float32)
+    out = [obs]
+    rewards = []
+    for a in actions:
+        obs, r, term, trunc, _ = env.step(a)
+        out.append(obs)
+        rewards.append(r)
+        if term:
+            break
+    env.close()
+    return np.array(out), np.array(rewards)
+
+
+def test_same_seed_same_actions_identical_for_400_steps():
+    o1, r1 = _rollout(7, 400)
+    o2, r2 = _rollout(7, 400)
+    assert len(r1) == 400
+    assert np.array_equal(o1, o2) and np.array_equal(r1, r2)
+
+
+def test_different_seed_differs_where_randomness_is_on():
+    opts = dict(target_speed_range=(0.8, 1.2), joint_noise=True)
+    o1, _ = _rollout(1, 5, **opts)
+    o2, _ = _rollout(2, 5, **opts)
+    assert not np.array_equal(o1, o2)
+
+
+def test_non_finite_action_raises():
+    env = CyberDogEnv()
+    env.reset(seed=0)
+    for bad in (np.nan, np.inf):
+        a = np.zeros(12, dtype=np.float32)
+        a[3] = bad
+        with pytest.raises(ValueError, match="finite"):
+            env.step(a)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(5))
+    env.close()
+
+
+@pytest.mark.parametrize("options, match", [
+    (dict(target_speed=-1.0), "target_speed"),
+    (dict(action_mode="position"), "action_mode"),
+    (dict(observation_source="oracle"), "observation_source"),
+    (dict(reward="stage3"), "reward"),
+    (dict(reward_weights_shape=(1, 2)), "unknown"),
+    (dict(target_speed_range=(1.2, 0.8)), "target_speed_range"),
+    (dict(wheels=4), "unknown"),
+])
+def test_invalid_options_raise_at_construction(options, match):
+    with pytest.raises(ValueError, match=match):
+        gym.make("CyberDog-v0", **options)
