@@ -132,3 +132,12 @@ def test_non_finite_action_raises():
 def test_invalid_options_raise_at_construction(options, match):
     with pytest.raises(ValueError, match=match):
         gym.make("CyberDog-v0", **options)
+
+
+def test_rgb_array_rendering_works_headless():
+    env = CyberDogEnv(render_mode="rgb_array")
+    env.reset(seed=0)
+    frame = env.render()
+    env.close()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+    assert frame.std() > 1.0  # not a blank image

@@ -38,7 +38,7 @@ class WalkResult:
     energy: float  # J, Eq. (7) Σ∫|τ·ω|dt over the walk
     energy_per_joint: np.ndarray  # (12,) J
     electrical_energy: float  # J, with copper loss, friction loss and driver efficiency
-    cost_of_transport: float  # E / (m g d)
+    cost_of_transport: float  # E / (m g d); nan when the robot made no forward progress
     peak_torque: float  # N·m, max |τ| over joints and time
     peak_joint_speed: float  # rad/s
     non_foot_contacts: list  # link names other than feet that touched the ground
@@ -47,7 +47,7 @@ class WalkResult:
     @property
     def energy_per_100m(self) -> float:
         """J per 100 m of forward travel."""
-        return en.energy_per_100m(self.energy, self.distance)
+        return en.energy_per_100m(self.energy, self.distance) if self.distance > 0 else float("nan")
 
     @property
     def speed_ok(self) -> bool:
@@ -125,7 +125,8 @@ def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, 
         height_min=float(z_log.min()), height_max=float(z_log.max()),
         max_roll=float(np.max(np.abs(rpy_log[:, 0]))), max_pitch=float(np.max(np.abs(rpy_log[:, 1]))),
         distance=distance, energy=float(e_joint.sum()), energy_per_joint=e_joint, electrical_energy=e_elec,
-        cost_of_transport=en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, distance),
+        cost_of_transport=(en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, distance)
+                           if distance > 0 else float("nan")),  # undefined without forward travel
         peak_torque=float(np.max(np.abs(tau_log))), peak_joint_speed=float(np.max(np.abs(dq_log))),
         non_foot_contacts=sorted(bad_contacts))
     if record:

@@ -28,6 +28,7 @@ from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
 from cyberdog.core.trajectories import FootTrajectory, make_trajectory
 
+SIDES = (np.array([0, 2]), np.array([1, 3]))  # leg indices of the left (LF, LH) and right (RF, RH) legs
 MAX_ATTITUDE_SHIFT = 0.03  # m, bound on the sideways foot-placement shift of the foot targets
 
 
@@ -110,10 +111,9 @@ class TrotController:
         S = self.step_lengths(body)
         xz = np.empty((4, 2))
         vxz = np.empty((4, 2))
-        for leg in range(4):  # legs may have different step lengths (heading correction)
-            p, v = self.trajectory.position_velocity(phases[leg], S[leg], g.lift_height, g.swing_time,
-                                                     g.stance_time)
-            xz[leg], vxz[leg] = np.ravel(p), np.ravel(v)
+        for legs in SIDES:  # left and right legs differ in step length (heading correction)
+            xz[legs], vxz[legs] = self.trajectory.position_velocity(phases[legs], S[legs[0]], g.lift_height,
+                                                                    g.swing_time, g.stance_time)
         # sideways foot placement against the body's sideways speed
         dy = float(np.clip(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT,
                            MAX_ATTITUDE_SHIFT))
