@@ -174,10 +174,11 @@ class ControllerConfig:
     speed_gain: float = 1.0  # 1/s, integral gain on the speed error (m/s) that corrects the step length; 0 = open loop
     max_speed_correction: float = 0.3  # share of the commanded speed the speed integral may add or remove
     lateral_placement_gain: float = 0.05  # s, swing-foot y shift per m/s of sideways body speed (Raibert-style)
+    speed_ramp_time: float = 1.0  # s, the commanded speed rises linearly from 0 over this time after a reset
 
     def __post_init__(self) -> None:
         _non_negative(self, "heading_gain", "lateral_gain", "speed_gain", "max_speed_correction",
-                      "lateral_placement_gain")
+                      "lateral_placement_gain", "speed_ramp_time")
 
 
 @dataclass(frozen=True)
@@ -412,3 +413,114 @@ class EnvConfig:
         _check(len(m) == 0 or (len(m) == 2 and 0 < m[0] <= m[1]), "EnvConfig.mass_scale_range",
                "() or (low, high) with 0 < low <= high", m)
         _check(self.joint_range_deg <= 180, "EnvConfig.joint_range_deg", "in (0, 180]", self.joint_range_deg)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The learning agent and its training (paper Section 3, Table 4)
+# ---------------------------------------------------------------------------------------------------------
+
+ALGORITHMS = ("td3", "ddpg")
+EXPLORATION_NOISES = ("gaussian", "ou")
+DEVICES = ("cpu", "cuda", "auto")
+BUFFER_POLICIES = ("clear", "keep")
+
+
+@dataclass(frozen=True)
+class AgentConfig:
+    """Actor–critic agent (paper Section 3: three hidden layers of 128 ReLU units; Table 4 learning rates)."""
+
+    algorithm: str = "td3"  # "td3": twin critics, clipped double-Q, delayed actor; "ddpg": one critic
+    hidden_sizes: Tuple[int, ...] = (128, 128, 128)  # units per hidden layer, actor and critic alike
+    actor_lr: float = 4e-4  # Adam learning rate of the actor (Table 4)
+    critic_lr: float = 2e-3  # Adam learning rate of the critic(s) (Table 4)
+    gamma: float = 0.99  # discount per agent step (Ts = 25 ms)
+    tau: float = 0.005  # soft (Polyak) target update rate per target update
+    policy_delay: int = 2  # TD3: actor and target update every d-th critic update (DDPG: ignored, d = 1)
+    policy_noise: float = 0.2  # TD3 target smoothing: std of the noise added to the target action (action units)
+    noise_clip: float = 0.5  # TD3 target smoothing: clip of that noise (action units)
+    exploration: str = "gaussian"  # one of EXPLORATION_NOISES: "gaussian" additive, or "ou" Ornstein–Uhlenbeck
+    exploration_sigma: float = 0.1  # std of the exploration noise at the start (action units, actions in [−1, 1])
+    exploration_sigma_end: float = 0.1  # std after `exploration_annealing_steps` env steps (linear annealing)
+    exploration_annealing_steps: int = 100_000  # env steps over which sigma goes from start to end
+    ou_theta: float = 0.15  # OU mean reversion rate (per OU step)
+    ou_dt: float = 0.025  # OU time step (s); the agent step Ts
+    max_grad_norm: float = 0.0  # gradient-norm clip of each optimizer step; 0 = off
+
+    def __post_init__(self) -> None:
+        _check(self.algorithm in ALGORITHMS, "AgentConfig.algorithm", f"one of {ALGORITHMS}", self.algorithm)
+        _check(self.exploration in EXPLORATION_NOISES, "AgentConfig.exploration", f"one of {EXPLORATION_NOISES}",
+               self.exploration)
+        _check(len(self.hidden_sizes) >= 1 and all(int(h) == h and h >= 1 for h in self.hidden_sizes),
+               "AgentConfig.hidden_sizes", "one or more positive integers", self.hidden_sizes)
+        _positive(self, "actor_lr", "critic_lr", "tau", "ou_dt")
+        _non_negative(self, "policy_noise", "noise_clip", "exploration_sigma", "exploration_sigma_end",
+                      "ou_theta", "max_grad_norm")
+        _check(0 <= self.gamma < 1, "AgentConfig.gamma", "in [0, 1)", self.gamma)
+        _check(self.tau <= 1, "AgentConfig.tau", "in (0, 1]", self.tau)
+        _check(int(self.policy_delay) == self.policy_delay and self.policy_delay >= 1, "AgentConfig.policy_delay",
+               "an integer >= 1", self.policy_delay)
+        _check(self.exploration_annealing_steps >= 1, "AgentConfig.exploration_annealing_steps", ">= 1",
+               self.exploration_annealing_steps)
+
+
+@dataclass(frozen=True)
+class StageConfig:
+    """One stage of the paper's two-stage training (Section 3). Scores are in *our* reward units: one
+    episode's summed reward, whose keep-moving bonus adds up to at most +25 (see configs/paper.yaml)."""
+
+    reward: str = "stage1"  # reward preset of CyberDog-v0: "stage1" (E = 0) or "stage2" (Eq. 11)
+    max_episodes: int = 20_000  # episode budget of this stage (Table 4 "max episodes")
+    max_env_steps: int = 0  # env-step budget of this stage; 0 = no step budget (episodes only)
+    stop_score: float = 19.0  # stop when the mean score over `score_window` episodes reaches this; .inf = never
+    save_score: float = 20.0  # save the agent whenever an episode's score reaches this (Table 4 "save agent")
+
+    def __post_init__(self) -> None:
+        _check(self.reward in ("stage1", "stage2"), "StageConfig.reward", "'stage1' or 'stage2'", self.reward)
+        _check(self.max_episodes >= 1, "StageConfig.max_episodes", ">= 1", self.max_episodes)
+        _check(self.max_env_steps >= 0, "StageConfig.max_env_steps", ">= 0 (0 = no step budget)",
+               self.max_env_steps)
+        for n in ("stop_score", "save_score"):
+            _check(not math.isnan(getattr(self, n)), f"StageConfig.{n}", "a number (.inf allowed)",
+                   getattr(self, n))
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Training loop: collection, replay, updates, stopping, checkpoints and logs."""
+
+    seed: int = 0  # seeds torch, numpy, python and the environment
+    device: str = "cpu"  # "cpu", "cuda" or "auto" (cuda if available); networks and updates
+    stage1: StageConfig = field(default_factory=StageConfig)  # speed and direction, no energy term
+    stage2: StageConfig = field(default_factory=lambda: StageConfig(reward="stage2", stop_score=math.inf))
+    score_window: int = 250  # episodes averaged for the stop test (Table 4 "score averaging window length")
+    buffer_size: int = 1_000_000  # transitions kept in the replay buffer
+    buffer_between_stages: str = "clear"  # "clear": rewards change at stage 2, so old transitions are dropped; "keep"
+    batch_size: int = 256  # transitions per update
+    init_random_frames: int = 5_000  # env steps with uniform random actions before learning starts (stage 1)
+    frames_per_batch: int = 200  # env steps collected between rounds of updates
+    updates_per_frame: float = 1.0  # critic updates per collected env step once learning has started
+    checkpoint_every: int = 10_000  # env steps between periodic checkpoints (rounded up to frames_per_batch)
+    deterministic: bool = False  # torch.use_deterministic_algorithms (bit-identical reruns, slower)
+    num_threads: int = 0  # torch CPU threads; 0 = torch's default
+
+    def __post_init__(self) -> None:
+        _check(self.device in DEVICES, "TrainConfig.device", f"one of {DEVICES}", self.device)
+        _check(self.buffer_between_stages in BUFFER_POLICIES, "TrainConfig.buffer_between_stages",
+               f"one of {BUFFER_POLICIES}", self.buffer_between_stages)
+        for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
+            _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
+        for n in ("init_random_frames", "num_threads"):
+            _check(getattr(self, n) >= 0, f"TrainConfig.{n}", ">= 0", getattr(self, n))
+        _check(self.updates_per_frame > 0 and math.isfinite(self.updates_per_frame),
+               "TrainConfig.updates_per_frame", "> 0 and finite", self.updates_per_frame)
+        _check(self.batch_size <= self.buffer_size, "TrainConfig.batch_size",
+               f"<= buffer_size ({self.buffer_size})", self.batch_size)
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Everything `train.py` needs: the environment, the agent and the training loop."""
+
+    env: EnvConfig = field(default_factory=lambda: EnvConfig(walk=WalkConfig(gait=GaitConfig(lift_height=0.10))))
+    agent: AgentConfig = field(default_factory=AgentConfig)
+    train: TrainConfig = field(default_factory=TrainConfig)

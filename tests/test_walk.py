@@ -22,9 +22,8 @@ def test_trot_walks_10_s_at_1_mps_on_its_feet(trajectory):
     assert abs(r.mean_speed - 1.0) <= 0.05, r.mean_speed
     assert r.lateral_drift < 0.3
     assert 0.9 * 10.0 < r.distance < 1.1 * 10.0
-    if trajectory == "cycloid":
-        # the rectangle path's abrupt corners make the hind calves brush the ground (README, known issues)
-        assert r.non_foot_contacts == [], r.non_foot_contacts
+    assert r.non_foot_contacts == [], r.non_foot_contacts
+    assert r.max_roll < 0.2 and r.max_pitch < 0.2
 
 
 def test_recorded_power_integrates_to_the_reported_energy():

@@ -89,15 +89,21 @@ class TrotController:
             raise ValueError(f"speed must be >= 0 and finite, got {speed!r}")
         self.speed = float(speed)
 
-    def step_lengths(self, body: BodyFeedback) -> np.ndarray:
+    def commanded_speed(self, t: float) -> float:
+        """m/s: the set speed, reached by a linear ramp over `speed_ramp_time` after a reset (t in s)."""
+        ramp = self.cfg.controller.speed_ramp_time
+        return self.speed if ramp <= 0 else self.speed * min(1.0, t / ramp)
+
+    def step_lengths(self, t: float, body: BodyFeedback) -> np.ndarray:
         """(4,) step length S per leg, m: S = v·stance_time, corrected for speed, skewed to hold the heading."""
         c = self.cfg.controller
+        v = self.commanded_speed(t)
         if body.forward_speed is not None and c.speed_gain > 0:
-            limit = c.max_speed_correction * self.speed
+            limit = c.max_speed_correction * v
             self.speed_correction = float(np.clip(
-                self.speed_correction + c.speed_gain * (self.speed - body.forward_speed) * self.cfg.sim.physics_dt,
+                self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.physics_dt,
                 -limit, limit))
-        S = (self.speed + self.speed_correction) * self.gait.stance_time
+        S = (v + self.speed_correction) * self.gait.stance_time
         # heading set-point turns back toward the path (y = 0); positive yaw error → lengthen left steps
         heading_error = body.yaw + c.lateral_gain * body.lateral_offset
         skew = np.clip(c.heading_gain * heading_error, -0.5, 0.5)
@@ -108,7 +114,7 @@ class TrotController:
         g, c = self.gait, self.cfg.controller
         body = body or BodyFeedback()
         phases = self.scheduler.leg_phases(t)
-        S = self.step_lengths(body)
+        S = self.step_lengths(t, body)
         xz = np.empty((4, 2))
         vxz = np.empty((4, 2))
         for legs in SIDES:  # left and right legs differ in step length (heading correction)
