@@ -1,0 +1,44 @@
+"""Replay buffer of transitions (`torchrl.data`), whose contents travel in checkpoints as plain tensors."""
+from __future__ import annotations
+
+from tensordict import TensorDict, TensorDictBase
+from torchrl.data import LazyTensorStorage, TensorDictReplayBuffer
+from torchrl.data.replay_buffers.samplers import RandomSampler
+
+# what one transition keeps: enough for the TD target (s, a, r, s', done)
+TRANSITION_KEYS = ("observation", "action", ("next", "observation"), ("next", "reward"), ("next", "done"),
+                   ("next", "terminated"))
+
+def make_replay_buffer(capacity: int, batch_size: int) -> TensorDictReplayBuffer:
+    """Uniform replay over the last `capacity` transitions (FIFO), sampled with torch's global RNG."""
+    return TensorDictReplayBuffer(storage=LazyTensorStorage(capacity), sampler=RandomSampler(),
+                                  batch_size=batch_size)
+
+def transitions(batch: TensorDictBase) -> TensorDictBase:
+    """The keys a transition keeps, flattened to one batch dimension."""
+    return batch.select(*TRANSITION_KEYS).reshape(-1)
+
+def buffer_state(rb: TensorDictReplayBuffer) -> dict:
+    """Contents (in storage order) and write cursor, as a plain dict of tensors."""
+    n = len(rb)
+    storage = rb._storage
+    data = storage[:n].to_dict() if n else {}
+    cursor = int(rb._writer._cursor) if n else 0
+    return {"size": n, "cursor": cursor, "capacity": int(storage.max_size), "data": data}
+
+def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
+    """Refill an empty buffer from `buffer_state`; raises ValueError if the capacities differ."""
+    if int(state["capacity"]) != int(rb._storage.max_size):
+        raise ValueError(f"replay buffer capacity in checkpoint ({state['capacity']}) differs from config "
+                         f"(train.buffer_size={rb._storage.max_size})")
+    rb.empty()
+    n = int(state["size"])
+    if n == 0:
+        return
+    data = TensorDict(state["data"], batch_size=[n])
+    rb.extend(data)  # writes slots 0..n-1 in order, as they were stored
+    rb._writer._cursor = int(state["cursor"]) % int(state["capacity"])
+    if len(rb) != n:
+        raise ValueError(f"replay buffer restored {len(rb)} transitions, checkpoint has {n}")
+
+__all__ = ["make_replay_buffer", "transitions", "buffer_state", "load_buffer_state", "TRANSITION_KEYS", "torch"]

@@ -1,0 +1,265 @@
+"""Two-stage training loop (paper Section 3): collect with TorchRL's `Collector`, replay, update, log, save.
+
+Stage 1 trains with the "stage1" reward (no energy term) until the mean score over `score_window`
+episodes reaches `stage1.stop_score` or its budget is spent; stage 2 continues the same agent (actor,
+critics, targets, optimizers) with the "stage2" reward. The replay buffer is cleared between the stages by
+default (`train.buffer_between_stages="clear"`): its stored rewards were computed without the energy term.
+
+Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
+the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
+at any moment. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
+buffer but it is not logged as an episode.
+"""
+from __future__ import annotations
+
+import math
+import random
+import time
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+import torch
+from torchrl.collectors import Collector
+from tqdm import tqdm
+
+from cyberdog import config as C
+from cyberdog.config import REWARD_TERM_NAMES
+from cyberdog.rl.agent import Agent, NonFiniteError
+from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, rng_state, save_atomic,
+                                    save_checkpoint, set_rng_state)
+from cyberdog.rl.env import make_env
+from cyberdog.rl.logger import EpisodeLogger
+from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, transitions
+
+OBSERVATION_SIZE, ACTION_SIZE = 50, 12
+
+
+def resolve_device(name: str) -> str:
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if name == "cuda" and not torch.cuda.is_available():
+        raise ValueError("train.device='cuda' but no CUDA device is available; use 'cpu' or 'auto'")
+    return name
+
+
+def _differences(a, b, prefix: str = "") -> list[str]:
+    """Dotted names of the fields where two config dicts differ."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return [d for k in sorted(set(a) | set(b)) for d in _differences(a.get(k), b.get(k), f"{prefix}{k}.")]
+    return [] if a == b else [f"{prefix[:-1]}: checkpoint {a!r} vs config {b!r}"]
+
+
+class Trainer:
+    """Runs `stages` (e.g. (1, 2)) of one experiment in `run_dir`."""
+
+    def __init__(self, cfg: C.ExperimentConfig, run_dir: str | Path, stages=(1, 2), resume: bool = False,
+                 init_from: str | Path | None = None, progress: bool = True):
+        self.cfg, self.run_dir, self.progress = cfg, Path(run_dir), progress
+        tc = cfg.train
+        if tc.num_threads:
+            torch.set_num_threads(tc.num_threads)
+        if tc.deterministic:
+            torch.use_deterministic_algorithms(True)
+        self.device = resolve_device(tc.device)
+        torch.manual_seed(tc.seed)  # network initialisation; a resume restores every RNG state below
+        np.random.seed(tc.seed)
+        random.seed(tc.seed)
+        self.agent = Agent(cfg.agent, OBSERVATION_SIZE, ACTION_SIZE, self.device)
+        self.rb = make_replay_buffer(tc.buffer_size, tc.batch_size)
+        self.stages = list(stages)
+        self.c = dict(stage=self.stages[0], env_steps=0, stage_env_steps=0, episodes=0, stage_episodes=0,
+                      update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
+        self.scores: deque = deque(maxlen=tc.score_window)
+        self.best_score = -math.inf
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        if resume:
+            self._restore(load_checkpoint(self.run_dir / "checkpoint.pt"), self.run_dir / "checkpoint.pt")
+        else:
+            if init_from is not None:
+                self._load_agent(load_checkpoint(init_from), init_from)
+            C.save(cfg, self.run_dir / "config.yaml")
+        self.logger = EpisodeLogger(self.run_dir, rows=self.c["csv_rows"],
+                                    purge_step=self.c["env_steps"] if resume else None)
+        self.last = {"actor_loss": math.nan, "critic_loss": math.nan, "q_mean": math.nan, "q_max": math.nan}
+
+    # ---- checkpoints -----------------------------------------------------------------------------------
+    def _state(self) -> dict:
+        return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": dict(self.c),
+                "agent": self.agent.state_dict(), "replay": buffer_state(self.rb), "rng": rng_state(),
+                "scores": list(self.scores), "best_score": self.best_score}
+
+    def save(self, name: str = "checkpoint.pt") -> Path:
+        self.logger.flush()
+        self.c["last_checkpoint"] = self.c["env_steps"]
+        return save_checkpoint(self._state(), self.run_dir / name)
+
+    def _load_agent(self, state: dict, path) -> None:
+        check_shapes(state["agent"]["loss"], self.agent.loss.state_dict(), "the agent", path)
+        self.agent.load_state_dict(state["agent"])
+
+    def _restore(self, state: dict, path) -> None:
+        try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
+            saved = C.to_dict(C.from_dict(C.ExperimentConfig, state.get("config")))
+        except (ValueError, TypeError) as e:
+            raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
+        differ = _differences(saved, C.to_dict(self.cfg))
+        if differ:
+            raise CheckpointError(f"{path} was written with another configuration than {self.run_dir}/config.yaml: "
+                                  + "; ".join(differ[:5]))
+        self._load_agent(state, path)
+        try:
+            load_buffer_state(self.rb, state["replay"])
+        except (ValueError, KeyError, RuntimeError) as e:
+            raise CheckpointError(f"{path}: replay buffer cannot be restored: {e}") from e
+        self.stages = list(state["stages"])
+        self.c.update(state["counters"])
+        self.scores.extend(state["scores"])
+        self.best_score = float(state["best_score"])
+        set_rng_state(state["rng"])
+
+    def _save_actor(self, name: str, score: float) -> None:
+        save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
+                     "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"]},
+                    self.run_dir / name)
+
+    # ---- the loop --------------------------------------------------------------------------------------
+    def run(self) -> dict:
+        try:
+            while not self.c["finished"]:
+                stage = self.c["stage"]
+                self._run_stage(stage)
+                self._save_actor(f"stage{stage}_final_actor.pt", self.scores[-1] if self.scores else math.nan)
+                save_checkpoint({**self._state(), "counters": {**self.c, "finished": True}},
+                                self.run_dir / f"stage{stage}_final.pt")
+                rest = [s for s in self.stages if s > stage]
+                if rest:  # next stage: same agent, fresh counters and score window
+                    self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0)
+                    self.scores.clear()
+                    self.best_score = -math.inf
+                    if self.cfg.train.buffer_between_stages == "clear":
+                        self.rb.empty()
+                else:
+                    self.c["finished"] = True
+                self.save()
+        finally:
+            self.logger.close()
+        return {**self.c, "updates": self.agent.updates, "buffer_size": len(self.rb),
+                "window_mean_score": float(np.mean(self.scores)) if self.scores else math.nan}
+
+    def _stage_done(self, sc: C.StageConfig) -> bool:
+        c = self.c
+        if c["stage_episodes"] >= sc.max_episodes or (sc.max_env_steps and c["stage_env_steps"] >= sc.max_env_steps):
+            return True
+        return len(self.scores) == self.scores.maxlen and float(np.mean(self.scores)) >= sc.stop_score
+
+    def _run_stage(self, stage: int) -> None:
+        tc, sc = self.cfg.train, getattr(self.cfg.train, f"stage{stage}")
+        if self._stage_done(sc):
+            return
+        c = self.c
+        env = make_env(self.cfg.env, sc.reward, seed=tc.seed + 100_003 * stage + c["env_steps"], track_init=True)
+        random_frames = self._random_frames_left(stage)
+        collector = Collector(env, self.agent.policy, frames_per_batch=tc.frames_per_batch, total_frames=-1,
+                              init_random_frames=random_frames or None, policy_device=self.device,
+                              env_device="cpu", storing_device="cpu", auto_register_policy_transforms=False)
+        budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
+        bar = tqdm(total=budget, initial=min(c["stage_env_steps"], budget), unit="step", desc=f"stage {stage}",
+                   disable=not self.progress, dynamic_ncols=True)
+        episode = self._new_episode()
+        t_env = t_upd = 0.0
+        n_upd = 0
+        try:
+            t0 = time.perf_counter()
+            for batch in collector:
+                t_env += time.perf_counter() - t0
+                if not torch.isfinite(batch["action"]).all():
+                    raise NonFiniteError("action is not finite (NaN or inf); training stopped")
+                self.rb.extend(transitions(batch))
+                n = batch.numel()
+                self.agent.policy[-1].step(n)  # anneal the exploration noise
+                c["env_steps"] += n
+                c["stage_env_steps"] += n
+                t1 = time.perf_counter()
+                n_upd += self._updates(n)
+                t_upd += time.perf_counter() - t1
+                rates = {"env_steps_per_s": c["stage_env_steps"] / max(t_env, 1e-9),
+                         "updates_per_s": n_upd / t_upd if t_upd > 0 else math.nan}
+                self._bookkeep(batch, episode, stage, sc, rates)
+                bar.update(min(n, max(0, budget - bar.n)))
+                bar.set_postfix(ep=c["stage_episodes"], score=f"{np.mean(self.scores) if self.scores else 0:.2f}",
+                                upd_s=f"{rates['updates_per_s']:.0f}", refresh=False)
+                if c["env_steps"] - c["last_checkpoint"] >= tc.checkpoint_every:
+                    self.save()
+                if self._stage_done(sc):
+                    break
+                t0 = time.perf_counter()
+        except NonFiniteError as e:
+            path = self.save("diagnostic.pt")
+            raise NonFiniteError(f"{e}; diagnostic checkpoint written to {path}") from None
+        finally:
+            bar.close()
+            collector.shutdown()
+
+    def _random_frames_left(self, stage: int) -> int:
+        """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent)."""
+        if stage != self.stages[0] or self.agent.updates > 0:
+            return 0
+        return max(0, self.cfg.train.init_random_frames - self.c["stage_env_steps"])
+
+    def _updates(self, frames: int) -> int:
+        tc = self.cfg.train
+        if len(self.rb) < tc.batch_size or self._random_frames_left(self.c["stage"]) > 0:
+            return 0
+        self.c["update_credit"] += frames * tc.updates_per_frame
+        n = int(self.c["update_credit"])
+        self.c["update_credit"] -= n
+        sums: dict[str, float] = {}
+        for _ in range(n):
+            for k, v in self.agent.update(self.rb.sample()).items():
+                sums[k] = sums.get(k, 0.0) + v
+        if n:
+            self.last = {k: v / n for k, v in sums.items()}
+            self.last["actor_loss"] = self.agent.last_actor_loss
+        return n
+
+    @staticmethod
+    def _new_episode() -> dict:
+        return {"length": 0, "score": 0.0, "energy_J": 0.0, "speed_sum": 0.0,
+                **{f"reward_{n}": 0.0 for n in REWARD_TERM_NAMES}}
+
+    def _bookkeep(self, batch, ep: dict, stage: int, sc: C.StageConfig, rates: dict) -> None:
+        """Accumulate each step into the running episode; log, score and save at every episode end."""
+        nxt = batch["next"]
+        cols = {k: nxt[k].reshape(-1).tolist() for k in ["reward", "energy_J", "forward_speed"]
+                + [f"reward_{n}" for n in REWARD_TERM_NAMES]}
+        done = nxt["done"].reshape(-1).tolist()
+        first_step = self.c["env_steps"] - len(done)
+        for i, d in enumerate(done):
+            ep["length"] += 1
+            ep["score"] += cols["reward"][i]
+            ep["energy_J"] += cols["energy_J"][i]
+            ep["speed_sum"] += cols["forward_speed"][i]
+            for n in REWARD_TERM_NAMES:
+                ep[f"reward_{n}"] += cols[f"reward_{n}"][i]
+            if d:
+                self._episode_end(ep, stage, sc, rates, first_step + i + 1)
+                ep.update(self._new_episode())
+
+    def _episode_end(self, ep: dict, stage: int, sc: C.StageConfig, rates: dict, env_steps: int) -> None:
+        c = self.c
+        c["episodes"] += 1
+        c["stage_episodes"] += 1
+        self.scores.append(ep["score"])
+        row = {**{k: v for k, v in ep.items() if k != "speed_sum"}, **self.last, **rates,
+               "stage": stage, "episode": c["episodes"], "stage_episode": c["stage_episodes"],
+               "env_steps": env_steps, "mean_speed": ep["speed_sum"] / ep["length"],
+               "window_mean_score": float(np.mean(self.scores)), "updates": self.agent.updates,
+               "wall_time_s": time.time()}
+        self.logger.log(row)
+        c["csv_rows"] = self.logger.rows
+        if ep["score"] > self.best_score:
+            self.best_score = ep["score"]
+            self._save_actor(f"stage{stage}_best_actor.pt", ep["score"])
+        if ep["score"] >= sc.save_score:
+            self._save_actor(f"saved/stage{stage}_episode{c['episodes']:06d}_actor.pt", ep["score"])

@@ -1,0 +1,108 @@
+"""Integration tests of `train.py` and the trainer with tiny budgets (configs/tiny.yaml)."""
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import torch
+
+from cyberdog import config as C
+from cyberdog.rl.checkpoint import load_checkpoint
+from cyberdog.rl.logger import TIMING_COLUMNS
+from cyberdog.rl.trainer import Trainer
+
+ROOT = Path(__file__).resolve().parents[1]
+STAGE1 = ["train.stage1.max_env_steps=300", "train.checkpoint_every=100"]
+
+
+def tiny(extra=()) -> C.ExperimentConfig:
+    return C.override(C.load(C.ExperimentConfig, ROOT / "configs/tiny.yaml"), STAGE1 + list(extra))
+
+
+def rows(run_dir: Path) -> list[dict]:
+    with open(run_dir / "metrics.csv") as f:
+        return [{k: v for k, v in r.items() if k not in TIMING_COLUMNS} for r in csv.DictReader(f)]
+
+
+@pytest.fixture(scope="module")
+def reference_run(tmp_path_factory):
+    """One uninterrupted stage-1 run of 300 env steps."""
+    torch.set_num_threads(1)
+    run_dir = tmp_path_factory.mktemp("ref")
+    summary = Trainer(tiny(), run_dir, stages=(1,), progress=False).run()
+    return run_dir, summary
+
+
+def test_short_run_writes_csv_tensorboard_and_checkpoint(reference_run):
+    run_dir, summary = reference_run
+    assert summary["env_steps"] == 300 and summary["updates"] > 0
+    table = rows(run_dir)
+    assert len(table) == summary["episodes"] >= 10
+    assert {"score", "reward_speed", "reward_energy", "energy_J", "mean_speed", "actor_loss", "critic_loss",
+            "q_mean"} <= set(table[0])
+    assert float(table[-1]["energy_J"]) > 0 and table[-1]["critic_loss"] != "nan"
+    assert list((run_dir / "tb").glob("events.out.tfevents.*"))
+    state = load_checkpoint(run_dir / "checkpoint.pt")
+    assert state["counters"]["env_steps"] == 300 and state["replay"]["size"] == 300
+    assert C.load(C.ExperimentConfig, run_dir / "config.yaml") == tiny()
+    assert (run_dir / "stage1_best_actor.pt").is_file() and (run_dir / "stage1_final.pt").is_file()
+
+
+def test_same_seed_gives_identical_metrics(reference_run, tmp_path):
+    run_dir, _ = reference_run
+    Trainer(tiny(), tmp_path, stages=(1,), progress=False).run()
+    assert rows(tmp_path) == rows(run_dir)
+    other = tmp_path / "other_seed"
+    Trainer(tiny(["train.seed=1", "train.stage1.max_env_steps=100"]), other, stages=(1,), progress=False).run()
+    assert rows(other)[:3] != rows(run_dir)[:3]
+
+
+def _train(*args: str) -> list[str]:
+    return [sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs/tiny.yaml"), "--stage", "1",
+            "--no-progress", *[a for s in STAGE1 for a in ("--set", s)], *args]
+
+
+def test_killed_run_resumes_to_the_same_counters(reference_run, tmp_path):
+    ref_dir, ref = reference_run
+    run_dir = tmp_path / "killed"
+    proc = subprocess.Popen(_train("--run-dir", str(run_dir)), cwd=ROOT, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    deadline = time.time() + 60
+    while not (run_dir / "checkpoint.pt").exists() and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
+    killed_at = load_checkpoint(run_dir / "checkpoint.pt")["counters"]["env_steps"]
+    assert 0 < killed_at < 300
+    done = subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(run_dir), "--no-progress"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    state = load_checkpoint(run_dir / "checkpoint.pt")
+    ref_state = load_checkpoint(ref_dir / "checkpoint.pt")
+    for k in ("env_steps", "stage_env_steps", "finished"):
+        assert state["counters"][k] == ref_state["counters"][k], k
+    assert state["agent"]["updates"] == ref_state["agent"]["updates"] == ref["updates"]
+    assert state["replay"]["size"] == ref_state["replay"]["size"] == ref["buffer_size"]
+    assert len(rows(run_dir)) == state["counters"]["episodes"]  # every logged episode exactly once
+
+
+def test_cli_errors_are_clear(tmp_path):
+    bad = subprocess.run(_train("--set", "agent.algorithm=ppo", "--run-dir", str(tmp_path)), cwd=ROOT,
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "AgentConfig.algorithm" in bad.stderr
+    missing = subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(tmp_path / "nothing")],
+                             cwd=ROOT, capture_output=True, text=True)
+    assert missing.returncode != 0 and "config.yaml" in missing.stderr
+
+
+def test_help_documents_every_option():
+    out = subprocess.run([sys.executable, str(ROOT / "train.py"), "--help"], capture_output=True, text=True)
+    for opt in ("--config", "--stage", "--seed", "--run-dir", "--set", "--resume", "--init-from", "--device"):
+        assert opt in out.stdout
