@@ -361,7 +361,9 @@ OBSERVATION_SOURCES = ("true", "estimated")
 class EnvConfig:
     """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
 
-    walk: WalkConfig = field(default_factory=WalkConfig)  # robot, actuator, sim, gait, PID, controller, energy
+    # robot, actuator, sim, gait, PID, controller, energy; the lift height is 0.10 m (not the paper's 0.15 m)
+    # so that the trot stays inside Table 4's ±45° joint range around the standing pose
+    walk: WalkConfig = field(default_factory=lambda: WalkConfig(gait=GaitConfig(lift_height=0.10)))
     reward: RewardConfig = field(default_factory=RewardConfig)  # Eq. (11) weights (stage 2 by default)
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)

@@ -89,7 +89,7 @@ class CyberDogEnv(gym.Env):
 
     def __init__(self, config: C.EnvConfig | None = None, reward: str | C.RewardConfig | None = None,
                  render_mode: str | None = None, **overrides: Any):
-        cfg = config or C.EnvConfig(walk=C.WalkConfig(gait=C.GaitConfig(lift_height=0.10)))
+        cfg = config or C.EnvConfig()
         if reward is not None:
             if isinstance(reward, str):
                 if reward not in REWARD_PRESETS:
