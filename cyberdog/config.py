@@ -499,6 +499,8 @@ class TrainConfig:
     buffer_between_stages: str = "clear"  # "clear": rewards change at stage 2, so old transitions are dropped; "keep"
     batch_size: int = 256  # transitions per update
     init_random_frames: int = 5_000  # env steps with uniform random actions before learning starts (stage 1)
+    learning_starts: int = 0  # env steps of the stage's first policy (+ noise) before the first update; lets
+    #                           the critic see the walking controller before the actor moves (residual mode)
     frames_per_batch: int = 200  # env steps collected between rounds of updates
     updates_per_frame: float = 1.0  # critic updates per collected env step once learning has started
     checkpoint_every: int = 10_000  # env steps between periodic checkpoints (rounded up to frames_per_batch)
@@ -511,7 +513,7 @@ class TrainConfig:
                f"one of {BUFFER_POLICIES}", self.buffer_between_stages)
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
-        for n in ("init_random_frames", "num_threads"):
+        for n in ("init_random_frames", "learning_starts", "num_threads"):
             _check(getattr(self, n) >= 0, f"TrainConfig.{n}", ">= 0", getattr(self, n))
         _check(self.updates_per_frame > 0 and math.isfinite(self.updates_per_frame),
                "TrainConfig.updates_per_frame", "> 0 and finite", self.updates_per_frame)

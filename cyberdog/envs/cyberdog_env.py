@@ -17,19 +17,26 @@ from cyberdog.sim.robot import Robot
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
 
-# Observation layout: (name, size, low, high); bounds are generous physical limits, values are clipped to them.
+# Observation layout: (name, size, low, high, typical magnitude). Bounds are generous physical limits, values
+# are clipped to them; the typical magnitude is what a learner may divide by to bring inputs to order one.
 OBSERVATION_LAYOUT = (
-    ("body_height", 1, 0.0, 1.0),  # m, z of the body centre
-    ("lateral_offset", 1, -5.0, 5.0),  # m, y from the straight line walked
-    ("body_rpy", 3, -np.pi, np.pi),  # rad, roll, pitch, yaw
-    ("body_linear_velocity", 3, -10.0, 10.0),  # m/s, body frame (true or estimated)
-    ("body_angular_velocity", 3, -50.0, 50.0),  # rad/s, body frame
-    ("joint_angles", 12, -2 * np.pi, 2 * np.pi),  # rad
-    ("joint_velocities", 12, -100.0, 100.0),  # rad/s
-    ("joint_torques", 12, -100.0, 100.0),  # N·m, motor torque applied at the last physics step
-    ("target_speed", 1, 0.0, 10.0),  # m/s
-    ("gait_phase", 2, -1.0, 1.0),  # sin, cos of the trot phase (LF leg)
+    ("body_height", 1, 0.0, 1.0, 0.3),  # m, z of the body centre
+    ("lateral_offset", 1, -5.0, 5.0, 0.1),  # m, y from the straight line walked
+    ("body_rpy", 3, -np.pi, np.pi, 0.2),  # rad, roll, pitch, yaw
+    ("body_linear_velocity", 3, -10.0, 10.0, 1.0),  # m/s, body frame (true or estimated)
+    ("body_angular_velocity", 3, -50.0, 50.0, 2.0),  # rad/s, body frame
+    ("joint_angles", 12, -2 * np.pi, 2 * np.pi, 1.5),  # rad
+    ("joint_velocities", 12, -100.0, 100.0, 10.0),  # rad/s
+    ("joint_torques", 12, -100.0, 100.0, 10.0),  # N·m, motor torque applied at the last physics step
+    ("target_speed", 1, 0.0, 10.0, 1.0),  # m/s
+    ("gait_phase", 2, -1.0, 1.0, 1.0),  # sin, cos of the trot phase (LF leg)
 )
+
+
+def observation_typical_magnitude() -> np.ndarray:
+    """(50,) typical magnitude of each observation entry (for input scaling in a learner)."""
+    return np.concatenate([np.full(n, m, dtype=np.float32) for _, n, _, _, m in OBSERVATION_LAYOUT])
+
 
 
 class CyberDogEnv(gym.Env):
@@ -118,8 +125,8 @@ class CyberDogEnv(gym.Env):
         self.q_low, self.q_high = np.maximum(q_stand - r, lo), np.minimum(q_stand + r, hi)
         self.fall_tilt = np.deg2rad(cfg.fall_tilt_deg)
         self.latency_steps = int(round(cfg.latency / self.dt))
-        low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _ in OBSERVATION_LAYOUT])
-        high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_ in OBSERVATION_LAYOUT])
+        low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in OBSERVATION_LAYOUT])
+        high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in OBSERVATION_LAYOUT])
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (12,), dtype=np.float32)
         self.estimator_every = int(round(cfg.estimator_dt / self.dt))

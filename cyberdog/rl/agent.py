@@ -16,6 +16,7 @@ from torchrl.modules import AdditiveGaussianModule, OrnsteinUhlenbeckProcessModu
 from torchrl.objectives import DDPGLoss, SoftUpdate, TD3Loss
 
 from cyberdog.config import AgentConfig
+from cyberdog.envs.cyberdog_env import observation_typical_magnitude
 from cyberdog.rl.networks import make_actor, make_critic
 
 
@@ -29,8 +30,9 @@ def action_spec(action_size: int, device: torch.device | str = "cpu") -> Bounded
 
 def make_loss(cfg: AgentConfig, observation_size: int, action_size: int):
     """Actor, critic, the loss module holding them and their targets, and the soft target updater."""
-    actor = make_actor(observation_size, action_size, cfg.hidden_sizes)
-    critic = make_critic(observation_size, action_size, cfg.hidden_sizes)
+    scale = observation_typical_magnitude() if observation_size == len(observation_typical_magnitude()) else None
+    actor = make_actor(observation_size, action_size, cfg.hidden_sizes, scale)
+    critic = make_critic(observation_size, action_size, cfg.hidden_sizes, scale)
     if cfg.algorithm == "td3":
         loss = TD3Loss(actor, critic, action_spec=action_spec(action_size), num_qvalue_nets=2,
                        policy_noise=cfg.policy_noise, noise_clip=cfg.noise_clip, loss_function="l2",

@@ -209,7 +209,8 @@ class Trainer:
 
     def _updates(self, frames: int) -> int:
         tc = self.cfg.train
-        if len(self.rb) < tc.batch_size or self._random_frames_left(self.c["stage"]) > 0:
+        if (len(self.rb) < tc.batch_size or self._random_frames_left(self.c["stage"]) > 0
+                or (self.agent.updates == 0 and self.c["stage_env_steps"] < tc.learning_starts)):
             return 0
         self.c["update_credit"] += frames * tc.updates_per_frame
         n = int(self.c["update_credit"])
