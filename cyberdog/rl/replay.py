@@ -41,4 +41,4 @@ def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
     if len(rb) != n:
         raise ValueError(f"replay buffer restored {len(rb)} transitions, checkpoint has {n}")
 
-__all__ = ["make_replay_buffer", "transitions", "buffer_state", "load_buffer_state", "TRANSITION_KEYS", "torch"]
+__all__ = ["make_replay_buffer", "transitions", "buffer_state", "load_buffer_state", "TRANSITION_KEYS"]
