@@ -10,14 +10,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cyberdog.config import WalkConfig
+from cyberdog.config import EnvConfig, WalkConfig
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
 from cyberdog.core.trajectories import FootTrajectory
 from cyberdog.sim.robot import Robot
 
-FALL_HEIGHT = 0.15  # m, body centre below this = fallen
-FALL_TILT = 0.8  # rad, |roll| or |pitch| above this = fallen
+# "fallen" means the same as in the learning environment (EnvConfig's defaults)
+FALL_HEIGHT = EnvConfig.fall_height  # m, body centre below this
+FALL_TILT = np.deg2rad(EnvConfig.fall_tilt_deg)  # rad, |roll| or |pitch| above this
 CONTACT_CHECK_EVERY = 10  # physics steps between checks of which links touch the ground
 
 
