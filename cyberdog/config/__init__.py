@@ -13,5 +13,5 @@ config as C; C.EnvConfig()` works.
 """
 from cyberdog.config.io import from_dict, load, override, replace, save, to_dict  # noqa: F401
 from cyberdog.config.learning import *  # noqa: F401,F403
-from cyberdog.config.learning import STAGE1_REWARD, STAGE2_REWARD  # noqa: F401
+from cyberdog.config.learning import STAGE1_REWARD, STAGE2_REWARD, stage_reward  # noqa: F401
 from cyberdog.config.robot import *  # noqa: F401,F403

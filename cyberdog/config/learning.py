@@ -1,9 +1,10 @@
 """Settings of the learning problem: reward (Eq. 10-11), state estimator, environment (Tables 3-4), agent, training."""
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Tuple
+from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
 
@@ -201,15 +202,27 @@ class StageConfig:
     max_env_steps: int = 0  # env-step budget of this stage; 0 = no step budget (episodes only)
     stop_score: float = 19.0  # stop when the mean score over `score_window` episodes reaches this; .inf = never
     save_score: float = 20.0  # save the agent whenever an episode's score reaches this (Table 4 "save agent")
+    energy_weight: Optional[float] = None  # E of Eq. (10) per J for this stage; None = the preset's (0 or −0.2)
 
     def __post_init__(self) -> None:
         _check(self.reward in ("stage1", "stage2"), "StageConfig.reward", "'stage1' or 'stage2'", self.reward)
         _check(self.max_episodes >= 1, "StageConfig.max_episodes", ">= 1", self.max_episodes)
         _check(self.max_env_steps >= 0, "StageConfig.max_env_steps", ">= 0 (0 = no step budget)",
                self.max_env_steps)
+        _check(self.energy_weight is None or (math.isfinite(self.energy_weight) and self.energy_weight <= 0),
+               "StageConfig.energy_weight", "None (the preset's) or a finite number <= 0 (per J)",
+               self.energy_weight)
         for n in ("stop_score", "save_score"):
             _check(not math.isnan(getattr(self, n)), f"StageConfig.{n}", "a number (.inf allowed)",
                    getattr(self, n))
+
+
+def stage_reward(stage: StageConfig) -> RewardConfig:
+    """The reward weights one training stage uses: its preset, with `energy_weight` if set."""
+    preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
+    if stage.energy_weight is None:
+        return preset
+    return dataclasses.replace(preset, energy=float(stage.energy_weight))
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from torchrl.data import Unbounded
 from torchrl.envs import GymWrapper, InitTracker, TransformedEnv
 from torchrl.envs.gym_like import default_info_dict_reader
 
-from cyberdog.config import REWARD_TERM_NAMES, EnvConfig
+from cyberdog.config import REWARD_TERM_NAMES, EnvConfig, RewardConfig
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 
 INFO_KEYS = tuple(f"reward_{n}" for n in REWARD_TERM_NAMES) + ("energy_J", "forward_speed")
@@ -37,14 +37,14 @@ class FlatInfo(gym.Wrapper):
         return obs, reward, terminated, truncated, self._flat(info)
 
 
-def make_gym_env(env_cfg: EnvConfig, reward: str) -> gym.Env:
+def make_gym_env(env_cfg: EnvConfig, reward: str | RewardConfig) -> gym.Env:
     """The gymnasium env with the paper's time limit (`EnvConfig.max_episode_steps`) and flat info."""
     env = CyberDogEnv(config=env_cfg, reward=reward)
     env = gym.wrappers.TimeLimit(env, max_episode_steps=env_cfg.max_episode_steps)
     return FlatInfo(env)
 
 
-def make_env(env_cfg: EnvConfig, reward: str, seed: int, device: str = "cpu",
+def make_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, device: str = "cpu",
              track_init: bool = False) -> TransformedEnv:
     """TorchRL env; `track_init` adds the "is_init" flag Ornstein–Uhlenbeck noise needs."""
     base = GymWrapper(make_gym_env(env_cfg, reward), device=device)

@@ -158,7 +158,7 @@ class Trainer:
         if self._stage_done(sc):
             return
         c = self.c
-        env = make_env(self.cfg.env, sc.reward, seed=tc.seed + 100_003 * stage + c["env_steps"], track_init=True)
+        env = make_env(self.cfg.env, C.stage_reward(sc), seed=tc.seed + 100_003 * stage + c["env_steps"], track_init=True)
         random_frames = self._random_frames_left(stage)
         collector = Collector(env, self.agent.policy, frames_per_batch=tc.frames_per_batch, total_frames=-1,
                               init_random_frames=random_frames or None, policy_device=self.device,
