@@ -183,3 +183,62 @@ class WalkConfig:
     pid: PIDConfig = field(default_factory=PIDConfig)
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     energy: EnergyConfig = field(default_factory=EnergyConfig)
+
+
+@dataclass(frozen=True)
+class HardwareConfig:
+    """A "hardware-like" robot for the prototype experiment in simulation (paper Section 4.2), beyond the paper.
+
+    The defaults are all off: `HardwareConfig()` is the ideal simulated robot of Section 4.1 (true states,
+    no friction, no delay, nominal mass). `HARDWARE_LIKE` below turns every effect on. What each does in a
+    scripted walk (`cyberdog.analysis.walk.walk(..., hardware=...)`):
+
+    - `friction`: the joints feel viscous + dry friction (ActuatorConfig.viscous_damping 0.01 N·m·s/rad,
+      dry_friction 0.246 N·m [X]) in the physics; the motors must overcome it (the paper's suspected cause of
+      its 3 % sim-to-real gap). The torque–speed curve and copper loss are on in both cases (ActuatorConfig,
+      cyberdog.core.energy).
+    - `latency_s`: a joint torque reaches the joint this long after the controller computed it (a FIFO of
+      whole physics steps). 3 ms [G]: one 500 Hz cycle of Xiaomi's locomotion controller plus the motor bus.
+    - `joint_angle_noise_std`, `joint_velocity_noise_std`: white encoder noise on the q, q̇ the controller
+      reads (the energy is computed from the true values) [G, as EnvConfig's defaults].
+    - `estimated_velocity`: the controller's speed feedback is the Kalman estimate (simulated IMU + leg
+      odometry, cyberdog.core.estimator) instead of the simulator's true body velocity; `imu_noise` adds the
+      IMU's noise and bias (EstimatorConfig's [G] BMI088-like values).
+    - `mass_uncertainty`: every link's mass and inertia are scaled by one draw from U(1 − u, 1 + u), from
+      `seed` (±5 % in the preset [G]: the model's 13.57 kg against the spec's "about 14 kg", +3 %). The
+      controller keeps the nominal mass: it does not know the draw.
+    - `seed`: one seed for the mass draw and every sensor-noise generator (same seed, same walk).
+    """
+
+    friction: bool = False  # joint viscous + dry friction in the physics (values from ActuatorConfig [X])
+    latency_s: float = 0.0  # s, actuation delay, a whole multiple of SimConfig.physics_dt [G: 0.003]
+    joint_angle_noise_std: float = 0.0  # rad, encoder noise on the controller's q [G: 0.002]
+    joint_velocity_noise_std: float = 0.0  # rad/s, noise on the controller's q̇ [G: 0.05]
+    estimated_velocity: bool = False  # speed feedback from the IMU + leg-odometry Kalman filter, not the truth
+    imu_noise: bool = False  # simulated IMU noise and bias (EstimatorConfig defaults), with estimated_velocity
+    estimator_dt: float = 0.005  # s, Kalman filter period, a whole multiple of physics_dt (as EnvConfig's)
+    mass_uncertainty: float = 0.0  # ± fraction; mass scale drawn from U(1 − u, 1 + u) [G: 0.05]
+    seed: int = 0  # seeds the mass draw and the sensor noise
+
+    @property
+    def ideal(self) -> bool:
+        """True when no effect is on (the ideal robot, whatever the seed)."""
+        return not (self.friction or self.latency_s > 0 or self.joint_angle_noise_std > 0
+                    or self.joint_velocity_noise_std > 0 or self.estimated_velocity or self.mass_uncertainty > 0)
+
+    def __post_init__(self) -> None:
+        _non_negative(self, "latency_s", "joint_angle_noise_std", "joint_velocity_noise_std", "mass_uncertainty")
+        _positive(self, "estimator_dt")
+        _check(self.latency_s <= 0.1, "HardwareConfig.latency_s", "in [0, 0.1] s", self.latency_s)
+        _check(self.mass_uncertainty <= 0.5, "HardwareConfig.mass_uncertainty", "in [0, 0.5]",
+               self.mass_uncertainty)
+        _check(isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0,
+               "HardwareConfig.seed", "an integer >= 0", self.seed)
+        _check(not self.imu_noise or self.estimated_velocity, "HardwareConfig.imu_noise",
+               "False unless estimated_velocity is True (the IMU only feeds the estimator)", self.imu_noise)
+
+
+# the prototype experiment's robot: every effect of HardwareConfig on ([G] values, see its docstring)
+HARDWARE_LIKE = HardwareConfig(friction=True, latency_s=0.003, joint_angle_noise_std=0.002,
+                               joint_velocity_noise_std=0.05, estimated_velocity=True, imu_noise=True,
+                               mass_uncertainty=0.05)

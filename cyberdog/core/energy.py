@@ -170,6 +170,24 @@ def range_at_full_charge(energy_J: float, distance_m: float, cfg: EnergyConfig) 
     return distance_m / energy_J * cfg.usable_fraction * battery_capacity_J(cfg)
 
 
+def energy_reduction(energy_min: float, energy_s: float) -> float:
+    """Eq. (12): D_t = (E_min − E_s) / E_min, as a fraction; E_min the cheaper of the other trajectories' energy,
+    E_s the evaluated trajectory's (any unit, both the same: J, J/m or % of battery)."""
+    if not (np.isfinite(energy_min) and energy_min > 0 and np.isfinite(energy_s)):
+        raise ValueError(f"Eq. (12) needs E_min > 0 and a finite E_s, got {energy_min!r}, {energy_s!r}")
+    return (energy_min - energy_s) / energy_min
+
+
+def range_from_percent(distance_m: float, percent_used: float, cfg: EnergyConfig) -> float:
+    """Range, m, on the usable pack (E_f = 100·usable_fraction %, drained to 0) at the rate of a walk of
+    `distance_m` that used `percent_used` points (Eq. 13): d · 100·usable_fraction / P_C.
+    Equal to `range_at_full_charge(E, d, cfg)` when percent_used = battery_percent_used(E, cfg)."""
+    _check_distance(distance_m)
+    if not (np.isfinite(percent_used) and percent_used > 0):
+        raise ValueError(f"percent used must be > 0 and finite to give a range, got {percent_used!r}")
+    return distance_m * 100.0 * cfg.usable_fraction / percent_used
+
+
 # ---------------------------------------------------------------------------------------------------------
 # Accumulator used inside the simulation loop
 # ---------------------------------------------------------------------------------------------------------

@@ -1,0 +1,358 @@
+"""The trajectory comparison of the paper's Section 4.1 and its Table 5.
+
+For each speed (1.0, 1.2, 1.4 m/s) the learned trajectory (one per policy seed) and the two common ones are
+replayed by the same IK + PID diagonal trot (`cyberdog.analysis.walk.walk`) with the same gait period and step
+length S = v·stance_time, for `duration` s (the paper's 10 s). Each walk reports E by Eq. (7), energy per
+100 m, cost of transport and mean speed; the learned walks also D_t by Eq. (12) against the cheaper baseline
+of the same set.
+
+Two sets of baselines, because the lift height H alone changes the energy a lot:
+- "paper": the baselines at the paper's H (`cfg.gait.lift_height`, 0.15 m): Table 5 proper;
+- "same_lift": the baselines at the learned trajectory's own recorded H (a control: what is left of the
+  saving when only the shape differs).
+The learned trajectory is always replayed at its own recorded H (its provenance says which).
+
+A walk that falls, or whose mean speed over its last half misses the command by more than 5 %, is reported
+with its status and left out of D_t and of the across-seed means (mean and 95 % Student-t interval,
+`cyberdog.analysis.stats.mean_ci`). Walks run in parallel processes (spawn; one PyBullet client each).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import multiprocessing as mp
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from cyberdog.analysis.stats import mean_ci
+from cyberdog.analysis.walk import walk
+from cyberdog.config import WalkConfig
+from cyberdog.core import energy as en
+from cyberdog.core.trajectories import SampledTrajectory
+
+PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, Table 5
+BASELINES = ("cycloid", "straight")
+SETS = ("paper", "same_lift")
+LIFT_DECIMALS = 4  # lift heights equal to 0.1 mm share their baseline walks
+# the paper's Table 5, kJ over the 10 s walk, for reference beside ours
+PAPER_TABLE5_KJ = {
+    "learned": (1.6236, 1.8152, 2.8261),
+    "cycloid": (1.8451, 2.0489, 3.1021),
+    "straight": (2.3571, 2.7571, 3.2871),
+    "decrement_pct": (12.0, 11.0, 9.0),
+}
+COLUMNS = ["set", "trajectory", "seed", "lift_height_m", "speed_command_mps", "mean_speed_mps", "status",
+           "energy_kJ", "energy_per_100m_kJ", "cost_of_transport", "D_t_pct", "D_t_per_100m_pct",
+           "E_min_trajectory"]
+
+
+@dataclass(frozen=True)
+class WalkJob:
+    """One replay: a trajectory at one speed and lift height."""
+
+    walk_id: int
+    trajectory: str  # "learned", "cycloid" or "straight"
+    seed: str  # the learned trajectory's label ("" for the baselines)
+    speed: float  # m/s
+    lift_height: float  # m
+    cfg: WalkConfig
+    duration: float  # s
+    path: SampledTrajectory | None = None  # the learned path (None: the baseline named by cfg.gait)
+
+
+def learned_lift_height(traj: SampledTrajectory) -> float:
+    """m, the lift height the learned trajectory was recorded with (its peak z)."""
+    return float(traj.lift_height)
+
+
+def pinned_lift(traj: SampledTrajectory, lift_height: float) -> SampledTrajectory:
+    """The same recorded path, renormalised so that a trot configured with `lift_height` replays it at its
+    recorded height (for experiments that share one gait config between trajectories, e.g. the prototype)."""
+    return SampledTrajectory(traj.phase, traj.x, traj.z, traj.step_length, lift_height,
+                             {**traj.provenance, "replayed_lift_height_m": float(np.max(traj.z)),
+                              "pinned_to_config_lift_height_m": float(lift_height)})
+
+
+def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: float) -> WalkConfig:
+    gait = dataclasses.replace(base.gait, speed=float(speed), lift_height=float(lift_height),
+                               trajectory=trajectory if trajectory in BASELINES else base.gait.trajectory)
+    return dataclasses.replace(base, gait=gait)
+
+
+def comparison_jobs(cfg: WalkConfig, learned: dict[str, SampledTrajectory], speeds=PAPER_SPEEDS,
+                    duration: float = 10.0, same_lift: bool = True) -> list[WalkJob]:
+    """Every walk of the comparison, each baseline walk once per distinct lift height."""
+    jobs: list[WalkJob] = []
+    lifts = [round(cfg.gait.lift_height, LIFT_DECIMALS)]
+    if same_lift:
+        lifts += [round(learned_lift_height(t), LIFT_DECIMALS) for t in learned.values()]
+    lifts = list(dict.fromkeys(lifts))
+    for v in speeds:
+        for label, traj in learned.items():
+            h = learned_lift_height(traj)
+            jobs.append(WalkJob(len(jobs), "learned", label, float(v), h, walk_config(cfg, "learned", v, h),
+                                duration, traj))
+        for name in BASELINES:
+            for h in lifts:
+                jobs.append(WalkJob(len(jobs), name, "", float(v), h, walk_config(cfg, name, v, h), duration))
+    return jobs
+
+
+def run_walk_job(job: WalkJob) -> dict:
+    """One walk → a row with its metrics and total joint power trace (runs in a worker process)."""
+    t0 = time.perf_counter()
+    r = walk(job.cfg, job.duration, job.path, record=True)
+    total_power = r.traces["power"].sum(axis=1)  # W, Σ_ij |τ_ij·θ̇_ij|, Eq. (7)'s integrand
+    if r.fell:
+        status = f"fell at {r.duration:.2f} s"
+    elif not r.speed_ok:
+        status = f"speed miss ({r.mean_speed:.3f} m/s)"
+    else:
+        status = "ok"
+    label = job.trajectory if job.trajectory != "straight" else f"straight ({job.cfg.gait.straight_shape})"
+    return {
+        "walk_id": job.walk_id, "trajectory": job.trajectory, "label": label, "seed": job.seed,
+        "lift_height_m": job.lift_height, "speed_command_mps": job.speed, "period_s": job.cfg.gait.period,
+        "step_length_m": job.cfg.gait.step_length, "mean_speed_mps": r.mean_speed, "fell": r.fell,
+        "speed_ok": r.speed_ok, "valid": (not r.fell) and r.speed_ok, "status": status,
+        "duration_s": r.duration, "distance_m": r.distance, "energy_J": r.energy,
+        "energy_kJ": r.energy / 1e3, "energy_per_100m_kJ": r.energy_per_100m / 1e3,
+        "cost_of_transport": r.cost_of_transport, "electrical_energy_J": r.electrical_energy,
+        "peak_torque_Nm": r.peak_torque, "lateral_drift_m": r.lateral_drift,
+        "physics_dt_s": job.cfg.sim.physics_dt, "wall_s": time.perf_counter() - t0,
+        "power_W": total_power,
+    }
+
+
+def _indexed(job: WalkJob) -> dict:
+    return run_walk_job(job)
+
+
+def run_jobs(jobs: list[WalkJob], workers: int | None = None, log=print) -> list[dict]:
+    """Run the walks (in `workers` spawned processes; 1 = in this process); rows in job order."""
+    workers = min(len(jobs), os.cpu_count() or 1) if workers is None else int(workers)
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers!r}")
+    rows: list[dict | None] = [None] * len(jobs)
+    t0 = time.perf_counter()
+
+    def progress(row: dict, done: int) -> None:
+        rows[row["walk_id"]] = row
+        elapsed = time.perf_counter() - t0
+        eta = elapsed / done * (len(jobs) - done)
+        seed = f" [{row['seed']}]" if row["seed"] else ""
+        log(f"[{done}/{len(jobs)}] {row['label'] + seed:24s} H={row['lift_height_m']:.3f} m "
+            f"v={row['speed_command_mps']:.1f} m/s  mean {row['mean_speed_mps']:.3f} m/s  "
+            f"E={row['energy_J']:7.1f} J  {row['status']}  ({row['wall_s']:.0f} s; elapsed {elapsed:.0f} s, "
+            f"ETA {eta:.0f} s)")
+
+    if workers == 1 or len(jobs) == 1:
+        for done, job in enumerate(jobs, 1):
+            progress(run_walk_job(job), done)
+    else:
+        with mp.get_context("spawn").Pool(workers) as pool:
+            for done, row in enumerate(pool.imap_unordered(_indexed, jobs), 1):
+                progress(row, done)
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Eq. (12) and the table
+# ---------------------------------------------------------------------------------------------------------
+
+def _same(a: float, b: float) -> bool:
+    return round(a, LIFT_DECIMALS) == round(b, LIFT_DECIMALS)
+
+
+def reduction(e_min: float, e_s: float) -> float:
+    """Eq. (12) in %, nan where it is undefined (no valid baseline or learned walk)."""
+    if not (math.isfinite(e_min) and e_min > 0 and math.isfinite(e_s)):
+        return float("nan")
+    return 100.0 * en.energy_reduction(e_min, e_s)
+
+
+def comparison_rows(walks: list[dict], paper_lift: float) -> list[dict]:
+    """The walks arranged in sets ("paper": baselines at `paper_lift`; "same_lift": at each learned
+    trajectory's own H), with D_t (Eq. 12, %) on E and on energy per 100 m for every learned walk, against the
+    cheaper valid baseline of its set at its speed. The learned walk appears in both sets."""
+    out = []
+    learned = [w for w in walks if w["trajectory"] == "learned"]
+    seeds = list(dict.fromkeys(w["seed"] for w in learned))
+    speeds = list(dict.fromkeys(w["speed_command_mps"] for w in walks))
+    for set_name in SETS:
+        for seed in seeds:
+            for v in speeds:
+                mine = [w for w in learned if w["seed"] == seed and w["speed_command_mps"] == v]
+                if not mine:
+                    continue
+                lw = mine[0]
+                lift = paper_lift if set_name == "paper" else lw["lift_height_m"]
+                base = [w for w in walks if w["trajectory"] in BASELINES and w["speed_command_mps"] == v
+                        and _same(w["lift_height_m"], lift)]
+                if not base:
+                    continue
+                valid = [w for w in base if w["valid"]]
+                cheap = min(valid, key=lambda w: w["energy_J"]) if valid else None
+                cheap100 = min(valid, key=lambda w: w["energy_per_100m_kJ"]) if valid else None
+                d = reduction(cheap["energy_J"], lw["energy_J"]) if cheap and lw["valid"] else float("nan")
+                d100 = (reduction(cheap100["energy_per_100m_kJ"], lw["energy_per_100m_kJ"])
+                        if cheap100 and lw["valid"] else float("nan"))
+                out.append({**_public(lw), "set": set_name, "D_t_pct": d, "D_t_per_100m_pct": d100,
+                            "E_min_trajectory": cheap["label"] if cheap else "",
+                            "E_min_kJ": cheap["energy_kJ"] if cheap else float("nan")})
+                for w in base:
+                    if not any(o["set"] == set_name and o["walk_id"] == w["walk_id"] for o in out):
+                        out.append({**_public(w), "set": set_name, "D_t_pct": float("nan"),
+                                    "D_t_per_100m_pct": float("nan"), "E_min_trajectory": "",
+                                    "E_min_kJ": float("nan")})
+    order = {"learned": 0, "cycloid": 1, "straight": 2}
+    out.sort(key=lambda r: (SETS.index(r["set"]),
+                            round(r["lift_height_m"], LIFT_DECIMALS) if r["set"] == "same_lift" else 0,
+                            order[r["trajectory"]], r["seed"], r["speed_command_mps"]))
+    return out
+
+
+def _public(w: dict) -> dict:
+    return {k: v for k, v in w.items() if k != "power_W"}
+
+
+def seed_means(rows: list[dict]) -> list[dict]:
+    """Per set and speed, across the learned seeds: mean and 95 % CI half-width of E (kJ) and D_t (%),
+    over the valid walks only (`n_valid` of `n_seeds`)."""
+    out = []
+    learned = [r for r in rows if r["trajectory"] == "learned"]
+    for set_name in SETS:
+        for v in dict.fromkeys(r["speed_command_mps"] for r in learned):
+            group = [r for r in learned if r["set"] == set_name and r["speed_command_mps"] == v]
+            if not group:
+                continue
+            ok = [r for r in group if r["valid"]]
+            e, e_ci = mean_ci([r["energy_kJ"] for r in ok])
+            d, d_ci = mean_ci([r["D_t_pct"] for r in ok])
+            d100, d100_ci = mean_ci([r["D_t_per_100m_pct"] for r in ok])
+            out.append({"set": set_name, "speed_command_mps": v, "n_seeds": len(group), "n_valid": len(ok),
+                        "energy_kJ_mean": e, "energy_kJ_ci95": e_ci, "D_t_pct_mean": d, "D_t_pct_ci95": d_ci,
+                        "D_t_per_100m_pct_mean": d100, "D_t_per_100m_pct_ci95": d100_ci})
+    return out
+
+
+def table5_rows(rows: list[dict]) -> list[dict]:
+    """Table 5, machine-readable: one row per (set, trajectory, seed, speed) with E (kJ) and status, plus a
+    "decrement" row per (set, seed, speed) with D_t (%) by Eq. (12) on those E."""
+    out = []
+    for r in rows:
+        out.append({"set": r["set"], "row": r["trajectory"], "label": r["label"], "seed": r["seed"],
+                    "lift_height_m": r["lift_height_m"], "speed_mps": r["speed_command_mps"],
+                    "energy_kJ": r["energy_kJ"], "valid": r["valid"], "status": r["status"],
+                    "D_t_pct": r["D_t_pct"], "D_t_per_100m_pct": r["D_t_per_100m_pct"],
+                    "E_min_trajectory": r["E_min_trajectory"]})
+    return out
+
+
+def _cell(r: dict) -> str:
+    if r["fell"]:
+        return f"fell ({r['duration_s']:.1f} s)"
+    txt = f"{r['energy_kJ']:.4f}"
+    return txt if r["speed_ok"] else f"{txt} (miss: {r['mean_speed_mps']:.2f} m/s)"
+
+
+def _mean_cell(m: dict) -> str:
+    if not math.isfinite(m["energy_kJ_mean"]):
+        return f"no valid walk (n = {m['n_seeds']})"
+    ci = f" ± {m['energy_kJ_ci95']:.4f}" if math.isfinite(m["energy_kJ_ci95"]) else ""
+    return f"{m['energy_kJ_mean']:.4f}{ci} (n = {m['n_valid']} of {m['n_seeds']})"
+
+
+def _pct(x: float, ci: float | None = None) -> str:
+    if not math.isfinite(x):
+        return "–"
+    return f"{x:.1f} %" + (f" ± {ci:.1f}" if ci is not None and math.isfinite(ci) else "")
+
+
+def table5_markdown(rows: list[dict], means: list[dict] | None = None) -> str:
+    """Table 5 in the paper's layout (energy in kJ over the walk; columns = speeds), both sets, then the
+    paper's own numbers for reference. Cells of walks that fell or missed the speed say so."""
+    speeds = list(dict.fromkeys(r["speed_command_mps"] for r in rows))
+    lines = ["| Energy (kJ) over the walk | " + " | ".join(f"{v:g} m/s" for v in speeds) + " |",
+             "|---|" + "---|" * len(speeds)]
+    means = means or []
+    all_seeds = list(dict.fromkeys(r["seed"] for r in rows if r["trajectory"] == "learned"))
+
+    def line(label: str, cells: list[str]) -> None:
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+
+    def pick(group: list[dict], traj: str, seed: str, v: float) -> dict | None:
+        return next((r for r in group if r["trajectory"] == traj and r["speed_command_mps"] == v
+                     and (traj != "learned" or r["seed"] == seed)), None)
+
+    for set_name in SETS:
+        set_rows = [r for r in rows if r["set"] == set_name]
+        if not set_rows:
+            continue
+        # groups of rows sharing the baselines' lift height (one group in the paper set)
+        lifts = list(dict.fromkeys(round(r["lift_height_m"], LIFT_DECIMALS) for r in set_rows
+                                   if r["trajectory"] in BASELINES))
+        for lift in lifts:
+            seeds = [s for s in all_seeds if any(r["trajectory"] == "learned" and r["seed"] == s
+                                                 for r in set_rows)]
+            if set_name == "same_lift":
+                seeds = [s for s in seeds if any(r["trajectory"] == "learned" and r["seed"] == s
+                                                 and _same(r["lift_height_m"], lift) for r in set_rows)]
+                line(f"*control: baselines at the learned lift height H = {lift:.3f} m*", [""] * len(speeds))
+            base = [r for r in set_rows if r["trajectory"] in BASELINES and _same(r["lift_height_m"], lift)]
+            learned = [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds]
+            group = base + learned
+            for s in seeds:
+                lr = [pick(group, "learned", s, v) for v in speeds]
+                h = next(r["lift_height_m"] for r in lr if r)
+                tag = f" [{s}]" if s else ""
+                line(f"Learned trajectory (H = {h:.3f} m){tag}", [_cell(r) if r else "" for r in lr])
+            for name in BASELINES:
+                br = [pick(group, name, "", v) for v in speeds]
+                first = next((r for r in br if r), None)
+                if first is None:
+                    continue
+                shape = first["label"].partition("(")[2].rstrip(")")
+                nice = "Composite cycloid" if name == "cycloid" else "Straight line" + (f", {shape}" if shape else "")
+                line(f"{nice} (H = {first['lift_height_m']:.3f} m)", [_cell(r) if r else "" for r in br])
+            for s in seeds:
+                lr = [pick(group, "learned", s, v) for v in speeds]
+                tag = f" [{s}]" if len(seeds) > 1 else ""
+                line(f"Decrement D_t, Eq. (12){tag}", [_pct(r["D_t_pct"]) if r else "" for r in lr])
+            if len(seeds) > 1 and set_name == "paper":
+                ms = [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None)
+                      for v in speeds]
+                line(f"Learned, mean ± 95 % CI over {len(seeds)} seeds",
+                     [_mean_cell(m) if m else "" for m in ms])
+                line("Decrement D_t, mean ± 95 % CI", [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else ""
+                                                       for m in ms])
+        if len(all_seeds) > 1 and set_name == "same_lift":
+            ms = [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None)
+                  for v in speeds]
+            line("Decrement D_t at the same lift, mean ± 95 % CI",
+                 [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else "" for m in ms])
+    p = PAPER_TABLE5_KJ
+    idx = [PAPER_SPEEDS.index(v) if v in PAPER_SPEEDS else None for v in speeds]
+    if any(i is not None for i in idx):
+        for key, label in (("learned", "simulation trajectory"), ("cycloid", "composite cycloid"),
+                           ("straight", "straight line")):
+            line(f"*paper, Table 5: {label}*", [f"{p[key][i]:.4f}" if i is not None else "" for i in idx])
+        line("*paper, Table 5: decrement*", [f"{p['decrement_pct'][i]:.0f} %" if i is not None else ""
+                                             for i in idx])
+    return "\n".join(lines)
+
+
+def two_cycle_window(n: int, dt: float, period: float, cycles: int = 2) -> slice:
+    """Samples of the last `cycles` whole gait-clock cycles of a walk of n samples (t = k·dt)."""
+    per = int(round(period / dt))
+    last = (n // per) * per  # end of the last whole cycle
+    start = max(0, last - cycles * per)
+    return slice(start, last)
+
+
+__all__ = ["BASELINES", "COLUMNS", "PAPER_SPEEDS", "PAPER_TABLE5_KJ", "SETS", "WalkJob", "comparison_jobs",
+           "comparison_rows", "learned_lift_height", "pinned_lift", "reduction", "run_jobs", "run_walk_job",
+           "seed_means", "table5_markdown", "table5_rows", "two_cycle_window", "walk_config"]

@@ -1,0 +1,143 @@
+"""The "hardware-like" robot of the prototype experiment (paper Section 4.2) in simulation, beyond the paper.
+
+`HardwareConfig` (cyberdog.config) names the effects; this module applies them around a scripted walk:
+
+- `hardware_walk_config`: the walk config the simulator must be built with (joint friction on or off);
+- `draw_mass_scale`: the seeded mass-scale draw in [1 − u, 1 + u];
+- `TorqueDelay`: actuation latency as a FIFO of whole physics steps;
+- `HardwareSensing`: what the controller reads on a real robot: noisy joint encoders and the Kalman body
+  velocity from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`, used the
+  same way as in `cyberdog.envs.cyberdog_env`).
+
+Randomness: one `numpy.random.SeedSequence(hw.seed)` spawns independent streams for the mass draw and the
+sensors, so the mass draw does not depend on which sensors are on (same seed, same robot).
+"""
+from __future__ import annotations
+
+import dataclasses
+from collections import deque
+
+import numpy as np
+
+from cyberdog.config import EstimatorConfig, HardwareConfig, WalkConfig
+from cyberdog.control.trot import BodyFeedback
+from cyberdog.core.estimator import SimulatedIMU, VelocityEstimator, leg_odometry_velocity
+
+MASS_STREAM, SENSOR_STREAM = 0, 1  # indices of the child seed sequences of HardwareConfig.seed
+
+
+def _streams(hw: HardwareConfig) -> list[np.random.SeedSequence]:
+    return np.random.SeedSequence(hw.seed).spawn(2)
+
+
+def draw_mass_scale(hw: HardwareConfig) -> float:
+    """Mass (and inertia) scale of every link: a draw from U(1 − u, 1 + u), u = mass_uncertainty; 1 if u = 0."""
+    u = hw.mass_uncertainty
+    if u == 0:
+        return 1.0
+    return float(np.random.default_rng(_streams(hw)[MASS_STREAM]).uniform(1.0 - u, 1.0 + u))
+
+
+def hardware_walk_config(cfg: WalkConfig, hw: HardwareConfig | None) -> WalkConfig:
+    """`cfg` with the actuator's joint friction set by `hw.friction` (unchanged when hw is None).
+
+    The energy model then counts friction once: simulated (in the applied torque) when on, added analytically
+    to the electrical power when off (cyberdog.core.energy.motor_torque)."""
+    if hw is None or cfg.actuator.friction == hw.friction:
+        return cfg
+    return dataclasses.replace(cfg, actuator=dataclasses.replace(cfg.actuator, friction=hw.friction))
+
+
+def whole_steps(duration_s: float, dt: float, name: str) -> int:
+    """`duration_s` in physics steps of `dt`; ValueError unless it is a whole multiple (0 allowed)."""
+    n = int(round(duration_s / dt))
+    if abs(duration_s / dt - n) > 1e-6:
+        raise ValueError(f"{name} must be a whole multiple of physics_dt ({dt} s), got {duration_s!r}")
+    return n
+
+
+class TorqueDelay:
+    """Actuation latency: `push(τ)` returns the torque pushed `steps` calls earlier (zeros at first).
+
+    With steps = 0 it returns its input. The delay sits between the controller and the actuator model, so
+    the torque–speed envelope acts on the joint speed at the time the torque arrives, as on the robot."""
+
+    def __init__(self, steps: int, size: int = 12) -> None:
+        if not (isinstance(steps, int) and steps >= 0):
+            raise ValueError(f"latency steps must be an integer >= 0, got {steps!r}")
+        self.steps, self.size = steps, size
+        self.reset()
+
+    def reset(self) -> None:
+        self._queue: deque = deque([np.zeros(self.size)] * self.steps)
+
+    def push(self, torque: np.ndarray) -> np.ndarray:
+        if self.steps == 0:
+            return torque
+        self._queue.append(np.array(torque, dtype=float))
+        return self._queue.popleft()
+
+
+class HardwareSensing:
+    """What the trot controller measures on the hardware-like robot, once per physics step.
+
+    `read(k, state, robot, start)` → (q, dq, BodyFeedback): encoder readings with white noise, and the body
+    feedback with the Kalman-estimated forward and sideways speed when `estimated_velocity` (yaw and lateral
+    offset stay true: on the robot they come from the IMU attitude filter and the operator's steering). The
+    filter runs every `estimator_dt` (predict with the IMU, correct with leg odometry of the feet in contact).
+    """
+
+    def __init__(self, hw: HardwareConfig, cfg: WalkConfig) -> None:
+        self.hw, self.cfg = hw, cfg
+        dt = cfg.sim.physics_dt
+        self.estimator_every = whole_steps(hw.estimator_dt, dt, "HardwareConfig.estimator_dt")
+        if self.estimator_every < 1:
+            raise ValueError(f"HardwareConfig.estimator_dt must be >= physics_dt ({dt} s), got {hw.estimator_dt!r}")
+        self.estimator_cfg = EstimatorConfig(noise=hw.imu_noise)
+        self.rng = np.random.default_rng(_streams(hw)[SENSOR_STREAM])
+        self.imu = SimulatedIMU(self.estimator_cfg, self.rng, hw.estimator_dt, cfg.sim.gravity)
+        self.estimator = VelocityEstimator(self.estimator_cfg, hw.estimator_dt, cfg.sim.gravity)
+        self._prev_velocity_world = np.zeros(3)
+
+    def reset(self, state) -> None:
+        """Start at rest in `state` (a RobotState): the filter starts from the true (zero) velocity."""
+        self.imu.reset()
+        self.estimator.reset(state.base_linear_velocity_world)
+        self._prev_velocity_world = state.base_linear_velocity_world.copy()
+
+    @property
+    def velocity_estimate_world(self) -> np.ndarray:
+        """(3,) current Kalman estimate of the body velocity, world frame, m/s."""
+        return self.estimator.velocity
+
+    def _noisy(self, q: np.ndarray, dq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        hw = self.hw
+        if hw.joint_angle_noise_std > 0:
+            q = q + self.rng.normal(0.0, hw.joint_angle_noise_std, q.shape)
+        if hw.joint_velocity_noise_std > 0:
+            dq = dq + self.rng.normal(0.0, hw.joint_velocity_noise_std, dq.shape)
+        return q, dq
+
+    def _update_estimator(self, state, robot) -> None:
+        dt = self.hw.estimator_dt
+        R = state.rotation_matrix
+        v_world = state.base_linear_velocity_world
+        accel_world = (v_world - self._prev_velocity_world) / dt  # mean acceleration over the filter period
+        self._prev_velocity_world = v_world.copy()
+        imu = self.imu.measure(accel_world, state.base_angular_velocity_world, R, frame="world")
+        q, dq = self._noisy(state.q, state.dq)  # the encoders feed leg odometry too
+        leg_v = leg_odometry_velocity(q, dq, robot.foot_contacts(), imu.gyroscope, self.cfg.robot)
+        self.estimator.update(imu, leg_v, R)
+
+    def read(self, k: int, state, robot, start: np.ndarray) -> tuple[np.ndarray, np.ndarray, BodyFeedback]:
+        """Sensor readings at physics step k (state read after step k − 1)."""
+        if self.hw.estimated_velocity and k > 0 and k % self.estimator_every == 0:
+            self._update_estimator(state, robot)
+        q, dq = self._noisy(state.q, state.dq)
+        if not self.hw.estimated_velocity:
+            return q, dq, BodyFeedback.from_state(state, start)
+        v_world = self.estimator.velocity
+        v_body = state.rotation_matrix.T @ v_world
+        body = BodyFeedback(yaw=float(state.base_rpy[2]), lateral_offset=float(state.base_position[1] - start[1]),
+                            forward_speed=float(v_world[0]), lateral_speed=float(v_body[1]))
+        return q, dq, body

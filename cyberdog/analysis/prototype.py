@@ -1,0 +1,295 @@
+"""The paper's prototype experiment (Section 4.2) in simulation: walk 100 m with each trajectory at each speed,
+on the ideal robot and on a hardware-like one, and report the battery drain by Eq. (13).
+
+The paper walked the real CyberDog 100 m at 1.0, 1.2 and 1.4 m/s with three foot trajectories and read the
+drop of the battery charge (Eq. 13, P_C = E_f − E_n, starting from E_f = 95 %). It reports ranges on a full
+charge at 1 m/s of 3,600 m (composite cycloid) and 3,924 m (learned trajectory), and a 3 % gap between the
+energy reduction measured in simulation (12 %, Eq. 7 and Eq. 12) and on the robot (9 %, battery).
+
+Here each walk is one `cyberdog.analysis.walk.walk(..., distance=distance_m)`:
+- "ideal": the Section 4.1 simulation (true states, no joint friction in the physics, nominal mass);
+- "hardware": `HardwareConfig` effects on (by default `HARDWARE_LIKE`: joint friction, 3 ms actuation
+  latency, encoder noise, Kalman-estimated speed feedback with a noisy IMU, one ±5 % mass draw). All
+  hardware rows share the seed, hence the same mass draw: one prototype walks every trajectory, as in the paper.
+Both report Eq. (7) mechanical energy and the electrical energy drawn from the pack (copper loss, joint friction,
+driver efficiency; `cyberdog.core.energy`). Battery (EnergyConfig; ASSUMPTION [G] except where noted):
+pack energy `battery_capacity_wh` (default 8 Ah × 25.2 V = 201.6 Wh [G]), charged to 25 V (paper), the walk
+starting at E_f = 95 % (paper), motor drivers 95 % efficient [G], no electronics load (idle_power = 0 W:
+legs only, so ranges are upper bounds). Battery % used = 100·E_el / pack energy (= Eq. 13's E_f − E_n);
+range = distance × 95 / battery % used (the walk's rate until the usable 95 % is spent).
+
+Walks run in parallel processes (spawn; each owns its PyBullet DIRECT client). `python -m
+cyberdog.analysis.prototype --out runs/prototype` runs the full experiment and writes CSV/JSON/Markdown.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import multiprocessing as mp
+import os
+import pickle
+import time
+from pathlib import Path
+
+from cyberdog.analysis.report import markdown_table, write_rows
+from cyberdog.analysis.walk import walk
+from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
+from cyberdog.core import energy as en
+from cyberdog.core.trajectories import FootTrajectory, SampledTrajectory
+
+PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, Section 4.2
+PAPER_DISTANCE_M = 100.0  # m, Section 4.2
+PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
+PAPER_SIM_TO_REAL_GAP_PP = 3.0  # percentage points: 12 % (simulation) vs 9 % (prototype) energy reduction
+MODES = ("ideal", "hardware")
+TIME_CAP_MARGIN_S = 10.0  # s added to 1.5 × distance / speed (+ the start-up ramp) before a walk is abandoned
+
+# the Markdown table's columns (rows carry more: J, wall time, peak torque, lateral drift, battery E_f, E_n)
+TABLE_COLUMNS = ["trajectory", "speed_mps", "robot", "fell", "reached", "mass_scale", "mean_speed_mps",
+                 "distance_m", "time_s", "energy_kJ", "electrical_energy_kJ", "battery_used_pct",
+                 "range_full_charge_m", "electrical_gap_pct"]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Job:
+    trajectory_name: str
+    trajectory: FootTrajectory | None
+    speed: float
+    mode: str
+    cfg: WalkConfig
+    hardware: HardwareConfig
+    distance_m: float
+
+
+def time_cap(distance_m: float, speed: float, cfg: WalkConfig) -> float:
+    """s: a walk slower than 2/3 of the command is abandoned (and reported as not reached)."""
+    return 1.5 * distance_m / speed + cfg.controller.speed_ramp_time + TIME_CAP_MARGIN_S
+
+
+def _job_config(base: WalkConfig, name: str, trajectory: FootTrajectory | None, speed: float) -> WalkConfig:
+    gait = dataclasses.replace(base.gait, speed=float(speed))
+    if trajectory is None and name in TRAJECTORY_NAMES and name != "sampled":
+        gait = dataclasses.replace(gait, trajectory=name)  # "cycloid" / "straight" by name
+    return dataclasses.replace(base, gait=gait)
+
+
+def _run_job(job: _Job) -> dict:
+    """One walk → one row (runs in a worker process)."""
+    t0 = time.perf_counter()
+    hw = job.hardware if job.mode == "hardware" else None
+    r = walk(job.cfg, time_cap(job.distance_m, job.speed, job.cfg), job.trajectory, hardware=hw,
+             distance=job.distance_m)
+    e_cfg = job.cfg.energy
+    ok = r.distance > 0 and r.electrical_energy > 0
+    pct = en.battery_percent_used(r.electrical_energy, e_cfg)
+    start_pct = 100.0 * e_cfg.usable_fraction
+    return {
+        "trajectory": job.trajectory_name, "speed_mps": job.speed, "robot": job.mode,
+        "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        "mean_speed_mps": r.mean_speed,  # last half of the walk
+        "average_speed_mps": r.distance / r.duration if r.duration > 0 else float("nan"),
+        "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
+        "energy_J": r.energy,  # Eq. (7)
+        "electrical_energy_J": r.electrical_energy,
+        "battery_start_pct": start_pct,  # E_f
+        "battery_end_pct": en.remaining_percent(r.electrical_energy, e_cfg),  # E_n
+        "battery_used_pct": en.power_consumption(start_pct, en.remaining_percent(r.electrical_energy, e_cfg)),
+        "range_full_charge_m": en.range_from_percent(r.distance, pct, e_cfg) if ok else float("nan"),
+        "peak_torque_Nm": r.peak_torque, "wall_s": time.perf_counter() - t0,
+    }
+
+
+def _check_picklable(name: str, trajectory) -> None:
+    try:
+        pickle.dumps(trajectory)
+    except Exception as err:  # noqa: BLE001 - any pickling failure means the worker cannot receive it
+        raise ValueError(f"trajectory {name!r} cannot be sent to a worker process ({err}); pass a "
+                         "SampledTrajectory or a name in TRAJECTORY_NAMES") from None
+
+
+def run_prototype(trajectories: dict[str, FootTrajectory | None] | None = None,
+                  speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
+                  hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
+                  base_cfg: WalkConfig | None = None, log=print) -> list[dict]:
+    """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
+
+    trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
+        ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own. Default: cycloid and straight.
+    modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
+    workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
+    Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
+    (`add_gaps`); see the module docstring for the battery assumptions.
+    """
+    base_cfg = base_cfg or WalkConfig()
+    trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
+    if not trajectories:
+        raise ValueError("trajectories must name at least one trajectory")
+    speeds = tuple(float(v) for v in speeds)
+    if not speeds or not all(math.isfinite(v) and v > 0 for v in speeds):
+        raise ValueError(f"speeds must be one or more finite speeds > 0 m/s, got {speeds!r}")
+    if not (math.isfinite(distance_m) and distance_m > 0):
+        raise ValueError(f"distance_m must be > 0 and finite, got {distance_m!r}")
+    modes = tuple(modes)
+    if not modes or any(m not in MODES for m in modes) or len(set(modes)) != len(modes):
+        raise ValueError(f"modes must be distinct values of {MODES}, got {modes!r}")
+    if not isinstance(hardware, HardwareConfig):
+        raise TypeError(f"hardware must be a HardwareConfig, got {type(hardware).__name__}")
+    for name, traj in trajectories.items():
+        if traj is not None and not isinstance(traj, FootTrajectory):
+            raise TypeError(f"trajectory {name!r} must be a FootTrajectory or None, got {type(traj).__name__}")
+        _check_picklable(name, traj)
+    jobs = [_Job(name, traj, v, mode, _job_config(base_cfg, name, traj, v), hardware, float(distance_m))
+            for name, traj in trajectories.items() for v in speeds for mode in modes]
+    workers = min(len(jobs), os.cpu_count() or 1) if workers is None else int(workers)
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers!r}")
+    rows: list[dict | None] = [None] * len(jobs)
+    t0 = time.perf_counter()
+
+    def progress(i: int, row: dict, done: int) -> None:
+        rows[i] = row
+        elapsed = time.perf_counter() - t0
+        eta = elapsed / done * (len(jobs) - done)
+        log(f"[{done}/{len(jobs)}] {row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} "
+            f"{row['distance_m']:6.1f} m in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "
+            f"E_el={row['electrical_energy_J'] / 1e3:6.2f} kJ  battery {row['battery_used_pct']:.2f} %  "
+            f"fell={row['fell']}  ({row['wall_s']:.0f} s; elapsed {elapsed:.0f} s, ETA {eta:.0f} s)")
+
+    if workers == 1:
+        for i, job in enumerate(jobs):
+            progress(i, _run_job(job), i + 1)
+    else:
+        # spawn: a fresh interpreter per worker, each with its own PyBullet DIRECT client (no forked state)
+        with mp.get_context("spawn").Pool(workers) as pool:
+            results = pool.imap_unordered(_indexed_job, list(enumerate(jobs)))
+            for done, (i, row) in enumerate(results, 1):
+                progress(i, row, done)
+    return add_gaps(rows)
+
+
+def _indexed_job(item: tuple[int, _Job]) -> tuple[int, dict]:
+    i, job = item
+    return i, _run_job(job)
+
+
+def _per_m(row: dict, key: str) -> float:
+    return row[key] / row["distance_m"] if row["distance_m"] > 0 else float("nan")
+
+
+def add_gaps(rows: list[dict]) -> list[dict]:
+    """Fill in each row's ideal-vs-hardware gaps (%, per metre, so the few mm past the goal do not count):
+    `electrical_gap_pct` = 100·(E_el,hw − E_el,ideal)/E_el,ideal, `mechanical_gap_pct` likewise for Eq. (7);
+    NaN where the row has no partner of the other robot. Returns the same rows."""
+    index = {(r["trajectory"], r["speed_mps"], r["robot"]): r for r in rows}
+    for r in rows:
+        ideal = index.get((r["trajectory"], r["speed_mps"], "ideal"))
+        hw = index.get((r["trajectory"], r["speed_mps"], "hardware"))
+        for key, gap in (("electrical_energy_J", "electrical_gap_pct"), ("energy_J", "mechanical_gap_pct")):
+            r[gap] = (100.0 * (_per_m(hw, key) / _per_m(ideal, key) - 1.0)
+                      if ideal is not None and hw is not None else float("nan"))
+    return rows
+
+
+def gap_rows(rows: list[dict]) -> list[dict]:
+    """Per trajectory and speed: ideal against hardware-like, and Eq. (12) reductions as the paper measured them.
+
+    `reduction_sim_pct`: Eq. (12) on the ideal robot's Eq. (7) energy per metre (the paper's simulation, 12 %
+    at 1 m/s); `reduction_proto_pct`: Eq. (12) on the hardware-like robot's battery % per metre (the paper's
+    prototype, 9 %); E_min is the cheapest OTHER trajectory at that speed (so the cheapest trajectory gets a
+    positive D_t). `sim_to_real_gap_pp` = their difference, the paper's "3 %".
+    """
+    index = {(r["trajectory"], r["speed_mps"], r["robot"]): r for r in rows}
+    names = list(dict.fromkeys(r["trajectory"] for r in rows))
+    speeds = list(dict.fromkeys(r["speed_mps"] for r in rows))
+
+    def reduction(name: str, v: float, robot: str, key: str) -> float:
+        own = index.get((name, v, robot))
+        others = [_per_m(index[(n, v, robot)], key) for n in names if n != name and (n, v, robot) in index]
+        if own is None or not others or not (min(others) > 0):
+            return float("nan")
+        return 100.0 * en.energy_reduction(min(others), _per_m(own, key))
+
+    out = []
+    for name in names:
+        for v in speeds:
+            ideal, hw = index.get((name, v, "ideal")), index.get((name, v, "hardware"))
+            if ideal is None or hw is None:
+                continue
+            d_sim = reduction(name, v, "ideal", "energy_J")
+            d_proto = reduction(name, v, "hardware", "battery_used_pct")
+            out.append({
+                "trajectory": name, "speed_mps": v,
+                "ideal_energy_kJ_per_100m": 0.1 * _per_m(ideal, "energy_J"),  # Eq. (7)
+                "hardware_energy_kJ_per_100m": 0.1 * _per_m(hw, "energy_J"),
+                "ideal_electrical_kJ_per_100m": 0.1 * _per_m(ideal, "electrical_energy_J"),
+                "hardware_electrical_kJ_per_100m": 0.1 * _per_m(hw, "electrical_energy_J"),
+                "ideal_battery_pct_per_100m": 100 * _per_m(ideal, "battery_used_pct"),
+                "hardware_battery_pct_per_100m": 100 * _per_m(hw, "battery_used_pct"),
+                "mechanical_gap_pct": hw["mechanical_gap_pct"], "electrical_gap_pct": hw["electrical_gap_pct"],
+                "ideal_range_m": ideal["range_full_charge_m"], "hardware_range_m": hw["range_full_charge_m"],
+                "reduction_sim_pct": d_sim, "reduction_proto_pct": d_proto,
+                "sim_to_real_gap_pp": d_sim - d_proto,
+            })
+    return out
+
+
+def prototype_table(rows: list[dict], energy_cfg=None) -> str:
+    """Markdown: the walks, then the ideal-vs-hardware gaps, with the battery assumption stated."""
+    e = energy_cfg or WalkConfig().energy
+    note = (f"Battery (ASSUMPTION [G]): {e.battery_capacity_wh:.1f} Wh pack charged to {e.battery_voltage:g} V "
+            f"(paper), walks start at E_f = {100 * e.usable_fraction:g} % (paper, Eq. 13), driver efficiency "
+            f"{e.driver_efficiency:g} [G], electronics {e.idle_power:g} W. battery_used_pct = E_f − E_n (Eq. 13); "
+            f"range_full_charge_m = distance × {100 * e.usable_fraction:g} / battery_used_pct. Paper at 1 m/s: "
+            f"{PAPER_RANGE_1MPS_M['cycloid']:.0f} m (cycloid), {PAPER_RANGE_1MPS_M['learned']:.0f} m (learned); "
+            f"sim-to-real gap {PAPER_SIM_TO_REAL_GAP_PP:g} percentage points.")
+    shown = [{**r, "energy_kJ": r["energy_J"] / 1e3, "electrical_energy_kJ": r["electrical_energy_J"] / 1e3}
+             for r in rows]
+    parts = [markdown_table(shown, [c for c in TABLE_COLUMNS if c in shown[0]] if shown else None), "", note]
+    gaps = gap_rows(rows)
+    if gaps:
+        parts += ["", markdown_table(gaps)]
+    return "\n".join(parts)
+
+
+def write_prototype(rows: list[dict], folder: str | Path) -> None:
+    """`prototype.{csv,json,md}` (the walks, the Markdown with both tables) and `prototype_gaps.{csv,json,md}`."""
+    folder = Path(folder)
+    write_rows(rows, folder, "prototype")
+    write_rows(gap_rows(rows), folder, "prototype_gaps")
+    (folder / "prototype.md").write_text(prototype_table(rows) + "\n")
+
+
+def _parse_trajectory(spec: str) -> tuple[str, FootTrajectory | None]:
+    """"cycloid" / "straight", or NAME=FILE / FILE of a saved SampledTrajectory (JSON or CSV)."""
+    if spec in TRAJECTORY_NAMES and spec != "sampled":
+        return spec, None
+    name, _, path = spec.rpartition("=")
+    path = path or spec
+    return (name or Path(path).stem), SampledTrajectory.load(path)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--trajectories", nargs="+", default=["cycloid", "straight"],
+                   help="cycloid, straight, or [NAME=]FILE of a sampled trajectory (JSON/CSV)")
+    p.add_argument("--speeds", nargs="+", type=float, default=list(PAPER_SPEEDS), help="m/s")
+    p.add_argument("--distance", type=float, default=PAPER_DISTANCE_M, help="m per walk (paper: 100)")
+    p.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
+    p.add_argument("--seed", type=int, default=0, help="hardware-like robot's seed (mass draw, sensor noise)")
+    p.add_argument("--workers", type=int, default=None, help="processes (default: one per walk, <= CPUs)")
+    p.add_argument("--out", type=Path, default=None, help="folder for prototype.{csv,json,md}")
+    args = p.parse_args(argv)
+    trajectories = dict(_parse_trajectory(s) for s in args.trajectories)
+    t0 = time.perf_counter()
+    rows = run_prototype(trajectories, args.speeds, args.distance, args.modes,
+                         dataclasses.replace(HARDWARE_LIKE, seed=args.seed), args.workers)
+    print(prototype_table(rows))
+    print(f"\nwall time {time.perf_counter() - t0:.0f} s")
+    if args.out is not None:
+        write_prototype(rows, args.out)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,111 @@
+"""A video of the scripted trot with a chosen foot trajectory, rendered headless (PyBullet TinyRenderer).
+
+The walk is the same trot controller as `cyberdog.analysis.walk.walk` (ideal robot, true state feedback);
+every `1 / fps` s of simulated time the camera that follows the body (`Robot.render`) takes a frame, with the
+trajectory, speed, time and the energy so far written on it. GIF is written with Pillow (no ffmpeg needed);
+MP4 needs `imageio` with its ffmpeg plugin, or matplotlib with an `ffmpeg` binary on the PATH.
+"""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from cyberdog.analysis.walk import FALL_HEIGHT, FALL_TILT
+from cyberdog.config import WalkConfig
+from cyberdog.control.trot import BodyFeedback, TrotController
+from cyberdog.core.trajectories import FootTrajectory
+from cyberdog.sim.robot import Robot
+
+FORMATS = (".gif", ".mp4")
+
+
+def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, duration: float = 4.0,
+                fps: int = 25, width: int = 480, height: int = 360, label: str = "") -> list[np.ndarray]:
+    """Frames (height, width, 3) uint8 of a `duration` s trot at `cfg.gait.speed`; stops early on a fall."""
+    if not duration > 0:
+        raise ValueError(f"video duration must be > 0 s, got {duration!r}")
+    if not 1 <= fps <= 100:
+        raise ValueError(f"fps must be in [1, 100], got {fps!r}")
+    from PIL import Image, ImageDraw
+
+    dt = cfg.sim.physics_dt
+    every = max(1, int(round(1.0 / (fps * dt))))
+    ctrl = TrotController(cfg, trajectory)
+    frames = []
+    energy = 0.0
+    with Robot(cfg.robot, cfg.actuator, cfg.sim) as robot:
+        robot.reset()
+        ctrl.reset()
+        start = robot.read_state().base_position.copy()
+        for k in range(int(round(duration / dt))):
+            s = robot.read_state()
+            tau = robot.step(ctrl.torque(k * dt, s.q, s.dq, BodyFeedback.from_state(s, start)))
+            energy += float(np.abs(tau * s.dq).sum()) * dt  # Eq. (7)
+            fell = s.base_position[2] < FALL_HEIGHT or np.max(np.abs(s.base_rpy[:2])) > FALL_TILT
+            if k % every == 0 or fell:
+                img = Image.fromarray(robot.render(width, height, distance=1.0, yaw_deg=60.0, pitch_deg=-15.0))
+                text = (f"{label or ctrl.trajectory.name}  v_cmd = {ctrl.speed:.1f} m/s  H = "
+                        f"{cfg.gait.lift_height:.3f} m\nt = {k * dt:5.2f} s  x = {s.base_position[0] - start[0]:5.2f} m"
+                        f"  E = {energy:6.1f} J (Eq. 7)" + ("  FELL" if fell else ""))
+                ImageDraw.Draw(img).multiline_text((8, 6), text, fill=(0, 0, 0))
+                frames.append(np.asarray(img))
+            if fell:
+                break
+    return frames
+
+
+def write_video(frames: list[np.ndarray], path: str | Path, fps: int = 25) -> Path:
+    """Write frames as GIF (Pillow) or MP4 (imageio-ffmpeg, else matplotlib + ffmpeg), by the suffix."""
+    path = Path(path)
+    if path.suffix.lower() not in FORMATS:
+        raise ValueError(f"video file must end in one of {FORMATS}, got {path.name!r}")
+    if not frames:
+        raise ValueError("no frames to write")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() == ".gif":
+        from PIL import Image
+
+        images = [Image.fromarray(f) for f in frames]
+        images[0].save(path, save_all=True, append_images=images[1:], duration=int(round(1000 / fps)), loop=0)
+        return path
+    try:
+        import imageio.v2 as imageio  # optional
+
+        imageio.mimwrite(path, frames, fps=fps)
+        return path
+    except ImportError:
+        pass
+    if shutil.which("ffmpeg") is None:
+        raise RuntimeError("MP4 needs imageio[ffmpeg] or an ffmpeg binary on the PATH; write a .gif instead")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FFMpegWriter
+
+    h, w = frames[0].shape[:2]
+    fig = plt.figure(figsize=(w / 100, h / 100), dpi=100)
+    ax = fig.add_axes([0, 0, 1, 1])
+    ax.axis("off")
+    im = ax.imshow(frames[0])
+    writer = FFMpegWriter(fps=fps)
+    with writer.saving(fig, str(path), dpi=100):
+        for f in frames:
+            im.set_data(f)
+            writer.grab_frame()
+    plt.close(fig)
+    return path
+
+
+def record_video(cfg: WalkConfig, trajectory: FootTrajectory | None, path: str | Path, duration: float = 4.0,
+                 fps: int = 25, width: int = 480, height: int = 360, label: str = "") -> Path:
+    """Render a trot (`render_walk`) and write it to `path` (.gif or .mp4); returns the path."""
+    path = Path(path)
+    if path.suffix.lower() not in FORMATS:
+        raise ValueError(f"video file must end in one of {FORMATS}, got {path.name!r}")
+    return write_video(render_walk(cfg, trajectory, duration, fps, width, height, label), path, fps)
+
+
+__all__ = ["FORMATS", "record_video", "render_walk", "write_video"]

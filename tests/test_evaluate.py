@@ -1,0 +1,156 @@
+"""evaluate.py end to end on a reduced budget, and the consistency of what it writes (Table 5, Eq. 12, Fig. 10)."""
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import evaluate
+from cyberdog.analysis import compare as cmp
+from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
+
+FIGURES = ("figure4_baseline_trajectories", "figure6_reward_curves", "figure7_learned_trajectory",
+           "figure10_power", "figure13_energy_vs_speed")
+# 2 s walks: a short speed ramp and a stiff speed integral make every walk reach 1.0 m/s ± 5 % in 2 s
+FAST = ["--set", "controller.speed_ramp_time=0.3", "controller.speed_gain=6.0"]
+
+
+def learned_file(path, lift=0.1):
+    """A stand-in for an extracted trajectory: the composite cycloid sampled at 100 phases, seed 0."""
+    phase = np.arange(100) / 100
+    pos, _ = CompositeCycloid().position_velocity(phase, 0.2, lift, 0.2, 0.2)
+    t = SampledTrajectory.from_points(phase, pos[:, 0], pos[:, 1], 0.2, lift,
+                                      {"seed": 0, "policy": "synthetic", "period_s": 0.4})
+    return t.save(path)
+
+
+def metrics_file(path):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["stage", "episode", "stage_episode", "score"])
+        for stage in (1, 2):
+            for ep in range(1, 41):
+                w.writerow([stage, ep + 40 * (stage - 1), ep, -50 + ep + np.sin(ep)])
+    return path
+
+
+@pytest.fixture(scope="module")
+def reduced_run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("evaluate")
+    out = tmp / "out"
+    argv = ["--learned", str(learned_file(tmp / "learned.json")), "--metrics", str(metrics_file(tmp / "m.csv")),
+            "--speeds", "1.0", "--duration", "2.0", "--prototype-distance", "1.0", "--prototype-modes", "ideal",
+            "--workers", "2", "--out", str(out), *FAST]
+    assert evaluate.main(argv) == 0
+    return out
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_reduced_run_writes_table5_figures_and_prototype(reduced_run):
+    out = reduced_run
+    for stem in ("table5", "comparison", "prototype"):
+        for ext in ("csv", "json", "md"):
+            assert (out / f"{stem}.{ext}").stat().st_size > 0, f"{stem}.{ext}"
+    for stem in FIGURES:
+        assert (out / f"{stem}.png").stat().st_size > 1000 and (out / f"{stem}.pdf").exists(), stem
+    assert (out / "power_traces.npz").exists() and (out / "learned" / "seed0.json").exists()
+    md = (out / "table5.md").read_text()
+    assert "Decrement D_t" in md and "Composite cycloid (H = 0.150 m)" in md and "H = 0.100 m" in md
+    proto = json.loads((out / "prototype.json").read_text())
+    assert {r["trajectory"] for r in proto} == {"learned", "cycloid", "straight"}
+
+
+def test_table5_decrement_is_eq12_on_its_own_energies(reduced_run):
+    rows = read_csv(reduced_run / "table5.csv")
+    assert {r["set"] for r in rows} == {"paper", "same_lift"}
+    checked = 0
+    for r in rows:
+        if r["row"] != "learned":
+            continue
+        base = [b for b in rows if b["set"] == r["set"] and b["speed_mps"] == r["speed_mps"]
+                and b["row"] in ("cycloid", "straight")]
+        assert len(base) == 2
+        lift = 0.15 if r["set"] == "paper" else float(r["lift_height_m"])
+        assert all(abs(float(b["lift_height_m"]) - lift) < 1e-4 for b in base)
+        valid = [float(b["energy_kJ"]) for b in base if b["valid"] == "True"]
+        if r["valid"] == "True" and valid:
+            e_min = min(valid)
+            assert float(r["D_t_pct"]) == pytest.approx(100 * (e_min - float(r["energy_kJ"])) / e_min, rel=1e-9)
+            checked += 1
+        else:
+            assert math.isnan(float(r["D_t_pct"]))
+    assert checked == 2  # both sets: every 2 s walk reached the speed with FAST
+
+
+def test_power_traces_integrate_to_the_tables_energy(reduced_run):
+    walks = json.loads((reduced_run / "walks.json").read_text())
+    table = read_csv(reduced_run / "table5.csv")
+    with np.load(reduced_run / "power_traces.npz") as z:
+        for w in walks:
+            p = z[f"walk_{w['walk_id']}"]
+            assert len(p) == round(w["duration_s"] / w["physics_dt_s"])
+            assert p.sum() * w["physics_dt_s"] == pytest.approx(w["energy_J"], rel=1e-9)
+            e_table = [float(r["energy_kJ"]) for r in table
+                       if r["row"] == w["trajectory"] and abs(float(r["lift_height_m"]) - w["lift_height_m"]) < 1e-9]
+            assert e_table and all(e == pytest.approx(w["energy_J"] / 1e3, rel=1e-9) for e in e_table)
+            window = p[cmp.two_cycle_window(len(p), w["physics_dt_s"], w["period_s"])]
+            assert len(window) == round(2 * w["period_s"] / w["physics_dt_s"])  # Figure 10's two cycles
+
+
+def test_figures_redraw_from_a_saved_folder(reduced_run, tmp_path):
+    out = tmp_path / "figs"
+    assert evaluate.main(["figures", "--from", str(reduced_run), "--out", str(out), "--metrics",
+                          str(metrics_file(tmp_path / "m.csv"))]) == 0
+    for stem in FIGURES:
+        assert (out / f"{stem}.png").exists(), stem
+
+
+def test_missing_learned_trajectory_is_a_clear_error(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(evaluate, "DEFAULT_LEARNED", tmp_path / "results" / "learned_trajectory.json")
+    assert evaluate.main(["--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "learned_trajectory.json does not exist" in err and "extract --policy" in err
+    assert not (tmp_path / "o").exists()  # nothing started
+    assert evaluate.main(["compare", "--learned", str(tmp_path / "nope.json"), "--out", str(tmp_path / "o")]) == 2
+    assert evaluate.main(["extract", "--out", str(tmp_path / "o")]) == 2
+    assert "--policy" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        evaluate.main(["compare", "--speeds", "-1"])
+
+
+def test_video_writes_a_gif(tmp_path):
+    from PIL import Image
+
+    assert evaluate.main(["video", "--video-trajectory", "cycloid", "--video-duration", "0.3",
+                          "--out", str(tmp_path)]) == 0
+    gif = tmp_path / "trot_cycloid_1mps.gif"
+    with Image.open(gif) as im:
+        assert im.n_frames >= 5 and im.size == (480, 360)
+
+
+def walk_row(walk_id, trajectory, energy, lift, valid=True, seed=""):
+    return {"walk_id": walk_id, "trajectory": trajectory, "label": trajectory, "seed": seed,
+            "lift_height_m": lift, "speed_command_mps": 1.0, "energy_J": energy, "energy_kJ": energy / 1e3,
+            "energy_per_100m_kJ": energy / 100, "valid": valid, "fell": False, "speed_ok": valid,
+            "status": "ok" if valid else "speed miss", "mean_speed_mps": 1.0, "duration_s": 10.0}
+
+
+def test_decrement_uses_the_cheaper_valid_baseline_of_the_same_set():
+    walks = [walk_row(0, "learned", 900.0, 0.1, seed="s0"), walk_row(1, "learned", 1200.0, 0.1, seed="s1"),
+             walk_row(2, "cycloid", 1000.0, 0.15), walk_row(3, "straight", 800.0, 0.15, valid=False),
+             walk_row(4, "cycloid", 850.0, 0.1), walk_row(5, "straight", 950.0, 0.1)]
+    rows = cmp.comparison_rows(walks, paper_lift=0.15)
+    d = {(r["set"], r["seed"]): r["D_t_pct"] for r in rows if r["trajectory"] == "learned"}
+    assert d[("paper", "s0")] == pytest.approx(10.0)  # the invalid straight walk (800 J) is not E_min
+    assert d[("paper", "s1")] == pytest.approx(-20.0)
+    assert d[("same_lift", "s0")] == pytest.approx(100 * (850 - 900) / 850)
+    means = {m["set"]: m for m in cmp.seed_means(rows)}
+    assert means["paper"]["n_valid"] == 2 and means["paper"]["D_t_pct_mean"] == pytest.approx(-5.0)
+    assert means["paper"]["energy_kJ_ci95"] > 0
+    md = cmp.table5_markdown(rows, cmp.seed_means(rows))
+    assert "mean ± 95 % CI over 2 seeds" in md and "(miss: 1.00 m/s)" in md

@@ -1,0 +1,171 @@
+"""Prototype experiment in simulation (paper Section 4.2): hardware-like robot options, distance walks, battery."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from cyberdog import config as C
+from cyberdog.analysis import prototype as proto
+from cyberdog.analysis.hardware import TorqueDelay, draw_mass_scale, hardware_walk_config
+from cyberdog.analysis.walk import walk
+from cyberdog.core import energy as en
+from cyberdog.sim.robot import Robot
+
+CFG = C.WalkConfig()
+SHORT_S = 1.5  # s of walking for the direction tests (includes the 1 s start-up ramp)
+
+
+@pytest.fixture(scope="module")
+def ideal_walk():
+    return walk(CFG, duration=SHORT_S, record=True)
+
+
+# ---- HardwareConfig ---------------------------------------------------------------------------------------
+
+def test_hardware_config_defaults_are_the_ideal_robot_and_bad_values_raise():
+    assert C.HardwareConfig().ideal and not C.HARDWARE_LIKE.ideal
+    assert C.HARDWARE_LIKE.latency_s == 0.003 and C.HARDWARE_LIKE.mass_uncertainty == 0.05
+    for field, value, match in [("latency_s", -0.001, "latency_s"), ("latency_s", 0.5, "latency_s"),
+                                ("mass_uncertainty", 0.6, "mass_uncertainty"), ("seed", -1, "seed"),
+                                ("joint_angle_noise_std", float("nan"), "joint_angle_noise_std"),
+                                ("imu_noise", True, "imu_noise")]:
+        with pytest.raises(ValueError, match=match):
+            C.HardwareConfig(**{field: value})
+    with pytest.raises(ValueError, match="whole multiple"):
+        walk(CFG, duration=0.01, hardware=C.HardwareConfig(latency_s=0.0025))
+    with pytest.raises(ValueError, match="distance"):
+        walk(CFG, duration=1.0, distance=-1.0)
+    with pytest.raises(TypeError, match="HardwareConfig"):
+        walk(CFG, duration=0.01, hardware={"friction": True})
+
+
+def test_all_off_hardware_path_reproduces_the_ideal_walk_exactly(ideal_walk):
+    r = walk(CFG, duration=SHORT_S, hardware=C.HardwareConfig(seed=5))
+    assert r.energy == ideal_walk.energy and r.electrical_energy == ideal_walk.electrical_energy
+    assert r.distance == ideal_walk.distance and r.mass_scale == 1.0
+
+
+# ---- each effect, in the expected direction -------------------------------------------------------------
+
+def test_latency_delays_the_torque_by_whole_physics_steps():
+    delay = TorqueDelay(3, size=2)
+    out = [delay.push(np.array([k, -k], dtype=float)) for k in range(1, 7)]
+    assert [o[0] for o in out] == [0, 0, 0, 1, 2, 3]
+    assert TorqueDelay(0).push(np.ones(12)) is not None
+    with pytest.raises(ValueError, match="latency"):
+        TorqueDelay(-1)
+    # in a walk: 3 ms at 1 kHz = the first 3 applied torques are zero, the 4th is the first command
+    r = walk(CFG, duration=0.006, hardware=C.HardwareConfig(latency_s=0.003), record=True)
+    ideal = walk(CFG, duration=0.001, record=True)
+    assert np.all(r.traces["tau"][:3] == 0)
+    np.testing.assert_allclose(r.traces["tau"][3], ideal.traces["tau"][0], rtol=1e-9, atol=1e-9)
+
+
+def test_latency_costs_energy(ideal_walk):
+    late = walk(CFG, duration=SHORT_S, hardware=C.HardwareConfig(latency_s=0.003))
+    assert late.energy > 1.02 * ideal_walk.energy  # delayed PD fights itself (measured: about +8 %)
+
+
+def test_friction_is_simulated_and_counted_once(ideal_walk):
+    hw = C.HardwareConfig(friction=True)
+    assert hardware_walk_config(CFG, hw).actuator.friction and not CFG.actuator.friction
+    r = walk(CFG, duration=SHORT_S, hardware=hw, record=True)
+    assert np.abs(r.traces["tau"] - ideal_walk.traces["tau"]).max() > 1.0  # the physics changed
+    # Ideal: friction added analytically to the electrical power; hardware-like: in the physics. Both count it
+    # once, so they agree closely; counting it twice (analytic on top of simulated) would add about 3 %.
+    assert r.electrical_energy == pytest.approx(ideal_walk.electrical_energy, rel=0.015)
+    twice = en.electrical_energy(r.traces["tau"], r.traces["dq"], CFG.sim.physics_dt, CFG.actuator, CFG.energy)
+    assert twice > r.electrical_energy * 1.015
+    with pytest.raises(ValueError, match="ActuatorConfig"):  # a robot built without friction is refused
+        with Robot(CFG.robot, CFG.actuator, CFG.sim) as robot:
+            walk(CFG, duration=0.01, robot=robot, hardware=hw)
+
+
+def test_mass_scale_is_within_5_percent_reproducible_and_applied(ideal_walk):
+    draws = [draw_mass_scale(C.HardwareConfig(mass_uncertainty=0.05, seed=s)) for s in range(200)]
+    assert all(0.95 <= d <= 1.05 for d in draws) and min(draws) < 0.96 and max(draws) > 1.04
+    assert len(set(draws)) == 200
+    assert draws[7] == draw_mass_scale(C.HardwareConfig(mass_uncertainty=0.05, seed=7))
+    # the sensors do not shift the mass draw (independent streams of one seed)
+    assert draws[0] == draw_mass_scale(C.HARDWARE_LIKE)
+    heavy_seed = next(s for s, d in enumerate(draws) if d > 1.03)
+    hw = C.HardwareConfig(mass_uncertainty=0.05, seed=heavy_seed)
+    with Robot(CFG.robot, CFG.actuator, CFG.sim) as robot:
+        r = walk(CFG, duration=SHORT_S, robot=robot, hardware=hw)
+        assert robot.total_mass() == pytest.approx(CFG.robot.total_mass * draws[heavy_seed], rel=1e-3)
+    assert r.mass_scale == draws[heavy_seed]
+    assert r.electrical_energy > 1.03 * ideal_walk.electrical_energy  # heavier robot, same gait
+
+
+def test_estimated_speed_feedback_with_noise_still_walks():
+    r = walk(CFG, duration=3.0, distance=1.5, hardware=C.HardwareConfig(
+        estimated_velocity=True, imu_noise=True, joint_angle_noise_std=0.002, joint_velocity_noise_std=0.05))
+    assert r.reached and r.distance >= 1.5
+
+
+# ---- distance walks -----------------------------------------------------------------------------------------
+
+def test_distance_walk_stops_at_the_goal_or_at_the_time_cap():
+    r = walk(CFG, duration=5.0, distance=0.5)
+    assert r.reached and 0.5 <= r.distance < 0.502 and r.duration < 5.0
+    capped = walk(CFG, duration=0.3, distance=100.0)
+    assert not capped.reached and capped.duration == pytest.approx(0.3)
+
+
+# ---- the prototype rows --------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def rows():
+    return proto.run_prototype({"cycloid": None}, speeds=(1.0,), distance_m=2.0, workers=2, log=lambda _: None)
+
+
+def test_2m_prototype_gives_ideal_and_hardware_rows(rows):
+    assert [(r["trajectory"], r["speed_mps"], r["robot"]) for r in rows] == [
+        ("cycloid", 1.0, "ideal"), ("cycloid", 1.0, "hardware")]
+    ideal, hw = rows
+    assert ideal["reached"] and hw["reached"] and not ideal["fell"] and not hw["fell"]
+    assert ideal["mass_scale"] == 1.0 and hw["mass_scale"] == draw_mass_scale(C.HARDWARE_LIKE)
+    assert hw["electrical_energy_J"] > ideal["electrical_energy_J"]  # measured: about +12 %
+    expected_gap = 100 * ((hw["electrical_energy_J"] / hw["distance_m"])
+                          / (ideal["electrical_energy_J"] / ideal["distance_m"]) - 1)
+    assert hw["electrical_gap_pct"] == pytest.approx(expected_gap)
+    text = proto.prototype_table(rows)
+    assert "ASSUMPTION" in text and "3600" in text and "electrical_gap_pct" in text
+
+
+def test_battery_percent_is_eq13_and_range_is_consistent(rows):
+    e = CFG.energy
+    for r in rows:
+        assert r["battery_start_pct"] == pytest.approx(95.0)
+        assert r["battery_used_pct"] == pytest.approx(r["battery_start_pct"] - r["battery_end_pct"])  # Eq. (13)
+        assert r["battery_used_pct"] == pytest.approx(100 * r["electrical_energy_J"] / (e.battery_capacity_wh * 3600))
+        assert r["range_full_charge_m"] == pytest.approx(r["distance_m"] * 95.0 / r["battery_used_pct"])
+        assert r["range_full_charge_m"] == pytest.approx(
+            en.range_at_full_charge(r["electrical_energy_J"], r["distance_m"], e))
+
+
+def test_eq12_reductions_and_gap_table_from_synthetic_rows():
+    def row(name, robot, e_mech, pct):
+        return {"trajectory": name, "speed_mps": 1.0, "robot": robot, "distance_m": 100.0, "energy_J": e_mech,
+                "electrical_energy_J": 10 * e_mech, "battery_used_pct": pct, "range_full_charge_m": 9500 / pct}
+    rows = proto.add_gaps([row("learned", "ideal", 880.0, 2.0), row("learned", "hardware", 900.0, 2.73),
+                           row("cycloid", "ideal", 1000.0, 2.5), row("cycloid", "hardware", 1100.0, 3.0)])
+    gaps = {g["trajectory"]: g for g in proto.gap_rows(rows)}
+    assert gaps["learned"]["reduction_sim_pct"] == pytest.approx(12.0)  # (1000 − 880) / 1000
+    assert gaps["learned"]["reduction_proto_pct"] == pytest.approx(9.0)  # (3.0 − 2.73) / 3.0
+    assert gaps["learned"]["sim_to_real_gap_pp"] == pytest.approx(3.0)  # the paper's 3 %
+    assert gaps["cycloid"]["mechanical_gap_pct"] == pytest.approx(10.0)
+    assert en.energy_reduction(1845.1, 1623.6) == pytest.approx(0.12, abs=0.001)  # Table 5 at 1 m/s
+
+
+def test_run_prototype_rejects_bad_input_before_walking():
+    for kwargs, match in [(dict(speeds=()), "speeds"), (dict(speeds=(-1.0,)), "speeds"),
+                          (dict(distance_m=0.0), "distance_m"), (dict(modes=("real",)), "modes"),
+                          (dict(workers=0), "workers"), (dict(trajectories={}), "trajectories")]:
+        with pytest.raises(ValueError, match=match):
+            proto.run_prototype(**kwargs, log=lambda _: None)
+    with pytest.raises(TypeError, match="FootTrajectory"):
+        proto.run_prototype({"x": "cycloid"}, log=lambda _: None)
+    assert math.isfinite(proto.time_cap(100.0, 1.0, CFG))
+    assert dataclasses.replace(C.HARDWARE_LIKE, seed=3).seed == 3
