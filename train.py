@@ -8,8 +8,17 @@ Examples:
   python train.py --resume runs/quick                                         # continue a killed run
   python train.py --config configs/quick.yaml --stage 2 --init-from runs/quick/stage1_final.pt --run-dir runs/q2
 
+Seeds at scale (one run per seed in RUN_DIR/seed<N>/, retried from its checkpoint if it fails, then aggregated):
+  python train.py --config configs/quick.yaml --seeds 0-9 --run-dir runs/sweep_quick       # local processes
+  python train.py --config configs/quick.yaml --seeds 0,3,7 --backend ray --workers 3      # local Ray instance
+  python train.py --config configs/paper.yaml --seeds 0-9 --backend ray --ray-address auto # existing cluster
+  python train.py --resume runs/sweep_quick                  # finish a killed or failed sweep
+  python train.py --aggregate runs/sweep_quick               # (re)write curves, evaluation and tables
+
 Outputs in the run folder: config.yaml (resolved), metrics.csv (one row per episode), tb/ (TensorBoard),
 checkpoint.pt (resume point), stage<N>_final.pt, stage<N>_best_actor.pt, saved/ (agents above save_score).
+Outputs in a sweep folder: sweep.json, sweep_config.yaml, sweep_status.json (live, per seed), seed<N>/ (run
+folders, each with train.log), learning_curves.png/.csv, evaluation.json, aggregate.csv/.md.
 """
 from __future__ import annotations
 
@@ -32,17 +41,150 @@ def parse_args(argv=None) -> argparse.Namespace:
                    help="override a config field, value parsed as YAML, e.g. --set train.stage1.max_env_steps=5000 "
                         "(repeatable)")
     p.add_argument("--resume", type=Path, metavar="RUN_DIR",
-                   help="continue the run in RUN_DIR from its checkpoint.pt with its saved config.yaml")
+                   help="continue the run in RUN_DIR from its checkpoint.pt with its saved config.yaml; if RUN_DIR is "
+                        "a sweep folder (sweep.json), continue every seed of the sweep that is not done")
     p.add_argument("--init-from", type=Path, metavar="CHECKPOINT",
                    help="start from this checkpoint's agent (e.g. runs/x/stage1_final.pt); "
                         "default for --stage 2: <run-dir>/stage1_final.pt")
     p.add_argument("--device", choices=C.DEVICES, help="overrides train.device: cpu, cuda or auto")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g = p.add_argument_group("seeds at scale (sweeps)")
+    g.add_argument("--seeds", metavar="SEEDS",
+                   help="train one run per seed: a range 0-9, a list 0,3,7 or both (0-2,5); each in "
+                        "RUN_DIR/seed<N>/ of the sweep folder RUN_DIR (default runs/sweep_<config name>), then "
+                        "aggregate. Resume a sweep with --resume RUN_DIR")
+    g.add_argument("--backend", choices=("local", "ray"),
+                   help="where the seeds run: local processes (default) or Ray (pip install -e '.[ray]')")
+    g.add_argument("--workers", type=int, metavar="N",
+                   help="seeds trained at the same time (default: the available CPU cores, at most the number of "
+                        "seeds; with Ray: the local instance's CPUs, or all CPUs of the cluster); also the number "
+                        "of processes evaluating the policies when that is long")
+    g.add_argument("--ray-address", metavar="ADDRESS",
+                   help="join an existing Ray cluster (e.g. auto, or HEAD_IP:6379) instead of starting a local Ray "
+                        "instance; the sweep folder must be on a file system all nodes share")
+    g.add_argument("--max-retries", type=int, metavar="N",
+                   help="times a failed or killed seed is restarted from its last checkpoint (default 2)")
+    g.add_argument("--aggregate", type=Path, metavar="SWEEP_DIR",
+                   help="no training: (re)aggregate the sweep folder SWEEP_DIR (learning curves with 95%% bands, "
+                        "evaluation of each seed's final actors, summary table)")
+    g.add_argument("--eval-duration", type=float, metavar="S",
+                   help="seconds of each evaluation rollout after a sweep or with --aggregate (default 10, the "
+                        "paper's Tf; 0 = no evaluation)")
+    g.add_argument("--eval-speed", type=float, metavar="V",
+                   help="commanded speed of the evaluation rollouts in m/s (default 1.0)")
     return p.parse_args(argv)
+
+
+SWEEP_OPTIONS = ("backend", "workers", "ray_address", "max_retries", "eval_duration", "eval_speed")
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
+    """--seeds, --resume of a sweep folder, --aggregate."""
+    from cyberdog.rl.sweep import SweepError, create_sweep, parse_seeds, run_sweep
+
+    try:
+        if args.aggregate is not None:
+            used = [o for o in ("config", "seed", "seeds", "resume", "init_from", "device", "run_dir")
+                    if getattr(args, o) is not None] + (["set"] if args.overrides else [])
+            used += [o for o in ("backend", "ray_address", "max_retries") if getattr(args, o) is not None]
+            if used:
+                sys.exit(f"--aggregate reads an existing sweep folder; do not combine it with "
+                         f"{', '.join(_flag(u) for u in used)}")
+            return _aggregate(args, args.aggregate)
+        if args.workers is not None and args.workers < 1:
+            raise SweepError(f"--workers must be >= 1, got {args.workers}")
+        if args.max_retries is not None and args.max_retries < 0:
+            raise SweepError(f"--max-retries must be >= 0, got {args.max_retries}")
+        if args.ray_address and args.backend != "ray":
+            raise SweepError("--ray-address needs --backend ray")
+        _check_eval_args(args)
+        if not resume:
+            for o in ("seed", "init_from", "resume"):
+                if getattr(args, o) is not None:
+                    sys.exit(f"--seeds cannot be combined with {_flag(o)}" + (
+                        ": resume a sweep with --resume SWEEP_DIR alone" if o == "resume" else ""))
+            if args.stage == "2":
+                sys.exit("--seeds trains --stage both or 1 (stage 2 alone needs a stage-1 agent per seed)")
+            seeds = parse_seeds(args.seeds)
+            cfg, name = _resolve_config(args)
+            sweep_dir = args.run_dir or Path("runs") / f"sweep_{name}"
+            create_sweep(sweep_dir, cfg, seeds, args.stage, source_config=args.config, overrides=args.overrides)
+            print(f"sweep: seeds {seeds} in {sweep_dir}")
+        status = run_sweep(sweep_dir, backend=args.backend or "local", workers=args.workers,
+                           max_retries=2 if args.max_retries is None else args.max_retries,
+                           ray_address=args.ray_address, progress=not args.no_progress,
+                           train_script=Path(__file__).resolve())
+        failed = [s["seed"] for s in status["seeds"] if s["state"] != "done"]
+        if any(s["state"] == "done" for s in status["seeds"]):
+            _aggregate(args, sweep_dir)
+    except SweepError as e:
+        sys.exit(f"error: {e}")
+    except KeyboardInterrupt:
+        print(f"\nsweep interrupted; its training processes were stopped. Continue with: "
+              f"python train.py --resume {sweep_dir}", file=sys.stderr)
+        return 130
+    if failed:
+        print(f"sweep: seeds {failed} failed (errors in {sweep_dir}/sweep_status.json and seed<N>/train.log); "
+              f"continue with: python train.py --resume {sweep_dir}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _check_eval_args(args) -> None:
+    from cyberdog.rl.sweep import SweepError
+
+    if args.eval_duration is not None and not args.eval_duration >= 0:
+        raise SweepError(f"--eval-duration must be >= 0 s (0 = no evaluation), got {args.eval_duration}")
+    if args.eval_speed is not None and not args.eval_speed >= 0:
+        raise SweepError(f"--eval-speed must be >= 0 m/s, got {args.eval_speed}")
+
+
+def _aggregate(args, sweep_dir: Path) -> int:
+    from cyberdog.analysis.aggregate import aggregate_sweep
+    from cyberdog.rl.sweep import SweepError, available_cores
+
+    try:
+        _check_eval_args(args)
+        aggregate_sweep(sweep_dir, eval_duration=10.0 if args.eval_duration is None else args.eval_duration,
+                        eval_speed=1.0 if args.eval_speed is None else args.eval_speed,
+                        workers=args.workers or available_cores(), progress=not args.no_progress)
+    except SweepError as e:
+        sys.exit(f"error: {e}")
+    print((sweep_dir / "aggregate.md").read_text())
+    return 0
+
+
+def _resolve_config(args):
+    """The experiment config from --config, --set and --device (+ --seed); and its name for default folders."""
+    try:
+        cfg = C.load(C.ExperimentConfig, args.config) if args.config else C.ExperimentConfig()
+        sets = list(args.overrides)
+        if args.seed is not None:
+            sets.append(f"train.seed={args.seed}")
+        if args.device:
+            sets.append(f"train.device={args.device}")
+        cfg = C.override(cfg, sets)
+    except (ValueError, TypeError, OSError) as e:
+        sys.exit(f"config error: {e}")
+    return cfg, (args.config.stem if args.config else "default")
 
 
 def main(argv=None) -> int:
     args = parse_args(argv)
+    if args.seeds is not None or args.aggregate is not None:
+        return _sweep_main(args, None, resume=False)
+    if args.resume is not None and (args.resume / "sweep.json").is_file():  # a sweep folder
+        if args.config or args.overrides or args.seed is not None or args.init_from or args.device or args.run_dir:
+            sys.exit("--resume of a sweep folder uses its sweep.json and sweep_config.yaml; do not combine it with "
+                     "--config, --set, --seed, --init-from, --device or --run-dir")
+        return _sweep_main(args, args.resume, resume=True)
+    used = [_flag(o) for o in SWEEP_OPTIONS if getattr(args, o) is not None]
+    if used:
+        sys.exit(f"{', '.join(used)} only apply to sweeps (--seeds, --resume SWEEP_DIR, --aggregate)")
     from cyberdog.rl import CheckpointError, NonFiniteError, Trainer  # slow import after --help
 
     if args.resume is not None:
@@ -57,17 +199,7 @@ def main(argv=None) -> int:
             sys.exit("--device cannot be combined with --resume: the run continues with its saved train.device")
         trainer_kwargs = dict(run_dir=args.resume, resume=True)
     else:
-        try:
-            cfg = C.load(C.ExperimentConfig, args.config) if args.config else C.ExperimentConfig()
-            sets = list(args.overrides)
-            if args.seed is not None:
-                sets.append(f"train.seed={args.seed}")
-            if args.device:
-                sets.append(f"train.device={args.device}")
-            cfg = C.override(cfg, sets)
-        except (ValueError, TypeError, OSError) as e:
-            sys.exit(f"config error: {e}")
-        name = args.config.stem if args.config else "default"
+        cfg, name = _resolve_config(args)
         run_dir = args.run_dir or Path("runs") / f"{name}_seed{cfg.train.seed}"
         if (run_dir / "checkpoint.pt").exists():
             sys.exit(f"{run_dir} already holds a run; use --resume {run_dir} or another --run-dir")

@@ -1,0 +1,262 @@
+"""Across-seed results of a sweep: learning curves with a 95 % band, evaluation of every seed's policies, tables.
+
+Written into the sweep folder (inputs — the seed run folders — are only read):
+
+    learning_curves.png / .csv   Figure 6 with bands: episode score vs env steps of the stage, stage 1 and stage
+                                 2, every seed interpolated onto a common step grid (the steps all seeds
+                                 reached), mean and 95 % t-interval across seeds; also the trainer's
+                                 moving-window score
+    evaluation.json              per seed: run_dir, actor files, training summary and rollout metrics of the
+                                 stage-1 and stage-2 final actors; then mean, 95 % CI half-width and n per metric
+    aggregate.csv / .md          the summary table: one row per seed, then mean and 95 % CI
+
+Evaluation is one deterministic `rollout` per actor (`cyberdog.rl.rollout`, the env the actor was trained in,
+`speed` m/s for `duration` s): mean speed over the second half, fell, energy per metre (Eq. 7 energy over
+forward distance), and the stage-2 vs stage-1 change of energy per metre in %. `duration=0` skips it.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from cyberdog.analysis.report import markdown_table
+from cyberdog.analysis.stats import mean_ci, mean_ci_band
+
+EVAL_FORMAT, EVAL_VERSION = "cyberdog-sweep-evaluation", 1
+ROLLOUT_METRICS = ("mean_speed_mps", "fell", "energy_per_m_J", "distance_m", "energy_J")
+GRID_POINTS = 200
+# a process pool for the rollouts only pays off when they are long (each worker imports torch and PyBullet)
+PARALLEL_EVAL_MIN_S = 60.0
+
+
+# ---- inputs ----------------------------------------------------------------------------------------------------
+def seed_runs(sweep_dir) -> list[tuple[str, Path]]:
+    """(label, run folder) of every seed: from sweep.json if the folder is a sweep, else every sub-folder with a
+    metrics.csv (so a hand-made folder of runs aggregates too)."""
+    from cyberdog.rl.sweep import SweepError, is_sweep_dir, load_sweep, seed_dir
+
+    sweep_dir = Path(sweep_dir)
+    if not sweep_dir.is_dir():
+        raise SweepError(f"{sweep_dir} is not a folder")
+    if is_sweep_dir(sweep_dir):
+        return [(str(s), seed_dir(sweep_dir, s)) for s in load_sweep(sweep_dir).seeds]
+    runs = sorted((p for p in sweep_dir.iterdir() if (p / "metrics.csv").is_file()),
+                  key=lambda p: (int(m[1]) if (m := re.fullmatch(r"seed(\d+)", p.name)) else math.inf, p.name))
+    if not runs:
+        raise SweepError(f"{sweep_dir} is neither a sweep folder (sweep.json) nor a folder of run folders "
+                         f"(sub-folders with metrics.csv)")
+    return [(m[1] if (m := re.fullmatch(r"seed(\d+)", p.name)) else p.name, p) for p in runs]
+
+
+def stage_curves(run_dir) -> dict[int, dict[str, np.ndarray]]:
+    """Per stage: env steps since the stage began (at each episode end), episode score, window-mean score."""
+    path = Path(run_dir) / "metrics.csv"
+    if not path.is_file():
+        return {}
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    out = {}
+    for stage in sorted({int(r["stage"]) for r in rows}):
+        rs = [r for r in rows if int(r["stage"]) == stage]
+        # the stage's first episode starts with the stage (fresh env), so its start is env_steps - length
+        start = int(rs[0]["env_steps"]) - int(rs[0]["length"])
+        out[stage] = {"env_steps": np.array([int(r["env_steps"]) - start for r in rs], dtype=float),
+                      "score": np.array([float(r["score"]) for r in rs]),
+                      "window_score": np.array([float(r["window_mean_score"]) for r in rs])}
+    return out
+
+
+def training_summary(curves: dict) -> dict:
+    out = {}
+    for stage, c in curves.items():
+        out[f"stage{stage}_env_steps"] = int(c["env_steps"][-1])
+        out[f"stage{stage}_episodes"] = int(len(c["score"]))
+        out[f"stage{stage}_best_score"] = float(np.max(c["score"]))
+        out[f"stage{stage}_final_window_score"] = float(c["window_score"][-1])
+    return out
+
+
+# ---- learning curves -------------------------------------------------------------------------------------------
+def learning_curves(per_seed: list[dict], points: int = GRID_POINTS) -> dict[int, dict[str, np.ndarray]]:
+    """Interpolate every seed's curves onto one grid per stage spanning the steps all seeds reached; mean and
+    95 % CI half-width across seeds at every grid point."""
+    out = {}
+    for stage in sorted({s for c in per_seed for s in c}):
+        curves = [c[stage] for c in per_seed if stage in c and len(c[stage]["env_steps"])]
+        lo = max(c["env_steps"][0] for c in curves)
+        hi = min(c["env_steps"][-1] for c in curves)
+        grid = np.linspace(lo, hi, points) if hi > lo else np.array([hi])
+        res = {"env_steps": grid, "n_seeds": np.full(grid.shape, len(curves))}
+        for key in ("score", "window_score"):
+            stacked = np.array([np.interp(grid, c["env_steps"], c[key]) for c in curves])
+            res[f"{key}_mean"], res[f"{key}_ci95"] = mean_ci_band(stacked)
+        out[stage] = res
+    return out
+
+
+def write_learning_curves(curves: dict, folder: Path, title: str = "") -> list[Path]:
+    from matplotlib.figure import Figure  # no pyplot: no GUI backend needed
+
+    folder = Path(folder)
+    paths = [folder / "learning_curves.csv", folder / "learning_curves.png"]
+    cols = ["stage", "env_steps", "n_seeds", "score_mean", "score_ci95", "window_score_mean", "window_score_ci95"]
+    with open(paths[0], "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for stage, c in curves.items():
+            for i in range(len(c["env_steps"])):
+                w.writerow([stage] + [float(c[k][i]) if k != "n_seeds" else int(c[k][i]) for k in cols[1:]])
+    fig = Figure(figsize=(5.5 * max(1, len(curves)), 4.0), layout="constrained")
+    axes = fig.subplots(1, max(1, len(curves)), squeeze=False)[0]
+    for ax, (stage, c) in zip(axes, curves.items()):
+        x = c["env_steps"]
+        m, h = c["score_mean"], np.nan_to_num(c["score_ci95"])
+        ax.fill_between(x, m - h, m + h, alpha=0.25, color="C0", label="95 % CI across seeds")
+        ax.plot(x, m, color="C0", label="episode score, mean")
+        ax.plot(x, c["window_score_mean"], color="C1", ls="--", label="moving-window score, mean")
+        ax.set_title(f"stage {stage} ({int(c['n_seeds'][0])} seeds)")
+        ax.set_xlabel("env steps in the stage")
+        ax.set_ylabel("episode score")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    fig.savefig(paths[1], dpi=120)
+    return paths
+
+
+# ---- evaluation -------------------------------------------------------------------------------------------------
+def evaluate_actor(path: str, speed: float, duration: float, seed: int = 0) -> dict:
+    """Rollout metrics of one actor file (module-level so that a process pool can run it)."""
+    import torch
+
+    from cyberdog.rl.rollout import load_actor, rollout
+
+    torch.set_num_threads(1)
+    r = rollout(load_actor(path), speed=speed, duration=duration, seed=seed)
+    return {k: v for k, v in r.summary().items()}
+
+
+def _finite_or_none(x):
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: _finite_or_none(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite_or_none(v) for v in x]
+    return x
+
+
+def aggregate_sweep(sweep_dir, eval_duration: float = 10.0, eval_speed: float = 1.0, workers: int = 1,
+                    progress: bool = True, echo=print) -> dict:
+    """Read every seed's metrics.csv, evaluate its final actors, and write the curves, evaluation.json and the
+    summary table into `sweep_dir`. Seeds without data are listed under "missing", not fatal."""
+    from tqdm import tqdm
+
+    from cyberdog.rl.sweep import SweepError
+
+    if not (math.isfinite(eval_duration) and eval_duration >= 0):
+        raise SweepError(f"--eval-duration must be >= 0 s (0 = no evaluation), got {eval_duration}")
+    if not (math.isfinite(eval_speed) and eval_speed >= 0):
+        raise SweepError(f"--eval-speed must be >= 0 m/s, got {eval_speed}")
+    sweep_dir = Path(sweep_dir)
+    runs = seed_runs(sweep_dir)
+    entries, missing, curves_per_seed = [], [], []
+    for label, run_dir in runs:
+        curves = stage_curves(run_dir)
+        if not curves:
+            missing.append({"seed": label, "run_dir": str(run_dir.resolve()), "reason": "no metrics.csv rows"})
+            continue
+        curves_per_seed.append(curves)
+        actors = {f"stage{s}": str((run_dir / f"stage{s}_final_actor.pt").resolve()) for s in sorted(curves)
+                  if (run_dir / f"stage{s}_final_actor.pt").is_file()}
+        entries.append({"seed": int(label) if label.isdigit() else label, "run_dir": str(run_dir.resolve()),
+                        "actors": actors, "training": training_summary(curves), "metrics": {}})
+    if not entries:
+        raise SweepError(f"{sweep_dir}: no seed has logged an episode yet; nothing to aggregate")
+    stages = sorted({s for c in curves_per_seed for s in c})
+
+    # rollouts of every final actor
+    jobs = [(i, name, path) for i, e in enumerate(entries) for name, path in e["actors"].items()]
+    if eval_duration > 0 and jobs:
+        echo(f"aggregate: evaluating {len(jobs)} actors ({eval_duration:g} s at {eval_speed:g} m/s each)")
+        bar = tqdm(total=len(jobs), unit="rollout", desc="evaluate", disable=not progress, dynamic_ncols=True)
+        parallel = workers > 1 and len(jobs) > 1 and eval_duration * len(jobs) >= PARALLEL_EVAL_MIN_S
+        try:
+            if parallel:
+                import multiprocessing
+
+                with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn")) as ex:
+                    futures = [(i, n, ex.submit(evaluate_actor, p, eval_speed, eval_duration)) for i, n, p in jobs]
+                    for i, n, fut in futures:
+                        entries[i]["metrics"][n] = fut.result()
+                        bar.update()
+            else:
+                for i, n, p in jobs:
+                    entries[i]["metrics"][n] = evaluate_actor(p, eval_speed, eval_duration)
+                    bar.update()
+        finally:
+            bar.close()
+        for e in entries:
+            m = e["metrics"]
+            if "stage1" in m and "stage2" in m:
+                e1, e2 = m["stage1"]["energy_per_m_J"], m["stage2"]["energy_per_m_J"]
+                m["energy_per_m_change_pct"] = 100.0 * (e2 - e1) / e1 if e1 and math.isfinite(e1) else math.nan
+
+    # the summary table
+    columns = ["seed"] + [f"stage{s}_{k}" for s in stages for k in ("env_steps", "episodes", "final_window_score")]
+    if eval_duration > 0:
+        columns += [f"stage{s}_{k}" for s in stages for k in ("mean_speed_mps", "fell", "energy_per_m_J")]
+        if stages == [1, 2]:
+            columns.append("energy_per_m_change_pct")
+    rows = []
+    for e in entries:
+        row = {"seed": e["seed"], **{k: v for k, v in e["training"].items() if k in columns}}
+        for s in stages:
+            for k, v in e["metrics"].get(f"stage{s}", {}).items():
+                if f"stage{s}_{k}" in columns:
+                    row[f"stage{s}_{k}"] = v
+        if "energy_per_m_change_pct" in e["metrics"]:
+            row["energy_per_m_change_pct"] = e["metrics"]["energy_per_m_change_pct"]
+        rows.append(row)
+    stats = {}
+    for c in columns[1:]:
+        values = [float(r[c]) for r in rows if c in r and r[c] is not None]
+        m, h = mean_ci(values)
+        stats[c] = {"mean": m, "ci95": h, "n": int(np.isfinite(values).sum()) if values else 0}
+
+    with open(sweep_dir / "aggregate.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        w.writerows(rows)
+        w.writerow({"seed": "mean", **{c: stats[c]["mean"] for c in columns[1:]}})
+        w.writerow({"seed": "ci95", **{c: stats[c]["ci95"] for c in columns[1:]}})
+    md_rows = rows + [{"seed": "**mean ± 95 % CI**",
+                       **{c: (f"{stats[c]['mean']:.4g} ± {stats[c]['ci95']:.2g}" if math.isfinite(stats[c]["ci95"])
+                              else f"{stats[c]['mean']:.4g}") for c in columns[1:]}}]
+    eval_line = (f"Evaluation: one deterministic rollout per final actor, {eval_duration:g} s at {eval_speed:g} m/s; "
+                 f"`fell` in the mean row is the fraction of seeds that fell." if eval_duration > 0
+                 else "No evaluation (eval duration 0).")
+    md = (f"# Sweep {sweep_dir.name}: {len(entries)} seeds\n\n{markdown_table(md_rows, columns)}\n\n"
+          f"stage<N>_env_steps: env steps of the stage at the end of its last logged episode; final window score: "
+          f"the trainer's moving-window mean episode score at that episode. 95 % CI: half-width of the Student-t "
+          f"interval of the mean across seeds. {eval_line}\n")
+    if missing:
+        md += "\nMissing: " + "; ".join(f"seed {m['seed']} ({m['reason']})" for m in missing) + "\n"
+    (sweep_dir / "aggregate.md").write_text(md)
+
+    curves = learning_curves(curves_per_seed)
+    write_learning_curves(curves, sweep_dir, title=f"{sweep_dir.name}: mean and 95 % CI over {len(entries)} seeds")
+    evaluation = {"format": EVAL_FORMAT, "version": EVAL_VERSION, "sweep_dir": str(sweep_dir.resolve()),
+                  "evaluation": ({"speed_mps": eval_speed, "duration_s": eval_duration, "rollout_seed": 0,
+                                  "reward": "stage2"} if eval_duration > 0 else None),
+                  "seeds": entries, "mean_ci95": stats, "missing": missing}
+    (sweep_dir / "evaluation.json").write_text(json.dumps(_finite_or_none(evaluation), indent=1) + "\n")
+    echo(f"aggregate: wrote aggregate.csv/.md, evaluation.json, learning_curves.csv/.png in {sweep_dir}")
+    return {"rows": rows, "stats": stats, "curves": curves, "evaluation": evaluation, "markdown": md}
