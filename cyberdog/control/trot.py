@@ -28,10 +28,12 @@ from cyberdog.config import WalkConfig
 from cyberdog.core import kinematics as kin
 from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
-from cyberdog.core.trajectories import FootTrajectory, make_trajectory
+from cyberdog.core.trajectories import FootTrajectory, make_trajectory, point_evaluator
 
 SIDES = (np.array([0, 2]), np.array([1, 3]))  # leg indices of the left (LF, LH) and right (RF, RH) legs
 MAX_ATTITUDE_SHIFT = 0.03  # m, bound on the sideways foot-placement shift of the foot targets
+LEG_SIDE = tuple(float(s) for s in kin.LEFT_RIGHT)  # +1 left, −1 right, per leg LF, RF, LH, RH
+LEG_IS_LEFT = tuple(s > 0 for s in LEG_SIDE)
 
 
 @dataclass
@@ -52,6 +54,9 @@ class BodyFeedback:
                    forward_speed=v, lateral_speed=float(state.base_linear_velocity_body[1]))
 
 
+_NO_FEEDBACK = BodyFeedback()
+
+
 @dataclass
 class TrotTargets:
     """What the controller asked for at one instant (for logging and tests)."""
@@ -68,6 +73,11 @@ class TrotController:
 
     `torque(t, q, dq, body)` returns the joint torque command (12,) in N·m.
     A custom trajectory (e.g. the learned one) can replace the one named in the config.
+
+    It runs at every physics step (1 kHz), so the per-step path works on Python floats leg by leg (scalar
+    IK, closed-form Jacobian solve) instead of numpy calls on (4, 3) arrays, whose call overhead was most of
+    its cost; the arithmetic is that of `cyberdog.core.kinematics`' array functions (tests/test_fast_paths.py
+    checks the torque against them).
     """
 
     def __init__(self, cfg: WalkConfig, trajectory: FootTrajectory | None = None):
@@ -81,6 +91,7 @@ class TrotController:
         self.body_weight = self.robot.total_mass * cfg.sim.gravity  # N
         self.speed = cfg.gait.speed
         self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
+        self._point_for = (None, None)  # (trajectory, its float evaluator or None), see _foot_points
 
     def reset(self) -> None:
         self.pid.reset()
@@ -98,49 +109,88 @@ class TrotController:
 
     def step_lengths(self, t: float, body: BodyFeedback) -> np.ndarray:
         """(4,) step length S per leg, m: S = v·stance_time, corrected for speed, skewed to hold the heading."""
+        left, right = self._side_step_lengths(t, body)
+        return np.array([left if is_left else right for is_left in LEG_IS_LEFT])
+
+    def _side_step_lengths(self, t: float, body: BodyFeedback) -> tuple[float, float]:
+        """(S_left, S_right), m; advances the speed integral (once per call, as `step_lengths`)."""
         c = self.cfg.controller
         v = self.commanded_speed(t)
         if body.forward_speed is not None and c.speed_gain > 0:
             limit = c.max_speed_correction * v
-            self.speed_correction = float(np.clip(
-                self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.physics_dt,
-                -limit, limit))
+            correction = self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.physics_dt
+            self.speed_correction = float(min(max(correction, -limit), limit))  # np.clip on a scalar
         S = (v + self.speed_correction) * self.gait.stance_time
         # heading set-point turns back toward the path (y = 0); positive yaw error → lengthen left steps
         heading_error = body.yaw + c.lateral_gain * body.lateral_offset
-        skew = np.clip(c.heading_gain * heading_error, -0.5, 0.5)
-        return np.maximum(S * (1.0 + skew * kin.LEFT_RIGHT), 0.0)
+        skew = min(max(c.heading_gain * heading_error, -0.5), 0.5)
+        return max(S * (1.0 + skew), 0.0), max(S * (1.0 - skew), 0.0)
+
+    def _foot_points(self, phases: list[float], S: tuple[float, float]) -> list[tuple[float, float, float, float]]:
+        """Per leg (x, z, vx, vz) of the trajectory at its phase and side's step length."""
+        g = self.gait
+        lift, swing, stance = g.lift_height, g.swing_time, g.stance_time  # (stance_time is a property)
+        traj = self.trajectory
+        if self._point_for[0] is not traj:
+            self._point_for = (traj, point_evaluator(traj))
+        point = self._point_for[1]
+        if point is not None:
+            return [point(phase, S[0] if is_left else S[1], lift, swing, stance)
+                    for phase, is_left in zip(phases, LEG_IS_LEFT)]
+        points = [None] * 4  # any other trajectory: its array method, once per side
+        for side, legs in enumerate(SIDES):
+            xz, vxz = traj.position_velocity(np.array([phases[i] for i in legs]), S[side], lift, swing, stance)
+            for row, i in enumerate(legs):
+                points[i] = (float(xz[row, 0]), float(xz[row, 1]), float(vxz[row, 0]), float(vxz[row, 1]))
+        return points
+
+    def _leg_targets(self, t: float, body: BodyFeedback):
+        """Foot targets (4 × (x, y, z)), foot velocities (4 × (vx, vy, vz)), joint targets and joint speed
+        targets (12 floats each) and the swing flags (4 bools) at time t, in plain Python values."""
+        c, r = self.cfg.controller, self.robot
+        phases = self.scheduler.leg_phase_list(t)
+        S = self._side_step_lengths(t, body)
+        # sideways foot placement against the body's sideways speed
+        dy = min(max(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT), MAX_ATTITUDE_SHIFT)
+        l1, l2, l3 = r.l1, r.l2, r.l3
+        points = self._foot_points(phases, S)
+        feet = [(x, side * l1 + dy, z - self.stand_height) for (x, z, _, _), side in zip(points, LEG_SIDE)]
+        foot_vels = [(vx, 0.0, vz) for _, _, vx, vz in points]
+        q_t, dq_t = [], []
+        for (x, y, z), (vx, _, vz), side in zip(feet, foot_vels, LEG_SIDE):
+            try:
+                q_leg = kin.leg_inverse_kinematics(x, y, z, side, l1, l2, l3)
+            except ValueError:  # unreachable: the array function raises with its full message
+                kin.inverse_kinematics(np.array(feet), r)
+                raise
+            q_t.extend(q_leg)
+            dq_t.extend(kin.leg_joint_velocity(*q_leg, side, vx, 0.0, vz, l1, l2, l3)
+                        if c.velocity_feedforward else (0.0, 0.0, 0.0))
+        swing_fraction = self.scheduler.gait.swing_fraction
+        return feet, foot_vels, q_t, dq_t, [phase < swing_fraction for phase in phases]
 
     def targets(self, t: float, body: BodyFeedback | None = None) -> TrotTargets:
         """Foot and joint targets at time t (s) for the measured body state."""
-        g, c = self.gait, self.cfg.controller
-        body = body or BodyFeedback()
-        phases = self.scheduler.leg_phases(t)
-        S = self.step_lengths(t, body)
-        xz = np.empty((4, 2))
-        vxz = np.empty((4, 2))
-        for legs in SIDES:  # left and right legs differ in step length (heading correction)
-            xz[legs], vxz[legs] = self.trajectory.position_velocity(phases[legs], S[legs[0]], g.lift_height,
-                                                                    g.swing_time, g.stance_time)
-        # sideways foot placement against the body's sideways speed
-        dy = float(np.clip(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT,
-                           MAX_ATTITUDE_SHIFT))
-        foot = np.stack([xz[:, 0], kin.LEFT_RIGHT * self.robot.l1 + dy, xz[:, 1] - self.stand_height],
-                        axis=-1)
-        foot_vel = np.stack([vxz[:, 0], np.zeros(4), vxz[:, 1]], axis=-1)
-        q = kin.inverse_kinematics(foot, self.robot)
-        if c.velocity_feedforward:
-            dq = np.linalg.solve(kin.jacobian(q, self.robot), foot_vel[..., None])[..., 0]
-        else:
-            dq = np.zeros((4, 3))
-        return TrotTargets(foot, foot_vel, q.ravel(), dq.ravel(), self.scheduler.in_swing(t))
+        feet, foot_vels, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
+        return TrotTargets(np.array(feet), np.array(foot_vels), np.array(q_t), np.array(dq_t), np.array(in_swing))
 
     def torque(self, t: float, q: np.ndarray, dq: np.ndarray, body: BodyFeedback | None = None) -> np.ndarray:
         """Joint torque command (12,), N·m: PID on the IK targets plus the feedforward terms."""
-        tgt = self.targets(t, body)
-        tau = self.pid.torque(tgt.joint_angles, q, tgt.joint_velocities, dq)
+        _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
+        q = np.asarray(q, dtype=float)
+        dq = np.asarray(dq, dtype=float)
+        if q.shape != (12,) or dq.shape != (12,):
+            return self._checked_torque(q_t, q, dq_t, dq, in_swing)
+        q_measured = q.tolist()
+        tau = self.pid.torque_from_lists(q_t, q_measured, dq_t, dq.tolist())
         if self.cfg.controller.gravity_compensation:
-            tau = tau + self.stance_feedforward(q, ~tgt.in_swing)
+            self._add_stance_feedforward(tau, q_measured, [not swing for swing in in_swing])
+        return np.array(tau)
+
+    def _checked_torque(self, q_t, q, dq_t, dq, in_swing) -> np.ndarray:
+        tau = self.pid.torque(np.array(q_t), q, np.array(dq_t), dq)  # raises on a bad shape
+        if self.cfg.controller.gravity_compensation:
+            tau = tau + self.stance_feedforward(q, ~np.array(in_swing))
         return tau
 
     def stance_feedforward(self, q: np.ndarray, stance: np.ndarray) -> np.ndarray:
@@ -151,3 +201,18 @@ class TrotController:
         J = kin.jacobian(np.reshape(q, (4, 3)), self.robot)
         tau = J[:, 2, :] * (-self.body_weight / n * stance)[:, None]  # Jᵀ (0, 0, f_z)
         return tau.ravel()
+
+    def _add_stance_feedforward(self, tau: list[float], q: list[float], stance: list[bool]) -> None:
+        """`stance_feedforward` added to tau (12 floats) in place, q as 12 floats: only the stance legs'
+        Jacobian rows are computed (the swing legs' terms are zeros)."""
+        n = sum(stance)
+        if n == 0:
+            return
+        r = self.robot
+        f_z = -self.body_weight / n  # N, each stance foot's share of the weight, pushing down
+        for leg, (on_ground, side) in enumerate(zip(stance, LEG_SIDE)):
+            if on_ground:
+                i = 3 * leg
+                row = kin.leg_jacobian_z_row(q[i], q[i + 1], q[i + 2], side, r.l1, r.l2, r.l3)
+                for j in range(3):
+                    tau[i + j] += row[j] * f_z

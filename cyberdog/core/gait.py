@@ -8,6 +8,7 @@ The paper's diagonal trot (Figure 9): LF and RH swing together, RF and LH half a
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,6 +17,7 @@ import numpy as np
 from cyberdog.config import LEG_NAMES, GaitConfig
 
 _PHASE_DECIMALS = 12  # phases are rounded to 1e-12 so legs half a cycle apart agree on a boundary
+_PHASE_SCALE = 10.0 ** _PHASE_DECIMALS  # np.round(x, 12) is rint(x · 1e12) / 1e12; `round(x * 1e12)` is that rint
 
 
 @dataclass(frozen=True)
@@ -79,6 +81,21 @@ class GaitScheduler:
         """(…, 4) phase of each leg in [0, 1): (t / period + offset) mod 1, 0 = lift-off."""
         phase = np.round(np.mod(self._time(t) / self.period + self.gait.offsets, 1.0), _PHASE_DECIMALS)
         return np.where(phase >= 1.0, 0.0, phase)
+
+    def leg_phase_list(self, t: float) -> list[float]:
+        """`leg_phases` for one scalar time, as 4 Python floats (the controller's 1 kHz path: no arrays).
+
+        Same arithmetic as the array method: Python's float % is numpy's mod, and round(x · 1e12) / 1e12 is
+        np.round(x, 12) (both round half to even)."""
+        t = float(t)
+        if not math.isfinite(t):
+            raise ValueError("time t must be finite")
+        cycles = t / self.period
+        phases = []
+        for offset in self.gait.phase_offsets:
+            phase = round(((cycles + offset) % 1.0) * _PHASE_SCALE) / _PHASE_SCALE
+            phases.append(0.0 if phase >= 1.0 else phase)
+        return phases
 
     def in_swing(self, t: Any) -> np.ndarray:
         """(…, 4) bool: leg in swing (phase < swing fraction)."""

@@ -23,6 +23,8 @@ kinematics of the URDF in the tests (agreement within 1 mm).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from cyberdog.config import RobotConfig
@@ -162,6 +164,69 @@ def jacobian(q: np.ndarray, robot: RobotConfig, side: np.ndarray | None = None) 
     J[..., 2, 1] = c1 * dz_dhip
     J[..., 2, 2] = c1 * dz_dknee
     return J
+
+
+# ---------------------------------------------------------------------------------------------------------
+# One leg in plain Python floats: the same formulas as above, for the controller's 1 kHz inner loop, where
+# numpy's per-call overhead on (4, 3) arrays cost more than the arithmetic (about 10x). Tested against the
+# array functions in tests/test_fast_paths.py.
+# ---------------------------------------------------------------------------------------------------------
+
+def leg_inverse_kinematics(x: float, y: float, z: float, side: float, l1: float, l2: float, l3: float
+                           ) -> tuple[float, float, float]:
+    """`inverse_kinematics` of one leg: (abad, hip, knee), rad, putting the foot at (x, y, z), m, leg frame.
+
+    side: +1 left, −1 right; l1, l2, l3 the link lengths (m). Raises ValueError for an unreachable target
+    (the array function's message names the reach; call it for the message).
+    """
+    r2 = y * y + z * z
+    l1_sq = l1 * l1
+    if r2 < l1_sq - 1e-12:
+        raise ValueError(f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
+    z_leg = -math.sqrt(max(r2 - l1_sq, 0.0))  # _sagittal_height
+    abad = math.atan2(z, y) - math.atan2(z_leg, side * l1)
+    abad = (abad + math.pi) % (2.0 * math.pi) - math.pi
+    # sagittal_inverse
+    cos_knee = (x * x + z_leg * z_leg - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+    if cos_knee > 1.0 + 1e-12 or cos_knee < -1.0 - 1e-12:
+        raise ValueError(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
+    knee = -math.acos(min(max(cos_knee, -1.0), 1.0))
+    hip = math.atan2(-x, -z_leg) - math.atan2(l3 * math.sin(knee), l2 + l3 * math.cos(knee))
+    return abad, hip, knee
+
+
+def leg_joint_velocity(abad: float, hip: float, knee: float, side: float, vx: float, vy: float, vz: float,
+                       l1: float, l2: float, l3: float) -> tuple[float, float, float]:
+    """J(q)⁻¹ v of one leg: joint speeds (rad/s) that move the foot at v = (vx, vy, vz), m/s, leg frame.
+
+    Closed form of `np.linalg.solve(jacobian(q), v)`: the abad row pair is a rotation of the sagittal
+    (x, z_leg) velocity, so the 3×3 system splits into the abad speed and a 2×2 sagittal system.
+    Raises numpy.linalg.LinAlgError where J is singular (straight knee, or foot level with the abad axis).
+    """
+    c1, s1 = math.cos(abad), math.sin(abad)
+    s_hk, c_hk = math.sin(hip + knee), math.cos(hip + knee)
+    z_leg = -l2 * math.cos(hip) - l3 * c_hk
+    dx_dhip, dx_dknee = -l2 * math.cos(hip) - l3 * c_hk, -l3 * c_hk
+    dz_dhip, dz_dknee = l2 * math.sin(hip) + l3 * s_hk, l3 * s_hk
+    det = dx_dhip * dz_dknee - dx_dknee * dz_dhip  # = −l2·l3·sin(knee)
+    if z_leg == 0.0 or det == 0.0:
+        raise np.linalg.LinAlgError("Singular matrix")
+    # rows y, z of J: (J10, −s1·dz_dhip, −s1·dz_dknee), (J20, c1·dz_dhip, c1·dz_dknee);
+    # c1·vy + s1·vz = −z_leg·dabad and −s1·vy + c1·vz = y_leg·dabad + (sagittal z_leg velocity)
+    dabad = -(c1 * vy + s1 * vz) / z_leg
+    vz_leg = -s1 * vy + c1 * vz - dabad * side * l1
+    dhip = (vx * dz_dknee - dx_dknee * vz_leg) / det
+    dknee = (dx_dhip * vz_leg - dz_dhip * vx) / det
+    return dabad, dhip, dknee
+
+
+def leg_jacobian_z_row(abad: float, hip: float, knee: float, side: float, l1: float, l2: float, l3: float
+                       ) -> tuple[float, float, float]:
+    """Row z of `jacobian` for one leg: ∂p_z/∂(abad, hip, knee), m/rad (Jᵀ(0, 0, f_z) = f_z · this row)."""
+    c1, s1 = math.cos(abad), math.sin(abad)
+    s_hk, c_hk = math.sin(hip + knee), math.cos(hip + knee)
+    z_leg = -l2 * math.cos(hip) - l3 * c_hk
+    return (c1 * (side * l1) - s1 * z_leg, c1 * (l2 * math.sin(hip) + l3 * s_hk), c1 * (l3 * s_hk))
 
 
 def joint_limits(robot: RobotConfig) -> tuple[np.ndarray, np.ndarray]:

@@ -14,6 +14,7 @@ overshoot once the error shrinks.
 """
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -69,10 +70,36 @@ class JointPID:
         for name, a in zip(("q_target", "q", "dq_target", "dq"), arrays):
             if a.shape != (N_JOINTS,):
                 raise ValueError(f"{name} must have shape ({N_JOINTS},), got {a.shape}")
-        q_target, q, dq_target, dq = arrays
+        return self.torque_unchecked(*arrays)
+
+    def torque_from_lists(self, q_target: list, q: list, dq_target: list, dq: list) -> list:
+        """`torque` for four lists of 12 Python floats, as a list (the trot controller's 1 kHz path).
+
+        Without integral action (ki = 0 and no stored integral, the default gains) and with finite errors
+        this is τ = clamp(kp·e + kd·ė) joint by joint in floats, which beats numpy's call overhead at this
+        size; otherwise it is the array update `torque_unchecked`."""
+        if not np.count_nonzero(self.ki) and not np.count_nonzero(self.integral):  # (faster than .any())
+            tau = [kp * (qt - qm) + kd * (dqt - dqm) for kp, kd, qt, qm, dqt, dqm
+                   in zip(self.kp.tolist(), self.kd.tolist(), q_target, q, dq_target, dq)]
+            if math.isfinite(sum(tau)):  # else a non-finite error: the array update (it stores the NaN)
+                limit = self.torque_limit
+                if -limit <= min(tau) and max(tau) <= limit:
+                    return tau
+                return [limit if t > limit else -limit if t < -limit else t for t in tau]
+        return self.torque_unchecked(np.array(q_target, dtype=float), np.array(q, dtype=float),
+                                     np.array(dq_target, dtype=float), np.array(dq, dtype=float)).tolist()
+
+    def torque_unchecked(self, q_target: np.ndarray, q: np.ndarray, dq_target: np.ndarray,
+                         dq: np.ndarray) -> np.ndarray:
+        """`torque` for four float arrays of shape (12,) that the caller guarantees (the 1 kHz path)."""
         error = q_target - q  # rad
         error_rate = dq_target - dq  # rad/s
         pd = self.kp * error + self.kd * error_rate
+        limit = self.torque_limit
+        if not np.count_nonzero(self.ki) and not np.count_nonzero(self.integral) and np.isfinite(pd).all():
+            # no integral action and none stored (the default gains): the update below would add ki·e·dt = 0
+            # to a zero integral, so skip it; non-finite errors (0·inf = nan) take the full path
+            return np.minimum(np.maximum(pd, -limit), limit)  # = np.clip(pd + 0, ±limit), np.clip is slower
         unclipped = pd + self.integral
         saturated = (np.abs(unclipped) >= self.torque_limit) & (np.sign(unclipped) == np.sign(error))
         step = np.where(saturated, 0.0, self.ki * error * self.dt)

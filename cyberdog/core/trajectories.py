@@ -15,10 +15,13 @@ ground, and the relative velocity then jumps to −v at the start of stance.
 Implementations: `CompositeCycloid` (the paper's "composite pendulum", Figure 4a), `StraightLine` (Figure 4b;
 the paper does not define the shape, three are offered), `SampledTrajectory` (a recorded full-cycle curve,
 e.g. the trajectory extracted from the learned gait). `make_trajectory` builds one from a `GaitConfig`.
+The cycloid and the straight line also evaluate one phase in Python floats (`foot_point`, the trot
+controller's 1 kHz path); `point_evaluator` returns it where it reproduces `position_velocity`.
 """
 from __future__ import annotations
 
 import json
+import math
 import os
 from abc import ABC, abstractmethod
 from pathlib import Path
@@ -62,6 +65,27 @@ def _check_tau(tau: Any) -> np.ndarray:
     if not np.all(np.isfinite(tau)) or np.any(tau < -1e-12) or np.any(tau > 1 + 1e-12):
         raise ValueError("swing phase tau must be finite and in [0, 1]")
     return np.clip(tau, 0.0, 1.0)
+
+
+def _point_args(phase: float, step_length: float, lift_height: float, swing_time: float,
+                 stance_time: float) -> float:
+    """Checks of `position_velocity` for one phase in plain floats (fast path); returns the wrapped phase.
+    Anything the quick test rejects goes through the array checks, which raise the usual messages."""
+    if not (step_length >= 0.0 and lift_height > 0.0 and swing_time > 0.0 and stance_time > 0.0
+            and math.isfinite(step_length) and math.isfinite(lift_height) and math.isfinite(swing_time)
+            and math.isfinite(stance_time)):
+        _check_gait_args(step_length, lift_height, swing_time, stance_time)
+    if not math.isfinite(phase):
+        raise ValueError("phase must be finite")
+    phi = phase % 1.0  # float % is np.mod
+    return 0.0 if phi >= 1.0 else phi
+
+
+def _stance_point(phi: float, beta: float, step_length: float, stance_time: float
+                  ) -> tuple[float, float, float, float]:
+    """The shared stance of `position_velocity` for one phase φ ≥ β: (x, z, vx, vz)."""
+    sigma = (phi - beta) / (1.0 - beta)
+    return 0.5 * step_length - step_length * sigma, 0.0, -step_length / stance_time, 0.0
 
 
 class FootTrajectory(ABC):
@@ -118,6 +142,26 @@ class CompositeCycloid(FootTrajectory):
         dz = np.where(rising, dz_up, -dz_up)
         return x, z, dx, dz
 
+    def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
+                   stance_time: float) -> tuple[float, float, float, float]:
+        """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same formulas."""
+        phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
+        beta = swing_fraction(swing_time, stance_time)
+        if not phi < beta:
+            return _stance_point(phi, beta, step_length, stance_time)
+        tau = phi / beta
+        S, H = step_length, lift_height
+        two_pi = 2.0 * math.pi
+        x = S * (tau - math.sin(two_pi * tau) / two_pi) - 0.5 * S
+        dx = S * (1.0 - math.cos(two_pi * tau))
+        s4 = math.sin(2.0 * two_pi * tau) / (2.0 * two_pi)
+        dz = 2.0 * H * (1.0 - math.cos(2.0 * two_pi * tau))
+        if tau <= 0.5:
+            z = 2.0 * H * (tau - s4)
+        else:
+            z, dz = 2.0 * H * (1.0 - tau + s4), -dz
+        return x, z, dx / swing_time, dz / swing_time
+
 
 class StraightLine(FootTrajectory):
     """Straight-line swing (the paper's Figure 4b), a polyline walked at constant path speed.
@@ -144,6 +188,9 @@ class StraightLine(FootTrajectory):
 
     def corners(self, step_length: float, lift_height: float) -> np.ndarray:
         """(k, 2) vertices (x, z), m, of the swing polyline from lift-off to touch-down."""
+        return np.asarray(self._corner_list(step_length, lift_height), dtype=float)
+
+    def _corner_list(self, step_length: float, lift_height: float) -> list[tuple[float, float]]:
         S, H = step_length, lift_height
         if self.shape == "rectangle":
             pts = [(-S / 2, 0.0), (-S / 2, H), (S / 2, H), (S / 2, 0.0)]
@@ -152,7 +199,7 @@ class StraightLine(FootTrajectory):
             pts = [(-S / 2, 0.0), (-S / 2 + d, H), (S / 2 - d, H), (S / 2, 0.0)]
         else:  # triangle
             pts = [(-S / 2, 0.0), (0.0, H), (S / 2, 0.0)]
-        return np.asarray(pts, dtype=float)
+        return pts
 
     def swing_path(self, tau, step_length, lift_height):
         tau = _check_tau(tau)
@@ -170,6 +217,31 @@ class StraightLine(FootTrajectory):
         direction = seg[i] / safe[..., None]
         pos = vertices[i] + frac[..., None] * seg[i]
         return pos[..., 0], pos[..., 1], total * direction[..., 0], total * direction[..., 1]
+
+    def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
+                   stance_time: float) -> tuple[float, float, float, float]:
+        """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same polyline walk."""
+        phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
+        beta = swing_fraction(swing_time, stance_time)
+        if not phi < beta:
+            return _stance_point(phi, beta, step_length, stance_time)
+        vertices = self._corner_list(float(step_length), float(lift_height))
+        segments = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(vertices[:-1], vertices[1:])]
+        lengths = [math.hypot(dx, dz) for dx, dz in segments]
+        starts = [0.0]  # path length at each segment's start (np.cumsum order)
+        for length in lengths[:-1]:
+            starts.append(starts[-1] + length)
+        total = starts[-1] + lengths[-1]
+        s = (phi / beta) * total
+        # last segment with start <= s, as searchsorted(side="right") − 1 clipped to the segments
+        i = 0
+        while i + 1 < len(segments) and starts[i + 1] <= s:
+            i += 1
+        (dx, dz), length = segments[i], lengths[i]
+        safe = length if length > 0 else 1.0
+        frac = (s - starts[i]) / safe if length > 0 else 0.0
+        return (vertices[i][0] + frac * dx, vertices[i][1] + frac * dz,
+                total * (dx / safe) / swing_time, total * (dz / safe) / swing_time)
 
 
 class SampledTrajectory(FootTrajectory):
@@ -288,6 +360,20 @@ class SampledTrajectory(FootTrajectory):
         pts = np.asarray(rows, dtype=float).reshape(-1, 3)
         return cls(pts[:, 0], pts[:, 1], pts[:, 2], float(meta["step_length_m"]),
                    float(meta["lift_height_m"]), json.loads(meta.get("provenance", "{}")))
+
+
+def point_evaluator(trajectory: FootTrajectory):
+    """The trajectory's one-phase float evaluator `foot_point(phase, S, H, swing_time, stance_time)` if it has
+    one that matches its `position_velocity` (CompositeCycloid, StraightLine, and subclasses that change
+    neither `swing_path` nor `position_velocity`), else None: callers then use `position_velocity`."""
+    cls = type(trajectory)
+    for base in (CompositeCycloid, StraightLine):
+        if (isinstance(trajectory, base) and cls.foot_point is base.foot_point
+                and cls.swing_path is base.swing_path and cls.position_velocity is FootTrajectory.position_velocity
+                and (base is not StraightLine or (cls.corners is StraightLine.corners
+                                                  and cls._corner_list is StraightLine._corner_list))):
+            return trajectory.foot_point
+    return None
 
 
 def make_trajectory(gait: GaitConfig) -> FootTrajectory:

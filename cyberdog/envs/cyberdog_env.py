@@ -174,22 +174,26 @@ class CyberDogEnv(gym.Env):
             raise ValueError(f"action must be finite, got {a.tolist()}")
         tau_action = np.clip(a, -1.0, 1.0) * self.cfg.action_scale
         residual = self.cfg.action_mode == "residual"
+        estimated = self.cfg.observation_source == "estimated"
+        controller, dt = self.controller, self.dt
         step_energy = 0.0
         s = self._state
-        for _ in range(self.decimation):
+        for _ in range(self.decimation):  # 1 kHz: keep this loop lean (see bench/env_throughput.py)
             tau = tau_action
             if residual:
-                v_known = (self._velocity_estimate_world[0] if self.cfg.observation_source == "estimated"
-                           else None)
-                tau = tau + self.controller.torque(self.t, s.q, s.dq,
-                                                   BodyFeedback.from_state(s, self.start_position, v_known))
-            tau = tau + self._joint_stop_torque(s.q, s.dq)
+                v_known = self._velocity_estimate_world[0] if estimated else None
+                tau = tau + controller.torque(self.t, s.q, s.dq,
+                                              BodyFeedback.from_state(s, self.start_position, v_known))
+            stop = self._joint_stop_torque(s.q, s.dq)
+            if stop is not None:
+                tau = tau + stop
             if self.latency_steps:
                 self.torque_queue.append(tau)
                 tau = self.torque_queue.popleft()
+            # self.robot.step / read_state, looked up per call: rl.rollout wraps them on the instance
             applied = self.robot.step(tau)
-            step_energy += float(np.abs(applied * s.dq).sum()) * self.dt  # Eq. (7), rectangle rule
-            self.t += self.dt
+            step_energy += float(np.abs(applied * s.dq).sum()) * dt  # Eq. (7), rectangle rule
+            self.t += dt
             s = self.robot.read_state()
             self.steps += 1
             if self.steps % self.estimator_every == 0:
@@ -219,11 +223,14 @@ class CyberDogEnv(gym.Env):
         return self._observation(), reward, terminated, False, info
 
     # ----------------------------------------------------------------------------------------------------
-    def _joint_stop_torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
-        """Spring-damper beyond ±joint_range of the standing pose (Table 4's joint control range)."""
+    def _joint_stop_torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray | None:
+        """Spring-damper beyond ±joint_range of the standing pose (Table 4's joint control range), N·m (12,);
+        None while every joint is inside its range (almost always: two comparisons instead of the torque)."""
+        if (self.q_low <= q).all() and (q <= self.q_high).all():
+            return None
         over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
         if not over.any():
-            return np.zeros(12)
+            return None
         return -self.cfg.joint_stop_stiffness * over - self.cfg.joint_stop_damping * dq * (over != 0)
 
     def _update_estimator(self, s) -> None:
@@ -253,7 +260,7 @@ class CyberDogEnv(gym.Env):
             v_body = s.rotation_matrix.T @ self._velocity_estimate_world
         else:
             v_body = s.base_linear_velocity_body
-        phase = 2 * np.pi * self.controller.scheduler.leg_phases(self.t)[0]
+        phase = 2 * np.pi * self.controller.scheduler.leg_phase_list(self.t)[0]  # = leg_phases(t)[0]
         obs = np.concatenate([
             [s.base_position[2], s.base_position[1] - self.start_position[1]], s.base_rpy, v_body,
             s.base_angular_velocity_body, q, dq, self.last_torque, [self.target_speed],

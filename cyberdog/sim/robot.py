@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +42,11 @@ N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)
 
 @dataclass(frozen=True)
 class RobotState:
-    """One snapshot of the robot, read after the last physics step."""
+    """One snapshot of the robot, read after the last physics step.
+
+    The rotation matrix and the body-frame velocities are computed on first access (then kept): most
+    physics steps use at most one of them, and `read_state` runs 1000 times per simulated second.
+    """
 
     time: float  # s, simulated time since the last reset
     q: np.ndarray  # (12,) joint angles, rad
@@ -51,9 +56,21 @@ class RobotState:
     base_rpy: np.ndarray  # (3,) roll, pitch, yaw, rad (PyBullet's convention)
     base_linear_velocity_world: np.ndarray  # (3,) m/s
     base_angular_velocity_world: np.ndarray  # (3,) rad/s
-    base_linear_velocity_body: np.ndarray  # (3,) m/s, in the body frame
-    base_angular_velocity_body: np.ndarray  # (3,) rad/s, in the body frame
-    rotation_matrix: np.ndarray  # (3, 3) body → world (v_world = R v_body)
+
+    @cached_property
+    def rotation_matrix(self) -> np.ndarray:
+        """(3, 3) body → world (v_world = R v_body), PyBullet's matrix of `base_quaternion`."""
+        return np.array(pybullet.getMatrixFromQuaternion(self.base_quaternion.tolist())).reshape(3, 3)
+
+    @cached_property
+    def base_linear_velocity_body(self) -> np.ndarray:
+        """(3,) m/s, in the body frame (Rᵀ v)."""
+        return self.base_linear_velocity_world @ self.rotation_matrix
+
+    @cached_property
+    def base_angular_velocity_body(self) -> np.ndarray:
+        """(3,) rad/s, in the body frame (Rᵀ ω)."""
+        return self.base_angular_velocity_world @ self.rotation_matrix
 
 
 def resolve_path(path: str) -> Path:
@@ -120,7 +137,6 @@ class Robot:
         self._get_joint_states = c.getJointStates
         self._get_base_pose = c.getBasePositionAndOrientation
         self._get_base_velocity = c.getBaseVelocity
-        self._get_matrix = c.getMatrixFromQuaternion
         self._get_euler = c.getEulerFromQuaternion
         self._multiply_transforms = c.multiplyTransforms
         self._joint_cache: tuple[np.ndarray, np.ndarray] | None = None
@@ -166,7 +182,7 @@ class Robot:
         tau = np.asarray(torque_command, dtype=float)
         if tau.shape != (N_JOINTS,):
             raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
-        if not np.all(np.isfinite(tau)):
+        if not np.isfinite(tau).all():
             raise ValueError(f"torque_command must be finite, got {tau!r}")
         dq = self._joint_states()[1]
         motor, joint = self.actuator.joint_torque(tau, dq)
@@ -209,17 +225,12 @@ class Robot:
         com_pos, com_quat = self._get_base_pose(self.body_id)
         pos, quat = self._multiply_transforms(com_pos, com_quat, *self._inertial_to_link)
         lin_com, ang = self._get_base_velocity(self.body_id)
-        rot = np.array(self._get_matrix(quat)).reshape(3, 3)  # body → world
         # velocity of the link-frame origin: v_com + ω × (p_link − p_com) (np.cross is slow on 3-vectors)
         rx, ry, rz = pos[0] - com_pos[0], pos[1] - com_pos[1], pos[2] - com_pos[2]
         wx, wy, wz = ang
-        lin = np.array((lin_com[0] + wy * rz - wz * ry, lin_com[1] + wz * rx - wx * rz,
-                        lin_com[2] + wx * ry - wy * rx))
-        pos, ang = np.array(pos), np.array(ang)
-        return RobotState(time=self.time, q=q.copy(), dq=dq.copy(), base_position=pos,
-                          base_quaternion=np.array(quat), base_rpy=np.array(self._get_euler(quat)),
-                          base_linear_velocity_world=lin, base_angular_velocity_world=ang,
-                          base_linear_velocity_body=lin @ rot, base_angular_velocity_body=ang @ rot, rotation_matrix=rot)
+        lin = (lin_com[0] + wy * rz - wz * ry, lin_com[1] + wz * rx - wx * rz, lin_com[2] + wx * ry - wy * rx)
+        return RobotState(self.step_count * self.dt, q.copy(), dq.copy(), np.array(pos), np.array(quat),
+                          np.array(self._get_euler(quat)), np.array(lin), np.array(ang))
 
     def _ground_contacts(self) -> list:
         return self.client.getContactPoints(bodyA=self.body_id, bodyB=self.plane_id)
