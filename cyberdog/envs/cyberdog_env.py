@@ -69,13 +69,19 @@ class CyberDogEnv(gym.Env):
     | 11:23 | joint angles | rad |
     | 23:35 | joint velocities | rad/s |
     | 35:47 | joint torques (last physics step) | N·m |
-    | 47 | commanded speed | m/s |
+    | 47 | commanded speed (ramped up over the first `speed_ramp_time`, then the set speed) | m/s |
     | 48:50 | sin, cos of the gait phase | – |
 
     The paper's model has 111 observations in these groups (torso position, orientation, joint angles,
     3-D velocities, angular velocities, joint velocities, joint torques, Section 2); its full list is not
     given. We keep one entry per physical quantity (no forward position x, which is unbounded) and add the
     command and phase the policy needs to be speed- and gait-aware.
+
+    **Commanded speed.** The robot starts from rest, so the command ramps linearly from 0 to the set speed
+    over `walk.controller.speed_ramp_time` (1 s), as in the scripted walks; the reward's v_cmd and the
+    observed command are that ramped value. (With the set speed in the reward from t = 0, the start-up ramp
+    alone cost about −40 of a 400-step episode's score, and a policy learned to fight the ramp instead of
+    walking straight: measured in `configs/quick.yaml` runs.)
 
     **Reward**, Eq. (10): r = A·(v_cmd − v_x)² + B·y² + C·(z − z_nom)² + D·Ts/Tf + E·Σ∫|τ·ω|dt, with
     (A, B, C, D, E) = (−2, −20, −50, 25, −0.2) (Eq. 11; `reward="stage1"` sets E = 0). `info` carries every
@@ -206,7 +212,8 @@ class CyberDogEnv(gym.Env):
         v_true = float(s.base_linear_velocity_world[0])
         v_used = float(self._velocity_estimate_world[0]) if cfg.observation_source == "estimated" else v_true
         y = float(s.base_position[1] - self.start_position[1])
-        terms = rewards.reward_terms(v_x=v_used, v_target=self.target_speed, y=y, z=float(s.base_position[2]),
+        v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
+        terms = rewards.reward_terms(v_x=v_used, v_target=v_cmd, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
                                      episode_time=cfg.episode_time, step_energy_J=step_energy)
         weighted = rewards.weighted_terms(terms, cfg.reward)
@@ -263,7 +270,7 @@ class CyberDogEnv(gym.Env):
         phase = 2 * np.pi * self.controller.scheduler.leg_phase_list(self.t)[0]  # = leg_phases(t)[0]
         obs = np.concatenate([
             [s.base_position[2], s.base_position[1] - self.start_position[1]], s.base_rpy, v_body,
-            s.base_angular_velocity_body, q, dq, self.last_torque, [self.target_speed],
+            s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(self.t)],
             [np.sin(phase), np.cos(phase)]]).astype(np.float32)
         obs = np.nan_to_num(obs, nan=0.0)
         return np.clip(obs, self.observation_space.low, self.observation_space.high)
