@@ -5,10 +5,14 @@ import pytest
 import torch
 from tensordict import TensorDict
 
+from torchrl.objectives import SoftUpdate
+
 from cyberdog import config as C
-from cyberdog.rl.agent import Agent, NonFiniteError
+from cyberdog.rl.agent import Agent, ForeachSoftUpdate, NonFiniteError, make_loss, metrics_to_float
 from cyberdog.rl.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
-from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer
+from cyberdog.rl.collect import ProcessCollector
+from cyberdog.rl.networks import TanhActor, make_actor, make_critic
+from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, sample_batches
 from cyberdog.rl.trainer import Trainer
 
 OBS, ACT = 50, 12
@@ -141,3 +145,111 @@ def test_non_finite_update_stops_training_with_a_diagnostic_checkpoint(tmp_path,
         trainer.run()
     state = load_checkpoint(tmp_path / "diagnostic.pt")
     assert state["counters"]["env_steps"] == 50 and state["replay"]["size"] == 50
+
+
+# ---- speed-ups must not change any number ----------------------------------------------------------------
+def test_foreach_soft_update_is_torchrl_soft_update_bit_for_bit():
+    cfg = C.AgentConfig(hidden_sizes=(16, 16))
+    torch.manual_seed(0)
+    _, ours, fast = make_loss(cfg, OBS, ACT)
+    plain = SoftUpdate(ours, tau=cfg.tau)  # same loss: plain first, on a copy of the state
+    assert isinstance(fast, ForeachSoftUpdate) and isinstance(fast, SoftUpdate)
+    with torch.no_grad():
+        for p in ours.actor_network_params.flatten_keys().values():
+            p.add_(torch.randn_like(p))
+        for p in ours.qvalue_network_params.flatten_keys().values():
+            p.add_(torch.randn_like(p))
+    start = {k: v.clone() for k, v in ours.state_dict().items()}
+    plain.step()
+    plain.step()
+    expected = {k: v.clone() for k, v in ours.state_dict().items()}
+    ours.load_state_dict(start)
+    fast.step()
+    fast.step()
+    got = ours.state_dict()
+    targets = [k for k in expected if k.startswith("target_")]
+    assert targets and any(not torch.equal(start[k], expected[k]) for k in targets)
+    assert all(torch.equal(expected[k], got[k]) for k in expected)
+
+
+def test_networks_write_the_same_outputs_as_plain_modules():
+    torch.manual_seed(0)
+    actor, critic = make_actor(OBS, ACT, (16, 16)), make_critic(OBS, ACT, (16, 16))
+    b = batch(8)
+    out = critic(actor(b.select("observation")))
+    assert torch.equal(out["action"], torch.tanh(actor.module.net(b["observation"])))
+    assert torch.equal(out["state_action_value"],
+                       critic.module.net(torch.cat([b["observation"], out["action"]], -1)))
+    net = TanhActor(OBS, ACT, (16, 16))  # the module rollouts load actors into
+    net.load_state_dict(actor.module.state_dict())
+    assert torch.equal(net(b["observation"]), out["action"])
+
+
+def test_sample_batches_draws_independent_batches_from_the_buffer():
+    rb = make_replay_buffer(1000, 4)
+    data = batch(100)
+    data["observation"][:, 0] = torch.arange(100.0)
+    rb.extend(data)
+    batches = list(sample_batches(rb, 70, 16))  # more than one chunk
+    assert len(batches) == 70 and all(b.batch_size == torch.Size([16]) for b in batches)
+    seen = torch.cat([b["observation"][:, 0] for b in batches])
+    assert set(seen.long().tolist()) <= set(range(100)) and len(set(seen.tolist())) > 90
+    assert not torch.equal(batches[0]["observation"], batches[1]["observation"])
+    assert list(sample_batches(rb, 0, 16)) == []
+
+
+def test_update_returns_tensors_and_metrics_average_them():
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    m1, m2 = agent.update(batch()), agent.update(batch())
+    assert all(isinstance(v, torch.Tensor) and v.dim() == 0 for v in m1.values())
+    avg = metrics_to_float([m1, m2])
+    assert avg["critic_loss"] == pytest.approx((float(m1["critic_loss"]) + float(m2["critic_loss"])) / 2)
+    assert avg["q_max"] == pytest.approx((float(m1["q_max"]) + float(m2["q_max"])) / 2)
+    assert torch.isnan(m1["actor_loss"]) and not torch.isnan(m2["actor_loss"])  # policy_delay 2: actor at update 2
+    assert agent.last_actor_loss == pytest.approx(float(m2["actor_loss"]))
+
+
+def test_optimizers_stay_fused_after_loading_an_unfused_state():
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    agent.update(batch())
+    state = agent.state_dict()
+    for opt in ("actor_optimizer", "critic_optimizer"):  # as written by the per-tensor Adam of older code
+        for group in state[opt]["param_groups"]:
+            group["fused"], group["foreach"] = None, None
+    other = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    other.load_state_dict(state)
+    assert all(g["fused"] for g in other.critic_optimizer.param_groups + other.actor_optimizer.param_groups)
+    other.update(batch())  # and they still step
+
+
+def test_collector_process_reports_worker_errors():
+    cfg = C.ExperimentConfig()
+    collector = ProcessCollector(None, C.STAGE1_REWARD, 0, cfg.agent, Agent(cfg.agent, OBS, ACT).policy, OBS,
+                                 ACT, 10, 0)  # no env config: the worker fails while building the env
+    try:
+        with pytest.raises(RuntimeError, match="collector process failed"):
+            next(collector)
+    finally:
+        collector.shutdown()
+
+
+def test_action_penalty_pulls_the_actor_toward_zero():
+    """action_l2 acts through the parameters the actor optimizer steps: with a strong penalty the actor's
+    outputs shrink; without it the same updates leave them far larger (a random critic drives them out)."""
+    b = batch(32)
+    mean_abs = {}
+    for l2 in (0.0, 100.0):
+        torch.manual_seed(0)
+        agent = Agent(C.AgentConfig(action_l2=l2, policy_delay=1, hidden_sizes=(32, 32)), 50, 12)
+        for _ in range(30):
+            agent.update(b)
+        with torch.no_grad():
+            mean_abs[l2] = float(agent.actor(b.select("observation").clone())["action"].abs().mean())
+    assert mean_abs[100.0] < 0.01 < 0.1 < mean_abs[0.0]
+
+
+def test_action_penalty_must_be_non_negative():
+    with pytest.raises(ValueError, match="action_l2"):
+        C.AgentConfig(action_l2=-1.0)

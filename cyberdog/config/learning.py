@@ -152,6 +152,7 @@ ALGORITHMS = ("td3", "ddpg")
 EXPLORATION_NOISES = ("gaussian", "ou")
 DEVICES = ("cpu", "cuda", "auto")
 BUFFER_POLICIES = ("clear", "keep")
+COLLECTION_MODES = ("sync", "async")
 
 
 @dataclass(frozen=True)
@@ -174,6 +175,7 @@ class AgentConfig:
     ou_theta: float = 0.15  # OU mean reversion rate (per OU step)
     ou_dt: float = 0.025  # OU time step (s); the agent step Ts
     max_grad_norm: float = 0.0  # gradient-norm clip of each optimizer step; 0 = off
+    action_l2: float = 0.0  # actor loss += action_l2 · mean(μ(s)²): keeps a residual policy near the trot controller
 
     def __post_init__(self) -> None:
         _check(self.algorithm in ALGORITHMS, "AgentConfig.algorithm", f"one of {ALGORITHMS}", self.algorithm)
@@ -183,7 +185,7 @@ class AgentConfig:
                "AgentConfig.hidden_sizes", "one or more positive integers", self.hidden_sizes)
         _positive(self, "actor_lr", "critic_lr", "tau", "ou_dt")
         _non_negative(self, "policy_noise", "noise_clip", "exploration_sigma", "exploration_sigma_end",
-                      "ou_theta", "max_grad_norm")
+                      "ou_theta", "max_grad_norm", "action_l2")
         _check(0 <= self.gamma < 1, "AgentConfig.gamma", "in [0, 1)", self.gamma)
         _check(self.tau <= 1, "AgentConfig.tau", "in (0, 1]", self.tau)
         _check(int(self.policy_delay) == self.policy_delay and self.policy_delay >= 1, "AgentConfig.policy_delay",
@@ -244,10 +246,18 @@ class TrainConfig:
     updates_per_frame: float = 1.0  # critic updates per collected env step once learning has started
     checkpoint_every: int = 10_000  # env steps between periodic checkpoints (rounded up to frames_per_batch)
     deterministic: bool = False  # torch.use_deterministic_algorithms (bit-identical reruns, slower)
-    num_threads: int = 0  # torch CPU threads; 0 = torch's default
+    num_threads: int = 0  # torch CPU threads of the updates; 0 = torch's default ("async": one core fewer)
+    collection: str = "sync"  # "sync": env steps and updates take turns in this process (bit-identical reruns
+    #                           and resumes, as before); "async": the env runs in a worker process while the
+    #                           updates run here, one batch ahead (~1.7x the env steps/s of "sync" on 2 idle
+    #                           cores at 1 update per step, bench/train_throughput.py; the policy that collects
+    #                           lags one batch of updates; reruns with a seed are identical too, but differ
+    #                           from "sync"). See cyberdog/rl/collect.py
 
     def __post_init__(self) -> None:
         _check(self.device in DEVICES, "TrainConfig.device", f"one of {DEVICES}", self.device)
+        _check(self.collection in COLLECTION_MODES, "TrainConfig.collection", f"one of {COLLECTION_MODES}",
+               self.collection)
         _check(self.buffer_between_stages in BUFFER_POLICIES, "TrainConfig.buffer_between_stages",
                f"one of {BUFFER_POLICIES}", self.buffer_between_stages)
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):

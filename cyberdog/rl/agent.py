@@ -2,7 +2,17 @@
 
 `Agent.update(batch)` is one gradient step of the critic(s); the actor and the target networks are updated
 on every `policy_delay`-th call for TD3 (Fujimoto et al. 2018) and on every call for DDPG. TD3's clipped
-double-Q and target-policy smoothing live inside `torchrl.objectives.TD3Loss`.
+double-Q and target-policy smoothing live inside `torchrl.objectives.TD3Loss` (its twin critics are one
+stacked set of parameters, evaluated with `vmap`).
+
+Speed (gradient updates dominate training on a CPU): the optimizers are fused Adam (one kernel over all
+parameters instead of ~8 small ops per tensor), the soft target update is one foreach kernel
+(`ForeachSoftUpdate`), the parameter lists are built once, and `update` returns its metrics as 0-d tensors so
+that nothing waits for the device until the caller logs them (`metrics_to_float`). None of this changes the
+update rule. What remains (batch 256, 3x128 nets, one CPU core, ~10 ms per TD3 update) is about half tensor
+work and half TorchRL/tensordict Python around it (functional parameter swaps, vmap over tensordicts), the
+price of keeping `TD3Loss`; `torch.compile` of the losses was tried and was no faster on a CPU (and takes
+~10-50 s to compile).
 """
 from __future__ import annotations
 
@@ -40,7 +50,39 @@ def make_loss(cfg: AgentConfig, observation_size: int, action_size: int):
     else:
         loss = DDPGLoss(actor, critic, loss_function="l2", delay_actor=True, delay_value=True)
     loss.make_value_estimator(gamma=cfg.gamma)
-    return actor, loss, SoftUpdate(loss, tau=cfg.tau)
+    return actor, loss, ForeachSoftUpdate(loss, tau=cfg.tau)
+
+
+class ForeachSoftUpdate(SoftUpdate):
+    """TorchRL's `SoftUpdate`, θ_target ← θ_target + τ (θ − θ_target), over the same (source, target) pairs,
+    applied by one `torch._foreach_lerp_` over all of them (the same kernel as `lerp_`, bit-identical results)
+    instead of `SoftUpdate.step`'s tensordict `.data` views and `lerp_` per network: ~0.5 ms → ~0.03 ms of CPU
+    per target update.
+
+    The pairs are collected at the first `step`, after the loss was moved to its device; the parameters are
+    updated in place afterwards (optimizers, `load_state_dict`), so they stay valid.
+    """
+
+    _pairs: tuple[list[torch.Tensor], list[torch.Tensor]] | None = None
+
+    def _collect_pairs(self) -> tuple[list[torch.Tensor], list[torch.Tensor]]:
+        targets, sources = [], []
+        for key, source in self._sources.items(True, True):
+            key = key if isinstance(key, tuple) else (key,)
+            target = self._targets[("target_" + key[0], *key[1:])]
+            if target.requires_grad:
+                raise RuntimeError("the target parameter is part of a graph.")
+            targets.append(target.data)
+            sources.append(source.data)
+        return targets, sources
+
+    def step(self) -> None:
+        if not self.initialized:
+            return super().step()  # raises the usual error
+        if self._pairs is None:
+            self._pairs = self._collect_pairs()
+        with torch.no_grad():
+            torch._foreach_lerp_(self._pairs[0], self._pairs[1], 1 - self.eps)
 
 
 def critic_parameters(loss) -> list[torch.nn.Parameter]:
@@ -52,10 +94,20 @@ def actor_parameters(loss) -> list[torch.nn.Parameter]:
     return list(loss.actor_network_params.flatten_keys().values())
 
 
+def _adam(params: list[torch.nn.Parameter], lr: float) -> torch.optim.Adam:
+    """Fused Adam where the parameters' device supports it (CPU, CUDA), else the multi-tensor (foreach) one.
+
+    The same update rule as the default per-tensor Adam (equal up to float rounding); on a CPU its step costs
+    ~0.15 ms instead of ~1-2 ms, and the whole TD3 update was ~1.2-1.3x faster with it."""
+    try:
+        return torch.optim.Adam(params, lr=lr, fused=True)
+    except RuntimeError:
+        return torch.optim.Adam(params, lr=lr, foreach=True)
+
+
 def make_optimizers(cfg: AgentConfig, loss) -> tuple[torch.optim.Adam, torch.optim.Adam]:
     """Separate Adam optimizers (Table 4: actor 4e-4, critic 2e-3)."""
-    return (torch.optim.Adam(actor_parameters(loss), lr=cfg.actor_lr),
-            torch.optim.Adam(critic_parameters(loss), lr=cfg.critic_lr))
+    return _adam(actor_parameters(loss), cfg.actor_lr), _adam(critic_parameters(loss), cfg.critic_lr)
 
 
 def make_exploration(cfg: AgentConfig, actor, action_size: int) -> TensorDictSequential:
@@ -75,9 +127,21 @@ def make_exploration(cfg: AgentConfig, actor, action_size: int) -> TensorDictSeq
     return TensorDictSequential(actor, noise)
 
 
-def _finite(name: str, value: torch.Tensor) -> None:
-    if not torch.isfinite(value).all():
-        raise NonFiniteError(f"{name} is not finite (NaN or inf); training stopped")
+def _finite(**values: torch.Tensor) -> None:
+    """Raise `NonFiniteError` naming the first non-finite value; one device sync for all of them."""
+    if not bool(torch.stack([torch.isfinite(v).all() for v in values.values()]).all()):
+        name = next(n for n, v in values.items() if not torch.isfinite(v).all())
+        raise NonFiniteError(f"{name.replace('_', ' ')} is not finite (NaN or inf); training stopped")
+
+
+def metrics_to_float(metrics: list[dict[str, torch.Tensor]]) -> dict[str, float]:
+    """Mean of each metric over several `Agent.update` results, as Python floats (one device sync)."""
+    if not metrics:
+        return {}
+    keys = list(metrics[0])
+    means = torch.stack([torch.stack([torch.as_tensor(m[k], dtype=torch.float32) for m in metrics]).mean()
+                         for k in keys]).tolist()
+    return dict(zip(keys, means))
 
 
 class Agent:
@@ -88,44 +152,63 @@ class Agent:
         self.device = torch.device(device)
         self.actor, self.loss, self.target_updater = make_loss(cfg, observation_size, action_size)
         self.loss.to(self.device)
+        self.critic_params, self.actor_params = critic_parameters(self.loss), actor_parameters(self.loss)
         self.actor_optimizer, self.critic_optimizer = make_optimizers(cfg, self.loss)
         self.policy = make_exploration(cfg, self.actor, action_size).to(self.device)
         self.policy_delay = cfg.policy_delay if cfg.algorithm == "td3" else 1
+        td3 = isinstance(self.loss, TD3Loss)
+        self._value_loss = self.loss.value_loss if td3 else self.loss.loss_value
+        self._actor_loss = self.loss.actor_loss if td3 else self.loss.loss_actor
         self.updates = 0  # critic updates done
         self.actor_updates = 0  # actor (and target) updates done
-        self.last_actor_loss = math.nan
+        self._last_actor_loss = torch.tensor(math.nan, device=self.device)
+
+    @property
+    def last_actor_loss(self) -> float:
+        """Actor loss of the latest actor update (NaN before the first)."""
+        return float(self._last_actor_loss)
 
     def _step(self, optimizer: torch.optim.Optimizer, loss: torch.Tensor, params) -> None:
         optimizer.zero_grad(set_to_none=True)
         loss.backward()
         if self.cfg.max_grad_norm > 0:
-            torch.nn.utils.clip_grad_norm_(params, self.cfg.max_grad_norm)
+            torch.nn.utils.clip_grad_norm_(params, self.cfg.max_grad_norm, foreach=True)
         optimizer.step()
 
-    def update(self, batch: TensorDictBase) -> dict[str, float]:
-        """One critic update; actor + soft target update every `policy_delay`-th call. Returns metrics."""
-        batch = batch.to(self.device)
-        if isinstance(self.loss, TD3Loss):
-            value_loss, meta = self.loss.value_loss(batch)
-        else:
-            value_loss, meta = self.loss.loss_value(batch)
+    def update(self, batch: TensorDictBase) -> dict[str, torch.Tensor]:
+        """One critic update; actor + soft target update every `policy_delay`-th call.
+
+        Returns the metrics as detached 0-d tensors (critic_loss, actor_loss, q_mean, q_max); convert them with
+        `metrics_to_float` when logging. Raises `NonFiniteError` before any step that would write NaN/inf."""
+        if batch.device != self.device:
+            batch = batch.to(self.device)
+        value_loss, meta = self._value_loss(batch)
         q = meta["pred_value"].detach()
-        _finite("critic loss", value_loss)
-        _finite("Q-value", q)
-        self._step(self.critic_optimizer, value_loss, critic_parameters(self.loss))
+        _finite(critic_loss=value_loss, Q_value=q)
+        self._step(self.critic_optimizer, value_loss, self.critic_params)
         self.updates += 1
         if self.updates % self.policy_delay == 0:
-            if isinstance(self.loss, TD3Loss):
-                actor_loss, _ = self.loss.actor_loss(batch)
-            else:
-                actor_loss, _ = self.loss.loss_actor(batch)
-            _finite("actor loss", actor_loss)
-            self._step(self.actor_optimizer, actor_loss, actor_parameters(self.loss))
+            actor_loss, _ = self._actor_loss(batch)
+            if self.cfg.action_l2 > 0:
+                actor_loss = actor_loss + self.cfg.action_l2 * self._mean_squared_action(batch)
+            _finite(actor_loss=actor_loss)
+            self._step(self.actor_optimizer, actor_loss, self.actor_params)
             self.target_updater.step()
             self.actor_updates += 1
-            self.last_actor_loss = float(actor_loss.detach())
-        return {"critic_loss": float(value_loss.detach()), "actor_loss": self.last_actor_loss,
-                "q_mean": float(q.mean()), "q_max": float(q.max())}
+            self._last_actor_loss = actor_loss.detach()
+        return {"critic_loss": value_loss.detach(), "actor_loss": self._last_actor_loss, "q_mean": q.mean(),
+                "q_max": q.max()}
+
+    def _mean_squared_action(self, batch: TensorDictBase) -> torch.Tensor:
+        """mean(μ(s)²) over the batch, through the loss's own actor parameters (those the optimizer steps).
+
+        The penalty `action_l2 · mean(μ(s)²)` added to the actor loss keeps a residual policy near zero, i.e.
+        near the trot controller, unless the critic's gradient says otherwise: without it the actor ran to the
+        ±1 bounds within a few thousand updates, where the critic (trained on actions near 0) only extrapolates
+        (measured, see configs/quick.yaml)."""
+        with self.loss.actor_network_params.to_module(self.loss.actor_network):
+            action = self.loss.actor_network(batch.select("observation").clone())["action"]
+        return action.pow(2).mean()
 
     # ---- checkpoint state (tensors and plain containers only) ----
     def state_dict(self) -> dict:
@@ -138,5 +221,9 @@ class Agent:
         if optimizers:
             self.actor_optimizer.load_state_dict(state["actor_optimizer"])
             self.critic_optimizer.load_state_dict(state["critic_optimizer"])
+            for opt in (self.actor_optimizer, self.critic_optimizer):  # a checkpoint may predate fused Adam
+                fused = opt.defaults.get("fused")
+                for group in opt.param_groups:
+                    group["fused"], group["foreach"] = fused, opt.defaults.get("foreach")
             self.policy.load_state_dict(state["exploration"])
             self.updates, self.actor_updates = int(state["updates"]), int(state["actor_updates"])

@@ -1,6 +1,9 @@
 """Replay buffer of transitions (`torchrl.data`), whose contents travel in checkpoints as plain tensors."""
 from __future__ import annotations
 
+import warnings
+from typing import Iterator
+
 from tensordict import TensorDict, TensorDictBase
 from torchrl.data import LazyTensorStorage, TensorDictReplayBuffer
 from torchrl.data.replay_buffers.samplers import RandomSampler
@@ -13,6 +16,25 @@ def make_replay_buffer(capacity: int, batch_size: int) -> TensorDictReplayBuffer
     """Uniform replay over the last `capacity` transitions (FIFO), sampled with torch's global RNG."""
     return TensorDictReplayBuffer(storage=LazyTensorStorage(capacity), sampler=RandomSampler(),
                                   batch_size=batch_size)
+
+SAMPLE_CHUNK = 64  # batches drawn per replay-buffer call in `sample_batches` (bounds its memory)
+
+
+def sample_batches(rb: TensorDictReplayBuffer, n: int, batch_size: int) -> Iterator[TensorDictBase]:
+    """`n` independent uniform batches (with replacement) of `batch_size` transitions.
+
+    The same distribution as `n` calls of `rb.sample()` while the buffer does not change, but drawn with one
+    index draw and one gather per `SAMPLE_CHUNK` batches: the per-call overhead of the replay buffer (~0.4 ms,
+    a few % of a TD3 update on a CPU) is paid once per chunk.
+    """
+    while n > 0:
+        k = min(n, SAMPLE_CHUNK)
+        with warnings.catch_warnings():  # "conflicting batch_sizes": the size given here is meant to prevail
+            warnings.filterwarnings("ignore", message="Got conflicting batch_sizes", category=UserWarning)
+            chunk = rb.sample(k * batch_size)
+        yield from chunk.split(batch_size)
+        n -= k
+
 
 def transitions(batch: TensorDictBase) -> TensorDictBase:
     """The keys a transition keeps, flattened to one batch dimension."""
@@ -41,4 +63,5 @@ def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
     if len(rb) != n:
         raise ValueError(f"replay buffer restored {len(rb)} transitions, checkpoint has {n}")
 
-__all__ = ["make_replay_buffer", "transitions", "buffer_state", "load_buffer_state", "TRANSITION_KEYS"]
+__all__ = ["make_replay_buffer", "sample_batches", "transitions", "buffer_state", "load_buffer_state",
+           "TRANSITION_KEYS"]

@@ -1,5 +1,8 @@
 """Two-stage training loop (paper Section 3): collect with TorchRL's `Collector`, replay, update, log, save.
 
+Collection runs in this process, taking turns with the updates (`train.collection="sync"`, the default), or
+in a worker process one batch ahead, overlapping with them ("async", `cyberdog.rl.collect`).
+
 Stage 1 trains with the "stage1" reward (no energy term) until the mean score over `score_window`
 episodes reaches `stage1.stop_score` or its budget is spent; stage 2 continues the same agent (actor,
 critics, targets, optimizers) with the "stage2" reward. The replay buffer is cleared between the stages by
@@ -20,17 +23,17 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from torchrl.collectors import Collector
 from tqdm import tqdm
 
 from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
-from cyberdog.rl.agent import Agent, NonFiniteError
+from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, rng_state, save_atomic,
                                     save_checkpoint, set_rng_state)
+from cyberdog.rl.collect import ProcessCollector, make_collector
 from cyberdog.rl.env import make_env
 from cyberdog.rl.logger import EpisodeLogger
-from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, transitions
+from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, sample_batches, transitions
 
 OBSERVATION_SIZE, ACTION_SIZE = 50, 12
 
@@ -59,6 +62,8 @@ class Trainer:
         tc = cfg.train
         if tc.num_threads:
             torch.set_num_threads(tc.num_threads)
+        elif tc.collection == "async" and torch.get_num_threads() > 1:
+            torch.set_num_threads(torch.get_num_threads() - 1)  # one core for the env process
         if tc.deterministic:
             torch.use_deterministic_algorithms(True)
         self.device = resolve_device(tc.device)
@@ -158,11 +163,14 @@ class Trainer:
         if self._stage_done(sc):
             return
         c = self.c
-        env = make_env(self.cfg.env, C.stage_reward(sc), seed=tc.seed + 100_003 * stage + c["env_steps"], track_init=True)
+        seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
         random_frames = self._random_frames_left(stage)
-        collector = Collector(env, self.agent.policy, frames_per_batch=tc.frames_per_batch, total_frames=-1,
-                              init_random_frames=random_frames or None, policy_device=self.device,
-                              env_device="cpu", storing_device="cpu", auto_register_policy_transforms=False)
+        if tc.collection == "async":  # env in a worker process, one batch ahead of the updates
+            collector = ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
+                                         OBSERVATION_SIZE, ACTION_SIZE, tc.frames_per_batch, random_frames)
+        else:
+            collector = make_collector(make_env(self.cfg.env, reward, seed=seed, track_init=True),
+                                       self.agent.policy, tc.frames_per_batch, random_frames, self.device)
         budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
         bar = tqdm(total=budget, initial=min(c["stage_env_steps"], budget), unit="step", desc=f"stage {stage}",
                    disable=not self.progress, dynamic_ncols=True)
@@ -172,7 +180,8 @@ class Trainer:
         try:
             t0 = time.perf_counter()
             for batch in collector:
-                t_env += time.perf_counter() - t0
+                is_async = isinstance(collector, ProcessCollector)
+                t_env += collector.last_collect_time if is_async else time.perf_counter() - t0
                 if not torch.isfinite(batch["action"]).all():
                     raise NonFiniteError("action is not finite (NaN or inf); training stopped")
                 self.rb.extend(transitions(batch))
@@ -180,6 +189,8 @@ class Trainer:
                 self.agent.policy[-1].step(n)  # anneal the exploration noise
                 c["env_steps"] += n
                 c["stage_env_steps"] += n
+                if is_async:
+                    collector.prefetch()  # the next batch is collected while we update on this one
                 t1 = time.perf_counter()
                 n_upd += self._updates(n)
                 t_upd += time.perf_counter() - t1
@@ -215,12 +226,9 @@ class Trainer:
         self.c["update_credit"] += frames * tc.updates_per_frame
         n = int(self.c["update_credit"])
         self.c["update_credit"] -= n
-        sums: dict[str, float] = {}
-        for _ in range(n):
-            for k, v in self.agent.update(self.rb.sample()).items():
-                sums[k] = sums.get(k, 0.0) + v
-        if n:
-            self.last = {k: v / n for k, v in sums.items()}
+        metrics = [self.agent.update(b) for b in sample_batches(self.rb, n, tc.batch_size)]
+        if n:  # tensors until here: one conversion per round of updates, not four per update
+            self.last = metrics_to_float(metrics)
             self.last["actor_loss"] = self.agent.last_actor_loss
         return n
 

@@ -1,0 +1,81 @@
+#!/usr/bin/env python
+"""Copy a finished training run into the small shipped result folder that `evaluate.py` uses by default.
+
+    python tools/ship_result.py runs/sweep_quick/seed0 --out results/policy
+
+Writes (never over an existing folder unless --force): stage1_actor.pt and stage2_actor.pt (the final
+actors of the two stages), config.yaml (the resolved experiment), metrics.csv (the training log, for
+Figure 6) and metadata.json (seed, env steps, episodes and wall time per stage, final window scores, the
+git commit of the code, the source run). Checkpoints with replay buffers are not copied (tens of MB).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+FILES = {"stage1_final_actor.pt": "stage1_actor.pt", "stage2_final_actor.pt": "stage2_actor.pt",
+         "config.yaml": "config.yaml", "metrics.csv": "metrics.csv"}
+MAX_BYTES = 2_000_000  # the shipped folder stays under 2 MB
+
+
+def stage_summary(rows: list[dict], stage: int) -> dict:
+    """Env steps, episodes, wall time (from the logged episode end times) and final scores of one stage."""
+    rs = [r for r in rows if int(r["stage"]) == stage]
+    if not rs:
+        return {}
+    t = [float(r["wall_time_s"]) for r in rs]
+    first_rate = float(rs[0]["env_steps_per_s"]) or float("nan")
+    first_episode_s = float(rs[0]["length"]) / first_rate  # the first episode ran before the first log line
+    return {"episodes": len(rs), "env_steps": int(sum(int(r["length"]) for r in rs)),
+            "wall_time_s": round(t[-1] - t[0] + first_episode_s, 1),
+            "final_window_mean_score": float(rs[-1]["window_mean_score"]),
+            "last_episode_score": float(rs[-1]["score"]),
+            "last_episode_energy_J": float(rs[-1]["energy_J"])}
+
+
+def git_commit() -> str:
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True)
+        return out.stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("run_dir", type=Path, help="a finished two-stage run folder (train.py output)")
+    p.add_argument("--out", type=Path, default=REPO / "results" / "policy", help="default: results/policy")
+    p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--note", default="", help="free text stored in metadata.json")
+    args = p.parse_args(argv)
+    missing = [f for f in FILES if not (args.run_dir / f).is_file()]
+    if missing:
+        sys.exit(f"{args.run_dir} is not a finished two-stage run: missing {missing}")
+    if args.out.exists() and not args.force:
+        sys.exit(f"{args.out} exists; pass --force to replace it")
+    args.out.mkdir(parents=True, exist_ok=True)
+    for src, dst in FILES.items():
+        shutil.copy2(args.run_dir / src, args.out / dst)
+    with open(args.run_dir / "metrics.csv") as f:
+        rows = list(csv.DictReader(f))
+    import yaml
+    cfg = yaml.safe_load((args.run_dir / "config.yaml").read_text())
+    meta = {"seed": cfg["train"]["seed"], "source_run": str(args.run_dir), "git_commit": git_commit(),
+            "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
+            "actors": "stage<N>_actor.pt = stage<N>_final_actor.pt of the run (the agent at the end of the stage)"}
+    (args.out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")
+    size = sum(f.stat().st_size for f in args.out.iterdir())
+    print(f"wrote {args.out} ({size / 1e6:.2f} MB): " + ", ".join(sorted(f.name for f in args.out.iterdir())))
+    if size > MAX_BYTES:
+        print(f"warning: {size / 1e6:.2f} MB is over the 2 MB the shipped folder should stay under", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
