@@ -22,8 +22,8 @@ cluster, the sweep folder must be on a file system that every node sees at the s
 the run folders there and the driver reads the status from them), and the code (`train.py` + `cyberdog/`) is
 shipped to the nodes as the Ray job's working_dir; each node needs the project's dependencies installed.
 
-This module imports only the standard library and `cyberdog.config` at module level, and its functions are
-shipped to Ray by value: a Ray worker starts the training process without importing torch itself.
+This module imports only the standard library and `cyberdog.config`; the two backends and the attempt a Ray
+worker runs are in `cyberdog.rl.sweep_process` (standard library only, shipped to Ray by value).
 """
 from __future__ import annotations
 
@@ -32,28 +32,23 @@ import os
 import re
 import signal
 import socket
-import subprocess
-import sys
 import threading
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from cyberdog import config as C
+from cyberdog.rl.sweep_process import (ATTEMPT_FILE, LOG_FILE, SWEEP_FILE, LocalBackend, RayBackend, SweepError,
+                                       available_cores)
 
 FORMAT, VERSION = "cyberdog-sweep", 1
-SWEEP_FILE, STATUS_FILE, CONFIG_FILE = "sweep.json", "sweep_status.json", "sweep_config.yaml"
-LOG_FILE, ATTEMPT_FILE, LOCK_FILE = "train.log", "sweep_attempt.json", ".sweep.lock"
+STATUS_FILE, CONFIG_FILE = "sweep_status.json", "sweep_config.yaml"
+LOCK_FILE = ".sweep.lock"
 BACKENDS = ("local", "ray")
 STATUS_EVERY_S = 2.0  # s between rewrites of sweep_status.json (also at every start, end or failure of a seed)
-RAY_MISSING = ("--backend ray needs Ray, which is not installed: pip install -e '.[ray]' (or pip install 'ray>=2.9'),"
-               " or use the default --backend local")
 # what a fresh attempt leaves in a seed folder before its first checkpoint (moved aside before a restart)
 _KEEP_ON_RESTART = (LOG_FILE, ATTEMPT_FILE)
 
-
-class SweepError(RuntimeError):
-    """Bad sweep input or a sweep folder that cannot be used; the message says what to do."""
 
 
 # ---- seeds and folders ---------------------------------------------------------------------------------------
@@ -73,12 +68,6 @@ def parse_seeds(text: str) -> list[int]:
         raise SweepError(f"--seeds {text!r}: seed(s) {repeated} given more than once")
     return seeds
 
-
-def available_cores() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not Linux
-        return max(1, os.cpu_count() or 1)
 
 
 def is_sweep_dir(path) -> bool:
@@ -155,187 +144,6 @@ def _write_json(path: Path, data) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(data, indent=1, default=str) + "\n")
     os.replace(tmp, path)
-
-
-# ---- one attempt: a training process. Standard library only (shipped by value to Ray workers) ------------------
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child between fork and exec
-    """Linux: the training process gets SIGTERM when the process that started it dies."""
-    try:
-        import ctypes
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG = 1
-    except Exception:
-        pass
-
-
-def _launch(cmd: list, cwd, run_dir: str, attempt: int) -> subprocess.Popen:
-    """Start one training attempt with its output appended to <run_dir>/train.log; record pid and host in
-    <run_dir>/sweep_attempt.json."""
-    os.makedirs(run_dir, exist_ok=True)
-    log_path = os.path.join(run_dir, LOG_FILE)
-    with open(log_path, "ab") as log:
-        offset = log.tell()
-        header = f"\n=== attempt {attempt} on {socket.gethostname()} at {time.strftime('%Y-%m-%d %H:%M:%S')}: "
-        log.write((header + " ".join(map(str, cmd)) + "\n").encode())
-        log.flush()
-        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-        proc = subprocess.Popen([str(c) for c in cmd], cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, env=env, start_new_session=True,
-                                preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
-    proc.log_offset = offset
-    info = {"attempt": attempt, "pid": proc.pid, "host": socket.gethostname(), "started": time.time(),
-            "command": [str(c) for c in cmd], "log_offset": offset}
-    tmp = os.path.join(run_dir, f".{ATTEMPT_FILE}.tmp")
-    with open(tmp, "w") as f:
-        json.dump(info, f)
-    os.replace(tmp, os.path.join(run_dir, ATTEMPT_FILE))
-    return proc
-
-
-def _describe_exit(rc: int, run_dir: str, offset: int, lines: int = 4) -> str:
-    """'killed by SIGKILL' / 'exit code 1', then the last lines this attempt wrote to train.log."""
-    if rc < 0:
-        try:
-            what = f"killed by {signal.Signals(-rc).name}"
-        except ValueError:
-            what = f"killed by signal {-rc}"
-    else:
-        what = f"exit code {rc}"
-    try:
-        with open(os.path.join(run_dir, LOG_FILE), "rb") as f:
-            f.seek(offset)
-            text = f.read()[-20000:].decode(errors="replace")
-        text = re.sub(r"\x1b\[[0-9;]*m", "", text).replace("\r", "\n")  # no terminal colours
-        tail = [ln.strip() for ln in text.splitlines() if ln.strip() and not ln.startswith("=== attempt")][-lines:]
-    except OSError:
-        tail = []
-    return what + (": " + " | ".join(tail) if tail else "")
-
-
-def _ray_attempt(cmd: list, run_dir: str, sweep_file: str, attempt: int, script: str) -> dict:
-    """Body of the Ray task: run one training attempt on whichever node Ray chose and wait for it."""
-    if not os.path.isfile(sweep_file):
-        return {"rc": None, "host": socket.gethostname(),
-                "error": f"the sweep folder {os.path.dirname(sweep_file)} is not visible on node "
-                         f"{socket.gethostname()}: with a Ray cluster it must be on a file system shared by all "
-                         f"nodes, at the same path"}
-    if script == "shipped":  # the code travelled as the Ray job's working_dir, the task's current folder
-        script = os.path.join(os.getcwd(), "train.py")
-    cmd = [sys.executable, script] + list(cmd)
-    proc = _launch(cmd, None, run_dir, attempt)
-    rc = proc.wait()
-    return {"rc": rc, "host": socket.gethostname(), "pid": proc.pid,
-            "error": None if rc == 0 else _describe_exit(rc, run_dir, proc.log_offset)}
-
-
-# ---- backends ----------------------------------------------------------------------------------------------------
-class LocalBackend:
-    """Up to `workers` training processes on this machine."""
-
-    name = "local"
-
-    def __init__(self, workers: int, script: Path):
-        self.capacity, self.script = workers, script
-        self.procs: dict[int, tuple[subprocess.Popen, str]] = {}  # seed -> (process, run folder)
-
-    def submit(self, seed: int, args: list, run_dir: Path, attempt: int) -> None:
-        proc = _launch([sys.executable, str(self.script)] + args, None, str(run_dir), attempt)
-        self.procs[seed] = (proc, str(run_dir))
-
-    def wait(self, timeout: float) -> list[tuple[int, bool, str | None]]:
-        deadline = time.monotonic() + timeout
-        while True:
-            finished = [s for s, (p, _) in self.procs.items() if p.poll() is not None]
-            if finished or time.monotonic() >= deadline:
-                break
-            time.sleep(min(0.1, timeout))
-        out = []
-        for seed in finished:
-            p, run_dir = self.procs.pop(seed)
-            rc = p.returncode
-            out.append((seed, rc == 0, None if rc == 0 else _describe_exit(rc, run_dir, p.log_offset)))
-        return out
-
-    def stop(self) -> None:
-        for p, _ in self.procs.values():
-            if p.poll() is None:
-                p.terminate()
-        for p, _ in self.procs.values():
-            try:
-                p.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
-        self.procs.clear()
-
-    def close(self) -> None:
-        self.stop()
-
-
-class RayBackend:
-    """One Ray task (1 CPU) per attempt, on a local Ray instance or an existing cluster."""
-
-    name = "ray"
-
-    def __init__(self, workers: int | None, address: str | None, script: Path, echo=print):
-        try:
-            import ray
-        except ImportError as e:
-            raise SweepError(RAY_MISSING) from e
-        self.ray, self.owns = ray, False
-        ship = False
-        if not ray.is_initialized():
-            kwargs = dict(include_dashboard=False, log_to_driver=False)
-            if address:
-                root = script.resolve().parent
-                ship = (root / "cyberdog").is_dir()
-                if ship:  # the nodes get this checkout's code; the runs themselves stay out of the upload
-                    kwargs["runtime_env"] = {"working_dir": str(root), "excludes": [
-                        ".venv", ".venv/**", "runs", "runs/**", ".git", ".git/**", "plots", "**/__pycache__",
-                        "*.egg-info", ".pytest_cache"]}
-                echo(f"sweep: joining the Ray cluster at {address}" + (f" (shipping {root})" if ship else ""))
-                ray.init(address=address, **kwargs)
-            else:
-                ray.init(num_cpus=workers or available_cores(), **kwargs)
-            self.owns = True
-        elif address:
-            echo(f"sweep: Ray is already initialised in this process; --ray-address {address} is not used")
-        self.script = "shipped" if ship else str(script.resolve())
-        cpus = int(ray.cluster_resources().get("CPU", 1))
-        self.capacity = max(1, min(workers, cpus) if workers else cpus)
-        # ship this module's functions by value: Ray workers need neither torch nor the package on their path
-        ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
-        self.task = ray.remote(num_cpus=1, max_retries=0)(_ray_attempt)
-        self.refs: dict = {}  # ObjectRef of a running attempt -> seed
-
-    def submit(self, seed: int, args: list, run_dir: Path, attempt: int) -> None:
-        sweep_file = str(run_dir.parent / SWEEP_FILE)
-        ref = self.task.remote(args, str(run_dir), sweep_file, attempt, self.script)
-        self.refs[ref] = seed
-
-    def wait(self, timeout: float) -> list[tuple[int, bool, str | None]]:
-        if not self.refs:
-            time.sleep(timeout)
-            return []
-        ready, _ = self.ray.wait(list(self.refs), num_returns=len(self.refs), timeout=timeout)
-        out = []
-        for ref in ready:
-            seed = self.refs.pop(ref)
-            try:
-                r = self.ray.get(ref)
-                out.append((seed, r["rc"] == 0, r["error"]))
-            except self.ray.exceptions.RayError as e:  # the worker or its node died
-                out.append((seed, False, f"Ray task failed: {type(e).__name__}: {str(e).strip().splitlines()[0]}"))
-        return out
-
-    def stop(self) -> None:
-        for ref in list(self.refs):
-            self.ray.cancel(ref, force=True)  # kills the worker; its training process follows (PDEATHSIG)
-        self.refs.clear()
-
-    def close(self) -> None:
-        self.stop()
-        if self.owns:
-            self.ray.shutdown()
 
 
 # ---- status ------------------------------------------------------------------------------------------------------
