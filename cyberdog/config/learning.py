@@ -80,7 +80,7 @@ class EstimatorConfig:
 # The learning environment (paper Section 3, Tables 3-4)
 # ---------------------------------------------------------------------------------------------------------
 
-ACTION_MODES = ("torque", "residual")
+ACTION_MODES = ("torque", "residual", "foot")
 OBSERVATION_SOURCES = ("true", "estimated")
 
 
@@ -95,8 +95,11 @@ class EnvConfig:
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)
     episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
-    action_mode: str = "residual"  # "torque": the paper's, the action is the joint torque; "residual": added to the trot controller's
-    action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit)
+    # "torque": the paper's, the action is the joint torque; "residual": torque added to the trot controller's;
+    # "foot": offsets of the trot controller's foot targets (the controller's IK + PID then track them)
+    action_mode: str = "residual"
+    action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
+    foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
     joint_range_deg: float = 45.0  # ± around the standing pose (Table 4 "joint control range")
     joint_stop_stiffness: float = 200.0  # N·m/rad, virtual end stop beyond the joint range
     joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
@@ -122,8 +125,8 @@ class EnvConfig:
         return int(round(self.episode_time / self.control_dt))
 
     def __post_init__(self) -> None:
-        _positive(self, "control_dt", "episode_time", "action_scale", "joint_range_deg", "fall_height",
-                  "fall_tilt_deg", "estimator_dt")
+        _positive(self, "control_dt", "episode_time", "action_scale", "foot_offset_scale", "joint_range_deg",
+                  "fall_height", "fall_tilt_deg", "estimator_dt")
         _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping", "latency",
                       "joint_angle_noise_std", "joint_velocity_noise_std")
         dt = self.walk.sim.physics_dt

@@ -91,11 +91,34 @@ class TrotController:
         self.body_weight = self.robot.total_mass * cfg.sim.gravity  # N
         self.speed = cfg.gait.speed
         self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
+        self.foot_offsets: list[tuple[float, float, float]] | None = None  # m, see set_foot_offsets
+        self.foot_offset_rates: list[tuple[float, float, float]] | None = None  # m/s
         self._point_for = (None, None)  # (trajectory, its float evaluator or None), see _foot_points
 
     def reset(self) -> None:
         self.pid.reset()
         self.speed_correction = 0.0
+        self.foot_offsets = self.foot_offset_rates = None
+
+    def set_foot_offsets(self, offsets: np.ndarray | None, rates: np.ndarray | None = None) -> None:
+        """Shift each foot target by `offsets` (4, 3), m, leg frame (x forward, y left, z up), legs LF, RF, LH,
+        RH, moving at `rates` (4, 3), m/s (added to the velocity feedforward; None = still), until the next
+        call; None removes the shift. This is how a policy modulates the trajectory (`CyberDogEnv`'s
+        action_mode="foot"). A shifted target the leg cannot reach falls back to the unshifted one."""
+        if offsets is None:
+            self.foot_offsets = self.foot_offset_rates = None
+            return
+        offsets = np.asarray(offsets, dtype=float)
+        if offsets.shape != (4, 3) or not np.all(np.isfinite(offsets)):
+            raise ValueError(f"foot offsets must be a finite (4, 3) array in m, got {offsets!r}")
+        self.foot_offsets = [tuple(row) for row in offsets.tolist()]
+        if rates is None:
+            self.foot_offset_rates = None
+        else:
+            rates = np.asarray(rates, dtype=float)
+            if rates.shape != (4, 3) or not np.all(np.isfinite(rates)):
+                raise ValueError(f"foot offset rates must be a finite (4, 3) array in m/s, got {rates!r}")
+            self.foot_offset_rates = [tuple(row) for row in rates.tolist()]
 
     def set_speed(self, speed: float) -> None:
         if not np.isfinite(speed) or speed < 0:
@@ -156,15 +179,24 @@ class TrotController:
         points = self._foot_points(phases, S)
         feet = [(x, side * l1 + dy, z - self.stand_height) for (x, z, _, _), side in zip(points, LEG_SIDE)]
         foot_vels = [(vx, 0.0, vz) for _, _, vx, vz in points]
+        plain_feet = feet
+        if self.foot_offsets is not None:
+            feet = [(x + ox, y + oy, z + oz) for (x, y, z), (ox, oy, oz) in zip(feet, self.foot_offsets)]
+            if self.foot_offset_rates is not None:
+                foot_vels = [(vx + rx, vy + ry, vz + rz)
+                             for (vx, vy, vz), (rx, ry, rz) in zip(foot_vels, self.foot_offset_rates)]
         q_t, dq_t = [], []
-        for (x, y, z), (vx, _, vz), side in zip(feet, foot_vels, LEG_SIDE):
+        for leg, ((x, y, z), (vx, vy, vz), side) in enumerate(zip(feet, foot_vels, LEG_SIDE)):
             try:
                 q_leg = kin.leg_inverse_kinematics(x, y, z, side, l1, l2, l3)
-            except ValueError:  # unreachable: the array function raises with its full message
-                kin.inverse_kinematics(np.array(feet), r)
-                raise
+            except ValueError:
+                if feet is plain_feet:  # unreachable: the array function raises with its full message
+                    kin.inverse_kinematics(np.array(feet), r)
+                    raise
+                feet[leg] = plain_feet[leg]  # a shifted target out of reach: the unshifted one
+                q_leg = kin.leg_inverse_kinematics(*feet[leg], side, l1, l2, l3)
             q_t.extend(q_leg)
-            dq_t.extend(kin.leg_joint_velocity(*q_leg, side, vx, 0.0, vz, l1, l2, l3)
+            dq_t.extend(kin.leg_joint_velocity(*q_leg, side, vx, vy, vz, l1, l2, l3)
                         if c.velocity_feedforward else (0.0, 0.0, 0.0))
         swing_fraction = self.scheduler.gait.swing_fraction
         return feet, foot_vels, q_t, dq_t, [phase < swing_fraction for phase in phases]
