@@ -30,7 +30,7 @@ def residual_episode():
                 estimates=np.array(estimates), rewards=rewards, infos=infos)
 
 
-@pytest.mark.parametrize("mode", ["torque", "residual"])
+@pytest.mark.parametrize("mode", ["torque", "residual", "foot"])
 def test_gymnasium_env_checker_passes_without_warnings(mode):
     from gymnasium.utils.env_checker import check_env
     env = CyberDogEnv(action_mode=mode)
