@@ -253,3 +253,24 @@ def test_action_penalty_pulls_the_actor_toward_zero():
 def test_action_penalty_must_be_non_negative():
     with pytest.raises(ValueError, match="action_l2"):
         C.AgentConfig(action_l2=-1.0)
+
+
+def test_a_stage_can_set_its_own_action_penalty(tmp_path):
+    """StageConfig.action_l2 replaces agent.action_l2 for that stage only (None keeps the agent's)."""
+    cfg = C.override(_tiny(), ["agent.action_l2=0.5", "train.stage2.action_l2=0.0", "train.init_random_frames=0",
+                               "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100"])
+    trainer = Trainer(cfg, tmp_path, progress=False)
+    seen = []
+    update = trainer.agent.update
+
+    def recording_update(batch):
+        seen.append((trainer.c["stage"], trainer.agent.action_l2))
+        return update(batch)
+
+    trainer.agent.update = recording_update
+    trainer.run()
+    trainer.logger.close()
+    assert {l2 for stage, l2 in seen if stage == 1} == {0.5}
+    assert {l2 for stage, l2 in seen if stage == 2} == {0.0}
+    with pytest.raises(ValueError, match="StageConfig.action_l2"):
+        C.StageConfig(action_l2=-0.1)

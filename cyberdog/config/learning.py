@@ -208,6 +208,7 @@ class StageConfig:
     stop_score: float = 19.0  # stop when the mean score over `score_window` episodes reaches this; .inf = never
     save_score: float = 20.0  # save the agent whenever an episode's score reaches this (Table 4 "save agent")
     energy_weight: Optional[float] = None  # E of Eq. (10) per J for this stage; None = the preset's (0 or −0.2)
+    action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
 
     def __post_init__(self) -> None:
         _check(self.reward in ("stage1", "stage2"), "StageConfig.reward", "'stage1' or 'stage2'", self.reward)
@@ -217,6 +218,8 @@ class StageConfig:
         _check(self.energy_weight is None or (math.isfinite(self.energy_weight) and self.energy_weight <= 0),
                "StageConfig.energy_weight", "None (the preset's) or a finite number <= 0 (per J)",
                self.energy_weight)
+        _check(self.action_l2 is None or (math.isfinite(self.action_l2) and self.action_l2 >= 0),
+               "StageConfig.action_l2", "None (agent.action_l2) or a finite number >= 0", self.action_l2)
         for n in ("stop_score", "save_score"):
             _check(not math.isnan(getattr(self, n)), f"StageConfig.{n}", "a number (.inf allowed)",
                    getattr(self, n))

@@ -156,6 +156,7 @@ class Agent:
         self.actor_optimizer, self.critic_optimizer = make_optimizers(cfg, self.loss)
         self.policy = make_exploration(cfg, self.actor, action_size).to(self.device)
         self.policy_delay = cfg.policy_delay if cfg.algorithm == "td3" else 1
+        self.action_l2 = cfg.action_l2  # the trainer sets a stage's own (StageConfig.action_l2)
         td3 = isinstance(self.loss, TD3Loss)
         self._value_loss = self.loss.value_loss if td3 else self.loss.loss_value
         self._actor_loss = self.loss.actor_loss if td3 else self.loss.loss_actor
@@ -189,8 +190,8 @@ class Agent:
         self.updates += 1
         if self.updates % self.policy_delay == 0:
             actor_loss, _ = self._actor_loss(batch)
-            if self.cfg.action_l2 > 0:
-                actor_loss = actor_loss + self.cfg.action_l2 * self._mean_squared_action(batch)
+            if self.action_l2 > 0:
+                actor_loss = actor_loss + self.action_l2 * self._mean_squared_action(batch)
             _finite(actor_loss=actor_loss)
             self._step(self.actor_optimizer, actor_loss, self.actor_params)
             self.target_updater.step()

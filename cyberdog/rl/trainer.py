@@ -164,6 +164,7 @@ class Trainer:
             return
         c = self.c
         seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
+        self.agent.action_l2 = self.cfg.agent.action_l2 if sc.action_l2 is None else sc.action_l2
         random_frames = self._random_frames_left(stage)
         if tc.collection == "async":  # env in a worker process, one batch ahead of the updates
             collector = ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
