@@ -53,11 +53,12 @@ class CyberDogEnv(gym.Env):
     - `action_mode="residual"` (default): the action is added to the torque of the diagonal trot controller
       (trajectory + IK + PID), so that a policy learns corrections to a walking gait — practical on a CPU;
     - `action_mode="foot"`: the action shifts the trot controller's foot targets by up to
-      ±`foot_offset_scale` (0.03 m) per axis, (Δx, Δy, Δz) per leg in the same leg order, held for the agent
-      step; the controller's IK + PID track the shifted path. The policy reshapes the foot trajectory
-      itself (a trajectory-modulating policy, cf. Iscen et al. 2018, "Policies Modulating Trajectory
-      Generators"), which a torque residual barely can: the 1 kHz PID (60 N·m/rad) pulls the joints back
-      to the path, and the residual policies stayed within 0.5 % of the controller's energy (README).
+      ±`foot_offset_scale` (0.03 m) per axis, (Δx, Δy, Δz) per leg in the same leg order, reached by a
+      linear ramp over the agent step from the last action's; the controller's IK + PID track the shifted
+      path. The policy reshapes the foot trajectory itself (a trajectory-modulating policy, cf. Iscen et al.
+      2018, "Policies Modulating Trajectory Generators"), which a torque residual barely can: the 1 kHz PID
+      (60 N·m/rad) pulls the joints back to the path, and the residual policies stayed within 0.5 % of the
+      controller's energy (README).
     Table 4's joint control range (±45°) is enforced around the standing pose by a virtual end stop: beyond
     the range a spring-damper torque (`joint_stop_stiffness`, `joint_stop_damping`) pushes the joint back.
     (The default lift height in the env is 0.10 m so that the trot stays inside that range; the paper's
@@ -191,7 +192,7 @@ class CyberDogEnv(gym.Env):
         if foot:  # the action moves the foot targets; the controller's torque is applied as it is
             # first-order hold: the offset ramps from the last action's to this one's over the agent step, so
             # that the target path stays continuous (a 25 ms staircase of targets made the PID jerk: lowering
-            # the swing feet by 1-3 cm that way cost 9-75 % more energy, measured)
+            # the swing feet by 1-3 cm that way cost 10-75 % more energy, measured)
             start = self._foot_offset
             self._foot_offset = np.clip(a, -1.0, 1.0).reshape(4, 3) * self.cfg.foot_offset_scale
             rate = (self._foot_offset - start) / self.cfg.control_dt  # m/s
