@@ -40,6 +40,31 @@ def test_gymnasium_env_checker_passes_without_warnings(mode):
     env.close()
 
 
+def test_observe_last_action_appends_the_previous_action():
+    from gymnasium.utils.env_checker import check_env
+    from cyberdog.envs.cyberdog_env import observation_size, observation_typical_magnitude
+    env = CyberDogEnv(action_mode="foot", observe_last_action=True, episode_time=0.25)
+    assert env.observation_space.shape == (62,) == (observation_size(env.cfg),)
+    assert observation_typical_magnitude(env.cfg).shape == (62,) and observation_size() == 50
+    plain = CyberDogEnv(action_mode="foot", episode_time=0.25)
+    obs, _ = env.reset(seed=1)
+    obs_plain, _ = plain.reset(seed=1)
+    np.testing.assert_array_equal(obs[50:], 0.0)
+    np.testing.assert_array_equal(obs[:50], obs_plain)  # Table 3's part is unchanged
+    a = np.linspace(-1.5, 1.5, 12).astype(np.float32)  # out of bounds at both ends: observed as clipped
+    obs, *_ = env.step(a)
+    obs_plain, *_ = plain.step(a)
+    np.testing.assert_allclose(obs[50:], np.clip(a, -1, 1))
+    np.testing.assert_array_equal(obs[:50], obs_plain)
+    obs, _ = env.reset(seed=1)
+    np.testing.assert_array_equal(obs[50:], 0.0)  # a new episode starts from no previous action
+    plain.close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env, skip_render_check=True)
+    env.close()
+
+
 def test_torchrl_gym_wrapper_specs():
     from torchrl.envs import GymWrapper
     from torchrl.envs.utils import check_env_specs

@@ -167,14 +167,16 @@ def test_every_shipped_preset_is_a_valid_config(preset):
 
 
 def test_a_foot_mode_run_trains_and_its_actor_moves_the_feet(tmp_path):
-    """The trainer end to end in action_mode="foot" (tiny budget): it updates, and the trained actor's
-    actions move the foot targets (a rollout differs from the zero-action trot)."""
+    """The trainer end to end in action_mode="foot" with the previous action observed (62 inputs, tiny
+    budget): it updates, and the trained actor's actions move the foot targets (a rollout differs from the
+    zero-action trot)."""
     from cyberdog.rl.rollout import load_actor, rollout
-    cfg = tiny(["env.action_mode=foot", "agent.exploration_sigma=0.5", "agent.exploration_sigma_end=0.5"])
+    cfg = tiny(["env.action_mode=foot", "agent.exploration_sigma=0.5", "agent.exploration_sigma_end=0.5",
+                "env.observe_last_action=true"])
     summary = Trainer(cfg, tmp_path, stages=(1,), progress=False).run()
     assert summary["updates"] > 0
     actor = load_actor(tmp_path / "stage1_final_actor.pt")
-    assert actor.config.env.action_mode == "foot"
+    assert actor.config.env.action_mode == "foot" and actor.config.env.observe_last_action
     moved = rollout(actor, speed=1.0, duration=0.2)
     zero = rollout(type(actor)(lambda obs: torch.zeros(12), actor.config), speed=1.0, duration=0.2)
     assert abs(moved.energy - zero.energy) > 1e-6

@@ -100,6 +100,9 @@ class EnvConfig:
     action_mode: str = "residual"
     action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
     foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
+    observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
+    #                                    in foot mode it is the offset the next action ramps from, which sets
+    #                                    the step's jerk and energy; without it the critics cannot see that cost
     joint_range_deg: float = 45.0  # ± around the standing pose (Table 4 "joint control range")
     joint_stop_stiffness: float = 200.0  # N·m/rad, virtual end stop beyond the joint range
     joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
@@ -154,7 +157,7 @@ class EnvConfig:
 ALGORITHMS = ("td3", "ddpg")
 EXPLORATION_NOISES = ("gaussian", "ou")
 DEVICES = ("cpu", "cuda", "auto")
-BUFFER_POLICIES = ("clear", "keep")
+BUFFER_POLICIES = ("clear", "keep", "relabel")
 COLLECTION_MODES = ("sync", "async")
 
 
@@ -208,7 +211,13 @@ class StageConfig:
     stop_score: float = 19.0  # stop when the mean score over `score_window` episodes reaches this; .inf = never
     save_score: float = 20.0  # save the agent whenever an episode's score reaches this (Table 4 "save agent")
     energy_weight: Optional[float] = None  # E of Eq. (10) per J for this stage; None = the preset's (0 or −0.2)
+    keep_moving_weight: Optional[float] = None  # D of Eq. (10) for this stage; None = the preset's (25): the
+    #                                             survival bonus per episode, which must outweigh the energy
+    #                                             cost of walking or falling at once becomes the best policy
     action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
+    critic_warmup_updates: int = 0  # the stage's first updates train the critics only (actor and targets
+    #                                 wait), so that the critics learn this stage's reward before the actor
+    #                                 follows them
 
     def __post_init__(self) -> None:
         _check(self.reward in ("stage1", "stage2"), "StageConfig.reward", "'stage1' or 'stage2'", self.reward)
@@ -218,6 +227,12 @@ class StageConfig:
         _check(self.energy_weight is None or (math.isfinite(self.energy_weight) and self.energy_weight <= 0),
                "StageConfig.energy_weight", "None (the preset's) or a finite number <= 0 (per J)",
                self.energy_weight)
+        _check(self.keep_moving_weight is None or (math.isfinite(self.keep_moving_weight)
+                                                    and self.keep_moving_weight >= 0),
+               "StageConfig.keep_moving_weight", "None (the preset's) or a finite number >= 0",
+               self.keep_moving_weight)
+        _check(self.critic_warmup_updates >= 0, "StageConfig.critic_warmup_updates", ">= 0",
+               self.critic_warmup_updates)
         _check(self.action_l2 is None or (math.isfinite(self.action_l2) and self.action_l2 >= 0),
                "StageConfig.action_l2", "None (agent.action_l2) or a finite number >= 0", self.action_l2)
         for n in ("stop_score", "save_score"):
@@ -226,11 +241,15 @@ class StageConfig:
 
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
-    """The reward weights one training stage uses: its preset, with `energy_weight` if set."""
+    """The reward weights one training stage uses: its preset, with `energy_weight` and `keep_moving_weight`
+    if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
-    if stage.energy_weight is None:
-        return preset
-    return dataclasses.replace(preset, energy=float(stage.energy_weight))
+    changes = {}
+    if stage.energy_weight is not None:
+        changes["energy"] = float(stage.energy_weight)
+    if stage.keep_moving_weight is not None:
+        changes["keep_moving"] = float(stage.keep_moving_weight)
+    return dataclasses.replace(preset, **changes) if changes else preset
 
 
 @dataclass(frozen=True)
@@ -243,7 +262,9 @@ class TrainConfig:
     stage2: StageConfig = field(default_factory=lambda: StageConfig(reward="stage2", stop_score=math.inf))
     score_window: int = 250  # episodes averaged for the stop test (Table 4 "score averaging window length")
     buffer_size: int = 1_000_000  # transitions kept in the replay buffer
-    buffer_between_stages: str = "clear"  # "clear": rewards change at stage 2, so old transitions are dropped; "keep"
+    buffer_between_stages: str = "clear"  # "clear": rewards change at stage 2, so old transitions are dropped;
+    #                                       "keep": kept with their old rewards; "relabel": kept, each reward
+    #                                       recomputed with the new stage's energy weight from its stored energy
     batch_size: int = 256  # transitions per update
     init_random_frames: int = 5_000  # env steps with uniform random actions before learning starts (stage 1)
     learning_starts: int = 0  # env steps of the stage's first policy (+ noise) before the first update; lets

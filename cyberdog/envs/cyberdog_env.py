@@ -33,9 +33,23 @@ OBSERVATION_LAYOUT = (
 )
 
 
-def observation_typical_magnitude() -> np.ndarray:
-    """(50,) typical magnitude of each observation entry (for input scaling in a learner)."""
-    return np.concatenate([np.full(n, m, dtype=np.float32) for _, n, _, _, m in OBSERVATION_LAYOUT])
+# appended when `EnvConfig.observe_last_action` is set: the previous action, in action units
+LAST_ACTION_LAYOUT = (("last_action", 12, -1.0, 1.0, 1.0),)
+
+
+def observation_layout(cfg: C.EnvConfig | None = None) -> tuple:
+    """The observation's (name, size, low, high, typical magnitude) groups for an env config."""
+    return OBSERVATION_LAYOUT + (LAST_ACTION_LAYOUT if cfg is not None and cfg.observe_last_action else ())
+
+
+def observation_size(cfg: C.EnvConfig | None = None) -> int:
+    """Entries of the observation: 50 (Table 3's groups), 62 with `observe_last_action`."""
+    return sum(n for _, n, _, _, _ in observation_layout(cfg))
+
+
+def observation_typical_magnitude(cfg: C.EnvConfig | None = None) -> np.ndarray:
+    """Typical magnitude of each observation entry (for input scaling in a learner), (50,) or (62,)."""
+    return np.concatenate([np.full(n, m, dtype=np.float32) for _, n, _, _, m in observation_layout(cfg)])
 
 
 
@@ -64,7 +78,7 @@ class CyberDogEnv(gym.Env):
     (The default lift height in the env is 0.10 m so that the trot stays inside that range; the paper's
     0.15 m needs about 51° of knee flexion.)
 
-    **Observation** (50,), float32, clipped to finite bounds (`OBSERVATION_LAYOUT`):
+    **Observation** (50,) or (62,), float32, clipped to finite bounds (`OBSERVATION_LAYOUT`):
 
     | slice | content | unit |
     |---|---|---|
@@ -78,6 +92,7 @@ class CyberDogEnv(gym.Env):
     | 35:47 | joint torques (last physics step) | N·m |
     | 47 | commanded speed (ramped up over the first `speed_ramp_time`, then the set speed) | m/s |
     | 48:50 | sin, cos of the gait phase | – |
+    | 50:62 | the previous action, only with `observe_last_action` | action units |
 
     The paper's model has 111 observations in these groups (torso position, orientation, joint angles,
     3-D velocities, angular velocities, joint velocities, joint torques, Section 2); its full list is not
@@ -138,8 +153,9 @@ class CyberDogEnv(gym.Env):
         self.q_low, self.q_high = np.maximum(q_stand - r, lo), np.minimum(q_stand + r, hi)
         self.fall_tilt = np.deg2rad(cfg.fall_tilt_deg)
         self.latency_steps = int(round(cfg.latency / self.dt))
-        low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in OBSERVATION_LAYOUT])
-        high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in OBSERVATION_LAYOUT])
+        layout = observation_layout(cfg)
+        low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
+        high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in layout])
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (12,), dtype=np.float32)
         self.estimator_every = int(round(cfg.estimator_dt / self.dt))
@@ -172,6 +188,7 @@ class CyberDogEnv(gym.Env):
         self.torque_queue = deque([np.zeros(12)] * self.latency_steps)
         self.last_torque = np.zeros(12)
         self._foot_offset = np.zeros((4, 3))  # m, the foot-target offsets of the last action (action_mode="foot")
+        self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
         self._state = self.robot.read_state()
         self.start_position = self._state.base_position.copy()
         self._prev_world_velocity = self._state.base_linear_velocity_world.copy()
@@ -187,6 +204,7 @@ class CyberDogEnv(gym.Env):
         if not np.all(np.isfinite(a)):
             raise ValueError(f"action must be finite, got {a.tolist()}")
         mode = self.cfg.action_mode
+        self._last_action = np.clip(a, -1.0, 1.0)
         controller, dt = self.controller, self.dt
         foot = mode == "foot"
         if foot:  # the action moves the foot targets; the controller's torque is applied as it is
@@ -292,7 +310,8 @@ class CyberDogEnv(gym.Env):
         obs = np.concatenate([
             [s.base_position[2], s.base_position[1] - self.start_position[1]], s.base_rpy, v_body,
             s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(self.t)],
-            [np.sin(phase), np.cos(phase)]]).astype(np.float32)
+            [np.sin(phase), np.cos(phase)]]
+            + ([self._last_action] if self.cfg.observe_last_action else [])).astype(np.float32)
         obs = np.nan_to_num(obs, nan=0.0)
         return np.clip(obs, self.observation_space.low, self.observation_space.high)
 

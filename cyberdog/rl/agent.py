@@ -38,9 +38,12 @@ def action_spec(action_size: int, device: torch.device | str = "cpu") -> Bounded
     return Bounded(-1.0, 1.0, shape=(action_size,), dtype=torch.float32, device=device)
 
 
-def make_loss(cfg: AgentConfig, observation_size: int, action_size: int):
-    """Actor, critic, the loss module holding them and their targets, and the soft target updater."""
-    scale = observation_typical_magnitude() if observation_size == len(observation_typical_magnitude()) else None
+def make_loss(cfg: AgentConfig, observation_size: int, action_size: int, observation_scale=None):
+    """Actor, critic, the loss module holding them and their targets, and the soft target updater.
+    `observation_scale`: typical magnitude of each observation entry (default: the env's, for 50 entries)."""
+    scale = observation_scale
+    if scale is None and observation_size == len(observation_typical_magnitude()):
+        scale = observation_typical_magnitude()
     actor = make_actor(observation_size, action_size, cfg.hidden_sizes, scale)
     critic = make_critic(observation_size, action_size, cfg.hidden_sizes, scale)
     if cfg.algorithm == "td3":
@@ -147,10 +150,12 @@ def metrics_to_float(metrics: list[dict[str, torch.Tensor]]) -> dict[str, float]
 class Agent:
     """Loss, optimizers and the update schedule of one TD3 or DDPG agent."""
 
-    def __init__(self, cfg: AgentConfig, observation_size: int, action_size: int, device: str = "cpu"):
+    def __init__(self, cfg: AgentConfig, observation_size: int, action_size: int, device: str = "cpu",
+                 observation_scale=None):
         self.cfg = cfg
         self.device = torch.device(device)
-        self.actor, self.loss, self.target_updater = make_loss(cfg, observation_size, action_size)
+        self.actor, self.loss, self.target_updater = make_loss(cfg, observation_size, action_size,
+                                                               observation_scale)
         self.loss.to(self.device)
         self.critic_params, self.actor_params = critic_parameters(self.loss), actor_parameters(self.loss)
         self.actor_optimizer, self.critic_optimizer = make_optimizers(cfg, self.loss)
@@ -176,8 +181,9 @@ class Agent:
             torch.nn.utils.clip_grad_norm_(params, self.cfg.max_grad_norm, foreach=True)
         optimizer.step()
 
-    def update(self, batch: TensorDictBase) -> dict[str, torch.Tensor]:
-        """One critic update; actor + soft target update every `policy_delay`-th call.
+    def update(self, batch: TensorDictBase, actor: bool = True) -> dict[str, torch.Tensor]:
+        """One critic update; actor + soft target update every `policy_delay`-th call (if `actor`; with
+        `actor=False` the critics alone learn, e.g. while they catch up with a new reward).
 
         Returns the metrics as detached 0-d tensors (critic_loss, actor_loss, q_mean, q_max); convert them with
         `metrics_to_float` when logging. Raises `NonFiniteError` before any step that would write NaN/inf."""
@@ -188,7 +194,7 @@ class Agent:
         _finite(critic_loss=value_loss, Q_value=q)
         self._step(self.critic_optimizer, value_loss, self.critic_params)
         self.updates += 1
-        if self.updates % self.policy_delay == 0:
+        if actor and self.updates % self.policy_delay == 0:
             actor_loss, _ = self._actor_loss(batch)
             if self.action_l2 > 0:
                 actor_loss = actor_loss + self.action_l2 * self._mean_squared_action(batch)

@@ -8,14 +8,27 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import LazyTensorStorage, TensorDictReplayBuffer
 from torchrl.data.replay_buffers.samplers import RandomSampler
 
-# what one transition keeps: enough for the TD target (s, a, r, s', done)
+# what one transition keeps: enough for the TD target (s, a, r, s', done), and the step's energy (J, Eq. 7) so
+# that its reward can be recomputed for another energy weight (`relabel_rewards`)
 TRANSITION_KEYS = ("observation", "action", ("next", "observation"), ("next", "reward"), ("next", "done"),
-                   ("next", "terminated"))
+                   ("next", "terminated"), ("next", "energy_J"))
 
 def make_replay_buffer(capacity: int, batch_size: int) -> TensorDictReplayBuffer:
     """Uniform replay over the last `capacity` transitions (FIFO), sampled with torch's global RNG."""
     return TensorDictReplayBuffer(storage=LazyTensorStorage(capacity), sampler=RandomSampler(),
                                   batch_size=batch_size)
+
+def relabel_rewards(rb: TensorDictReplayBuffer, delta_energy_weight: float, delta_per_step: float = 0.0) -> None:
+    """Add `delta_energy_weight · energy_J + delta_per_step` to every stored reward, in place: the rewards
+    become those of a reward whose energy weight E (Eq. 10) is larger by `delta_energy_weight` and whose
+    constant per-step bonus (the keep-moving term D·Ts/Tf) is larger by `delta_per_step`."""
+    n = len(rb)
+    if n == 0 or (delta_energy_weight == 0 and delta_per_step == 0):
+        return
+    nxt = rb._storage._storage["next"]
+    reward = nxt["reward"][:n]
+    reward += delta_energy_weight * nxt["energy_J"][:n].reshape(reward.shape) + delta_per_step
+
 
 SAMPLE_CHUNK = 64  # batches drawn per replay-buffer call in `sample_batches` (bounds its memory)
 

@@ -55,8 +55,8 @@ def load_actor(path: str | Path) -> LoadedActor:
     cfg = C.from_dict(C.ExperimentConfig, state["config"])
     # TensorDictModule wraps TanhActor: its parameters are stored under "module."
     weights = {k.removeprefix("module."): v for k, v in state["actor"].items()}
-    obs_size, act_size = len(observation_typical_magnitude()), 12
-    module = TanhActor(obs_size, act_size, cfg.agent.hidden_sizes, observation_typical_magnitude())
+    scale = observation_typical_magnitude(cfg.env)
+    module = TanhActor(len(scale), 12, cfg.agent.hidden_sizes, scale)
     check_shapes(weights, module.state_dict(), "the actor", path)
     module.load_state_dict(weights)
     module.eval()

@@ -7,6 +7,9 @@ Stage 1 trains with the "stage1" reward (no energy term) until the mean score ov
 episodes reaches `stage1.stop_score` or its budget is spent; stage 2 continues the same agent (actor,
 critics, targets, optimizers) with the "stage2" reward. The replay buffer is cleared between the stages by
 default (`train.buffer_between_stages="clear"`): its stored rewards were computed without the energy term.
+With "relabel" it is kept and each stored reward is recomputed with stage 2's energy weight (from the step's
+stored energy) and keep-moving weight, so stage 2's critics start from the whole of stage 1's experience under the right reward.
+A stage's first `critic_warmup_updates` updates train the critics only.
 
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
 the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
@@ -27,15 +30,18 @@ from tqdm import tqdm
 
 from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
+from cyberdog.core import rewards
+from cyberdog.envs.cyberdog_env import observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, rng_state, save_atomic,
                                     save_checkpoint, set_rng_state)
 from cyberdog.rl.collect import ProcessCollector, make_collector
 from cyberdog.rl.env import make_env
 from cyberdog.rl.logger import EpisodeLogger
-from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, sample_batches, transitions
+from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
+                                transitions)
 
-OBSERVATION_SIZE, ACTION_SIZE = 50, 12
+OBSERVATION_SIZE, ACTION_SIZE = 50, 12  # Table 3's observation (62 with env.observe_last_action), actions
 
 
 def resolve_device(name: str) -> str:
@@ -70,11 +76,13 @@ class Trainer:
         torch.manual_seed(tc.seed)  # network initialisation; a resume restores every RNG state below
         np.random.seed(tc.seed)
         random.seed(tc.seed)
-        self.agent = Agent(cfg.agent, OBSERVATION_SIZE, ACTION_SIZE, self.device)
+        obs_scale = observation_typical_magnitude(cfg.env)
+        self.observation_size = len(obs_scale)
+        self.agent = Agent(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale)
         self.rb = make_replay_buffer(tc.buffer_size, tc.batch_size)
         self.stages = list(stages)
         self.c = dict(stage=self.stages[0], env_steps=0, stage_env_steps=0, episodes=0, stage_episodes=0,
-                      update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
+                      stage_updates=0, update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
         self.scores: deque = deque(maxlen=tc.score_window)
         self.best_score = -math.inf
         self.run_dir.mkdir(parents=True, exist_ok=True)
@@ -139,11 +147,10 @@ class Trainer:
                                 self.run_dir / f"stage{stage}_final.pt")
                 rest = [s for s in self.stages if s > stage]
                 if rest:  # next stage: same agent, fresh counters and score window
-                    self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0)
+                    self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0, stage_updates=0)
                     self.scores.clear()
                     self.best_score = -math.inf
-                    if self.cfg.train.buffer_between_stages == "clear":
-                        self.rb.empty()
+                    self._carry_buffer(stage, rest[0])
                 else:
                     self.c["finished"] = True
                 self.save()
@@ -151,6 +158,22 @@ class Trainer:
             self.logger.close()
         return {**self.c, "updates": self.agent.updates, "buffer_size": len(self.rb),
                 "window_mean_score": float(np.mean(self.scores)) if self.scores else math.nan}
+
+    def _carry_buffer(self, old: int, new: int) -> None:
+        """The replay buffer at the switch from stage `old` to stage `new` (`train.buffer_between_stages`)."""
+        policy = self.cfg.train.buffer_between_stages
+        if policy == "clear":
+            self.rb.empty()
+        elif policy == "relabel":
+            r_old, r_new = (C.stage_reward(getattr(self.cfg.train, f"stage{s}")) for s in (old, new))
+            w_old, w_new = r_old.weights, r_new.weights
+            other = [n for n in ("speed", "y_offset", "fuselage") if w_old[n] != w_new[n]]
+            if other:  # only the energy (stored per step) and the constant keep-moving term can be recomputed
+                raise ValueError(f"buffer_between_stages='relabel' recomputes the energy and keep-moving terms "
+                                 f"only, but the weights of {other} differ between stage {old} and stage {new}")
+            keep_moving = rewards.keep_moving_term(self.cfg.env.control_dt, self.cfg.env.episode_time)
+            relabel_rewards(self.rb, w_new["energy"] - w_old["energy"],
+                            (w_new["keep_moving"] - w_old["keep_moving"]) * keep_moving)
 
     def _stage_done(self, sc: C.StageConfig) -> bool:
         c = self.c
@@ -168,7 +191,7 @@ class Trainer:
         random_frames = self._random_frames_left(stage)
         if tc.collection == "async":  # env in a worker process, one batch ahead of the updates
             collector = ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
-                                         OBSERVATION_SIZE, ACTION_SIZE, tc.frames_per_batch, random_frames)
+                                         self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames)
         else:
             collector = make_collector(make_env(self.cfg.env, reward, seed=seed, track_init=True),
                                        self.agent.policy, tc.frames_per_batch, random_frames, self.device)
@@ -227,7 +250,11 @@ class Trainer:
         self.c["update_credit"] += frames * tc.updates_per_frame
         n = int(self.c["update_credit"])
         self.c["update_credit"] -= n
-        metrics = [self.agent.update(b) for b in sample_batches(self.rb, n, tc.batch_size)]
+        warmup = getattr(tc, f"stage{self.c['stage']}").critic_warmup_updates
+        metrics = []
+        for b in sample_batches(self.rb, n, tc.batch_size):
+            metrics.append(self.agent.update(b, actor=self.c["stage_updates"] >= warmup))
+            self.c["stage_updates"] += 1
         if n:  # tensors until here: one conversion per round of updates, not four per update
             self.last = metrics_to_float(metrics)
             self.last["actor_loss"] = self.agent.last_actor_loss
