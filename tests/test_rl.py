@@ -257,24 +257,33 @@ def test_action_penalty_must_be_non_negative():
 
 
 def test_a_stage_can_set_its_own_action_penalty(tmp_path):
-    """StageConfig.action_l2 replaces agent.action_l2 for that stage only (None keeps the agent's)."""
+    """StageConfig.action_l2 and actor_lr replace the agent's for that stage only (None keeps the agent's);
+    fresh_actor_optimizer starts the stage with new Adam moments."""
     cfg = C.override(_tiny(), ["agent.action_l2=0.5", "train.stage2.action_l2=0.0", "train.init_random_frames=0",
-                               "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100"])
+                               "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100",
+                               "agent.actor_lr=0.001", "train.stage2.actor_lr=0.0002",
+                               "train.stage2.fresh_actor_optimizer=true"])
     trainer = Trainer(cfg, tmp_path, progress=False)
     seen = []
     update = trainer.agent.update
 
     def recording_update(batch, actor=True):
-        seen.append((trainer.c["stage"], trainer.agent.action_l2))
+        opt = trainer.agent.actor_optimizer
+        seen.append((trainer.c["stage"], trainer.agent.action_l2, opt.param_groups[0]["lr"],
+                     max((int(st["step"]) for st in opt.state.values()), default=0)))
         return update(batch, actor)
 
     trainer.agent.update = recording_update
     trainer.run()
     trainer.logger.close()
-    assert {l2 for stage, l2 in seen if stage == 1} == {0.5}
-    assert {l2 for stage, l2 in seen if stage == 2} == {0.0}
+    assert {(l2, lr) for stage, l2, lr, _ in seen if stage == 1} == {(0.5, 0.001)}
+    assert {(l2, lr) for stage, l2, lr, _ in seen if stage == 2} == {(0.0, 0.0002)}
+    first2 = next(i for i, row in enumerate(seen) if row[0] == 2)
+    assert seen[first2 - 1][3] > 0 and seen[first2][3] == 0, "stage 2 starts with fresh Adam moments"
     with pytest.raises(ValueError, match="StageConfig.action_l2"):
         C.StageConfig(action_l2=-0.1)
+    with pytest.raises(ValueError, match="StageConfig.actor_lr"):
+        C.StageConfig(actor_lr=0.0)
 
 
 def test_update_without_actor_trains_the_critics_only():

@@ -215,6 +215,11 @@ class StageConfig:
     #                                             survival bonus per episode, which must outweigh the energy
     #                                             cost of walking or falling at once becomes the best policy
     action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
+    actor_lr: Optional[float] = None  # the actor's learning rate in this stage; None = agent.actor_lr
+    fresh_actor_optimizer: bool = False  # start the stage with a new Adam for the actor: the moments it kept
+    #                                      were scaled to the previous stage's loss, and a larger gradient now
+    #                                      (a new reward, a weaker action penalty) would take ~|g|/sqrt(v)
+    #                                      times the learning rate per step until they catch up
     critic_warmup_updates: int = 0  # the stage's first updates train the critics only (actor and targets
     #                                 wait), so that the critics learn this stage's reward before the actor
     #                                 follows them
@@ -231,6 +236,8 @@ class StageConfig:
                                                     and self.keep_moving_weight >= 0),
                "StageConfig.keep_moving_weight", "None (the preset's) or a finite number >= 0",
                self.keep_moving_weight)
+        _check(self.actor_lr is None or (math.isfinite(self.actor_lr) and self.actor_lr > 0),
+               "StageConfig.actor_lr", "None (agent.actor_lr) or a finite number > 0", self.actor_lr)
         _check(self.critic_warmup_updates >= 0, "StageConfig.critic_warmup_updates", ">= 0",
                self.critic_warmup_updates)
         _check(self.action_l2 is None or (math.isfinite(self.action_l2) and self.action_l2 >= 0),

@@ -218,6 +218,13 @@ class Agent:
         return action.pow(2).mean()
 
     # ---- checkpoint state (tensors and plain containers only) ----
+    def set_actor_lr(self, lr: float, fresh: bool = False) -> None:
+        """The actor's learning rate from now on; `fresh=True` also drops Adam's moments (a new optimizer)."""
+        if fresh:
+            self.actor_optimizer = _adam(self.actor_params, lr)
+        for group in self.actor_optimizer.param_groups:
+            group["lr"] = lr
+
     def state_dict(self) -> dict:
         return {"loss": self.loss.state_dict(), "actor_optimizer": self.actor_optimizer.state_dict(),
                 "critic_optimizer": self.critic_optimizer.state_dict(), "exploration": self.policy.state_dict(),

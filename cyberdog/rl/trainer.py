@@ -188,6 +188,8 @@ class Trainer:
         c = self.c
         seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
         self.agent.action_l2 = self.cfg.agent.action_l2 if sc.action_l2 is None else sc.action_l2
+        self.agent.set_actor_lr(self.cfg.agent.actor_lr if sc.actor_lr is None else sc.actor_lr,
+                                fresh=sc.fresh_actor_optimizer and c["stage_env_steps"] == 0)
         random_frames = self._random_frames_left(stage)
         if tc.collection == "async":  # env in a worker process, one batch ahead of the updates
             collector = ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
