@@ -367,3 +367,20 @@ def test_relabel_formula_gives_the_reward_the_next_stage_would_have_given():
     for (r1, e1), (r2, e2) in zip(*runs):
         assert e1 == e2 > 0
         assert r2 == pytest.approx(r1 - 0.05 * e1 + per_step, abs=1e-9)
+
+
+def test_action_smoothness_pulls_consecutive_actions_together():
+    """CAPS's temporal term: with only it in the actor loss (critic gradient removed), μ(s') − μ(s) shrinks."""
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_smoothness=10.0,
+                                actor_lr=1e-2), OBS, ACT)
+    agent._actor_loss = lambda b: (torch.zeros(()), {})  # the penalty alone drives the actor
+    b = batch(64)
+    gap = lambda: (agent.actor(b["next"].select("observation").clone())["action"]  # noqa: E731
+                   - agent.actor(b.select("observation").clone())["action"]).pow(2).mean().item()
+    before = gap()
+    for _ in range(50):
+        agent.update(b)
+    assert gap() < 0.2 * before
+    with pytest.raises(ValueError, match="action_smoothness"):
+        C.AgentConfig(action_smoothness=-1.0)

@@ -182,6 +182,9 @@ class AgentConfig:
     ou_dt: float = 0.025  # OU time step (s); the agent step Ts
     max_grad_norm: float = 0.0  # gradient-norm clip of each optimizer step; 0 = off
     action_l2: float = 0.0  # actor loss += action_l2 · mean(μ(s)²): keeps a residual policy near the trot controller
+    action_smoothness: float = 0.0  # actor loss += action_smoothness · mean((μ(s') − μ(s))²), the temporal
+    #                                 smoothness term of CAPS (Mysore et al. 2021): a foot-mode policy that
+    #                                 changes its offsets from step to step makes the PID jerk, which costs energy
 
     def __post_init__(self) -> None:
         _check(self.algorithm in ALGORITHMS, "AgentConfig.algorithm", f"one of {ALGORITHMS}", self.algorithm)
@@ -191,7 +194,7 @@ class AgentConfig:
                "AgentConfig.hidden_sizes", "one or more positive integers", self.hidden_sizes)
         _positive(self, "actor_lr", "critic_lr", "tau", "ou_dt")
         _non_negative(self, "policy_noise", "noise_clip", "exploration_sigma", "exploration_sigma_end",
-                      "ou_theta", "max_grad_norm", "action_l2")
+                      "ou_theta", "max_grad_norm", "action_l2", "action_smoothness")
         _check(0 <= self.gamma < 1, "AgentConfig.gamma", "in [0, 1)", self.gamma)
         _check(self.tau <= 1, "AgentConfig.tau", "in (0, 1]", self.tau)
         _check(int(self.policy_delay) == self.policy_delay and self.policy_delay >= 1, "AgentConfig.policy_delay",

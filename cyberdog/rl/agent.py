@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 import torch
-from tensordict import TensorDictBase
+from tensordict import TensorDict, TensorDictBase
 from tensordict.nn import TensorDictSequential
 from torchrl.data import Bounded
 from torchrl.modules import AdditiveGaussianModule, OrnsteinUhlenbeckProcessModule
@@ -196,8 +196,8 @@ class Agent:
         self.updates += 1
         if actor and self.updates % self.policy_delay == 0:
             actor_loss, _ = self._actor_loss(batch)
-            if self.action_l2 > 0:
-                actor_loss = actor_loss + self.action_l2 * self._mean_squared_action(batch)
+            if self.action_l2 > 0 or self.cfg.action_smoothness > 0:
+                actor_loss = actor_loss + self._action_penalties(batch)
             _finite(actor_loss=actor_loss)
             self._step(self.actor_optimizer, actor_loss, self.actor_params)
             self.target_updater.step()
@@ -206,16 +206,25 @@ class Agent:
         return {"critic_loss": value_loss.detach(), "actor_loss": self._last_actor_loss, "q_mean": q.mean(),
                 "q_max": q.max()}
 
-    def _mean_squared_action(self, batch: TensorDictBase) -> torch.Tensor:
-        """mean(μ(s)²) over the batch, through the loss's own actor parameters (those the optimizer steps).
+    def _action_penalties(self, batch: TensorDictBase) -> torch.Tensor:
+        """`action_l2 · mean(μ(s)²) + action_smoothness · mean((μ(s') − μ(s))²)` over the batch, through the
+        loss's own actor parameters (those the optimizer steps).
 
-        The penalty `action_l2 · mean(μ(s)²)` added to the actor loss keeps a residual policy near zero, i.e.
-        near the trot controller, unless the critic's gradient says otherwise: without it the actor ran to the
-        ±1 bounds within a few thousand updates, where the critic (trained on actions near 0) only extrapolates
-        (measured, see configs/quick.yaml)."""
+        The first keeps a residual policy near zero, i.e. near the trot controller, unless the critic's
+        gradient says otherwise: without it the actor ran to the ±1 bounds within a few thousand updates,
+        where the critic (trained on actions near 0) only extrapolates (measured, see configs/quick.yaml).
+        The second is CAPS's temporal smoothness term (Mysore et al. 2021): consecutive actions should be
+        close, because a jump of the foot targets makes the PID jerk."""
+        obs = batch["observation"]
+        smooth = self.cfg.action_smoothness > 0
+        if smooth:  # one forward pass for s and s'
+            obs = torch.cat([obs, batch["next", "observation"]])
         with self.loss.actor_network_params.to_module(self.loss.actor_network):
-            action = self.loss.actor_network(batch.select("observation").clone())["action"]
-        return action.pow(2).mean()
+            action = self.loss.actor_network(TensorDict({"observation": obs}, batch_size=obs.shape[:1]))["action"]
+        if not smooth:
+            return self.action_l2 * action.pow(2).mean()
+        now, nxt = action.chunk(2)
+        return self.action_l2 * now.pow(2).mean() + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
 
     # ---- checkpoint state (tensors and plain containers only) ----
     def set_actor_lr(self, lr: float, fresh: bool = False) -> None:
