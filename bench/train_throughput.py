@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Training throughput: env steps/s of this pipeline at one update per env step, against Stable-Baselines3 TD3.
 
-Both learn on the same CyberDog-v0 (residual mode, configs/quick.yaml's environment, the stage-1 reward) in
+Both learn on the same CyberDog-v0 (residual mode, configs/quick_residual.yaml's environment, the stage-1 reward) in
 this process, on the same machine, with the same number of torch threads:
 
   ours   the real training path, `cyberdog.rl.Trainer` (TorchRL TD3Loss, replay buffer, collector, logging),
@@ -53,10 +53,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def experiment(args, collection: str, steps: int) -> C.ExperimentConfig:
-    """configs/quick.yaml's environment; default agent with 3x128 nets; one update per env step, batch 256 and a
+    """configs/quick_residual.yaml's environment; default agent with 3x128 nets; one update per env step, batch 256 and a
     stage-1 budget of `steps`. (Only the env section of the preset is read: the timing does not depend on
     the other agent settings, and the script keeps working when the preset gains fields.)"""
-    with open(ROOT / "configs/quick.yaml") as f:
+    with open(ROOT / "configs/quick_residual.yaml") as f:
         env = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
     sets = ["train.batch_size=256", "train.updates_per_frame=1", "train.init_random_frames=0",
             f"train.learning_starts={args.learning_starts}", f"train.stage1.max_env_steps={steps}",
@@ -219,7 +219,7 @@ def main() -> None:
     p.add_argument("--learning-starts", type=int, default=256,
                    help="env steps without updates before the timed window (default 256 = the batch size)")
     p.add_argument("--frames-per-batch", type=int, default=200,
-                   help="our env steps per collection batch (default 200, as configs/quick.yaml)")
+                   help="our env steps per collection batch (default 200, as configs/quick_residual.yaml)")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--threads", type=int, default=1, help="torch threads of the updates, ours and SB3 (default 1)")
     p.add_argument("--collection", nargs="+", default=["sync", "async"], choices=C.COLLECTION_MODES

@@ -162,8 +162,9 @@ def test_help_documents_every_option():
 def test_every_shipped_preset_is_a_valid_config(preset):
     cfg = C.load(C.ExperimentConfig, ROOT / "configs" / preset)
     assert cfg.env.max_episode_steps >= 1 and cfg.train.stage2.reward == "stage2"
-    if preset == "quick_foot.yaml":
-        assert cfg.env.action_mode == "foot"
+    if preset == "quick.yaml":  # the preset whose stage 2 learns a cheaper gait (README)
+        assert cfg.env.action_mode == "foot" and cfg.env.observe_last_action
+        assert cfg.train.buffer_between_stages == "relabel" and cfg.train.stage2.energy_weight == -0.2
 
 
 def test_a_foot_mode_run_trains_and_its_actor_moves_the_feet(tmp_path):

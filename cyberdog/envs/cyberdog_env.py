@@ -103,7 +103,7 @@ class CyberDogEnv(gym.Env):
     over `walk.controller.speed_ramp_time` (1 s), as in the scripted walks; the reward's v_cmd and the
     observed command are that ramped value. (With the set speed in the reward from t = 0, the start-up ramp
     alone cost about −40 of a 400-step episode's score, and a policy learned to fight the ramp instead of
-    walking straight: measured in `configs/quick.yaml` runs.)
+    walking straight: measured in `configs/quick_residual.yaml` runs.)
 
     **Reward**, Eq. (10): r = A·(v_cmd − v_x)² + B·y² + C·(z − z_nom)² + D·Ts/Tf + E·Σ∫|τ·ω|dt, with
     (A, B, C, D, E) = (−2, −20, −50, 25, −0.2) (Eq. 11; `reward="stage1"` sets E = 0). `info` carries every

@@ -212,7 +212,7 @@ class Agent:
 
         The first keeps a residual policy near zero, i.e. near the trot controller, unless the critic's
         gradient says otherwise: without it the actor ran to the ±1 bounds within a few thousand updates,
-        where the critic (trained on actions near 0) only extrapolates (measured, see configs/quick.yaml).
+        where the critic (trained on actions near 0) only extrapolates (measured, see configs/quick_residual.yaml).
         The second is CAPS's temporal smoothness term (Mysore et al. 2021): consecutive actions should be
         close, because a jump of the foot targets makes the PID jerk."""
         obs = batch["observation"]
