@@ -26,7 +26,8 @@ def batch(n: int = 16, reward: float | None = None) -> TensorDict:
                        "action": torch.rand(n, ACT, generator=g) * 2 - 1,
                        "next": {"observation": torch.randn(n, OBS, generator=g), "reward": r,
                                 "done": torch.zeros(n, 1, dtype=torch.bool),
-                                "terminated": torch.zeros(n, 1, dtype=torch.bool)}}, [n])
+                                "terminated": torch.zeros(n, 1, dtype=torch.bool),
+                                "energy_J": torch.rand(n, 1, generator=g) * 5}}, [n])
 
 
 def snapshot(agent: Agent) -> dict[str, torch.Tensor]:
@@ -91,6 +92,10 @@ def test_replay_buffer_round_trip_keeps_order_and_cursor(tmp_path):
     assert torch.equal(rb._storage[:10]["observation"], rb2._storage[:10]["observation"])
     with pytest.raises(ValueError, match="capacity"):
         load_buffer_state(make_replay_buffer(20, 4), buffer_state(rb))
+    old_format = buffer_state(rb)  # written before the step energy was stored
+    del old_format["data"]["next"]["energy_J"]
+    with pytest.raises(ValueError, match=r"lack \[\('next', 'energy_J'\)\]"):
+        load_buffer_state(make_replay_buffer(10, 4), old_format)
 
 
 def test_config_validation_names_the_field():
@@ -301,7 +306,7 @@ def test_update_without_actor_trains_the_critics_only():
 def test_relabel_adds_the_weight_changes_to_each_stored_reward():
     rb = make_replay_buffer(10, 2)
     data = batch(6, reward=1.0)
-    data["next", "energy_J"] = torch.tensor([0.0, 1.0, 2.0, 3.0, 4.0, 5.0]).reshape(6, 1)
+    data["next", "energy_J"] = torch.arange(6.0).reshape(6, 1)
     rb.extend(data)
     relabel_rewards(rb, -0.5, 0.25)
     assert torch.allclose(rb[:6]["next", "reward"].reshape(-1), 1.25 - 0.5 * torch.arange(6.0))

@@ -274,7 +274,8 @@ class TrainConfig:
     buffer_size: int = 1_000_000  # transitions kept in the replay buffer
     buffer_between_stages: str = "clear"  # "clear": rewards change at stage 2, so old transitions are dropped;
     #                                       "keep": kept with their old rewards; "relabel": kept, each reward
-    #                                       recomputed with the new stage's energy weight from its stored energy
+    #                                       recomputed with the new stage's energy weight (from the step's stored
+    #                                       energy) and keep-moving weight
     batch_size: int = 256  # transitions per update
     init_random_frames: int = 5_000  # env steps with uniform random actions before learning starts (stage 1)
     learning_starts: int = 0  # env steps of the stage's first policy (+ noise) before the first update; lets

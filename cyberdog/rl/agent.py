@@ -226,7 +226,6 @@ class Agent:
         now, nxt = action.chunk(2)
         return self.action_l2 * now.pow(2).mean() + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
 
-    # ---- checkpoint state (tensors and plain containers only) ----
     def set_actor_lr(self, lr: float, fresh: bool = False) -> None:
         """The actor's learning rate from now on; `fresh=True` also drops Adam's moments (a new optimizer)."""
         if fresh:
@@ -234,6 +233,7 @@ class Agent:
         for group in self.actor_optimizer.param_groups:
             group["lr"] = lr
 
+    # ---- checkpoint state (tensors and plain containers only) ----
     def state_dict(self) -> dict:
         return {"loss": self.loss.state_dict(), "actor_optimizer": self.actor_optimizer.state_dict(),
                 "critic_optimizer": self.critic_optimizer.state_dict(), "exploration": self.policy.state_dict(),

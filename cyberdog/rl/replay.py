@@ -71,6 +71,10 @@ def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
     if n == 0:
         return
     data = TensorDict(state["data"], batch_size=[n])
+    missing = [k for k in TRANSITION_KEYS if k not in data.keys(include_nested=True)]
+    if missing:
+        raise ValueError(f"the stored transitions lack {missing} (a checkpoint of an older version); "
+                         f"start a new run, or continue that one with the version that wrote it")
     rb.extend(data)  # writes slots 0..n-1 in order, as they were stored
     rb._writer._cursor = int(state["cursor"]) % int(state["capacity"])
     if len(rb) != n:

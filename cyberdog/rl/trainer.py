@@ -8,8 +8,8 @@ episodes reaches `stage1.stop_score` or its budget is spent; stage 2 continues t
 critics, targets, optimizers) with the "stage2" reward. The replay buffer is cleared between the stages by
 default (`train.buffer_between_stages="clear"`): its stored rewards were computed without the energy term.
 With "relabel" it is kept and each stored reward is recomputed with stage 2's energy weight (from the step's
-stored energy) and keep-moving weight, so stage 2's critics start from the whole of stage 1's experience under the right reward.
-A stage's first `critic_warmup_updates` updates train the critics only.
+stored energy) and keep-moving weight, so that stage 2's critics start from all of stage 1's experience under
+the right reward. A stage's first `critic_warmup_updates` updates train the critics only.
 
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
 the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
