@@ -53,8 +53,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def experiment(args, collection: str, steps: int) -> C.ExperimentConfig:
-    """configs/quick_residual.yaml's environment; default agent with 3x128 nets; one update per env step, batch 256 and a
-    stage-1 budget of `steps`. (Only the env section of the preset is read: the timing does not depend on
+    """configs/quick_residual.yaml's environment; default agent with 3x128 nets; one update per env step, batch
+    256 and a stage-1 budget of `steps`. (Only the env section of the preset is read: the timing does not depend on
     the other agent settings, and the script keeps working when the preset gains fields.)"""
     with open(ROOT / "configs/quick_residual.yaml") as f:
         env = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
