@@ -41,8 +41,11 @@ from cyberdog import config as C
 from cyberdog.analysis import compare as cmp
 from cyberdog.analysis import figures as figs
 from cyberdog.analysis.baselines import BASELINES, PAPER_SPEEDS, baseline_rows
-from cyberdog.analysis.extract import SPEED_TOLERANCE, ExtractionError, cycle_rows, extract_from_rollout
+from cyberdog.analysis import table5 as t5
+from cyberdog.analysis.extract import (CYCLE_CHOICES, SPEED_TOLERANCE, ExtractionError, commanded_from_rollout,
+                                       cycle_rows, extract_from_rollout)
 from cyberdog.analysis.report import markdown_table, write_rows
+from cyberdog.core.commanded_path import CommandedPath, load_foot_path
 from cyberdog.core.trajectories import SampledTrajectory
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
@@ -50,7 +53,7 @@ BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "latera
                     "cost_of_transport", "peak_torque_Nm", "peak_joint_speed_radps"]
 COMMANDS = ("all", "baselines", "extract", "compare", "prototype", "figures", "video")
 ROOT = Path(__file__).resolve().parent
-DEFAULT_LEARNED = ROOT / "results" / "learned_trajectory.json"  # the shipped extracted trajectory
+DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
 DEFAULT_METRICS = ROOT / "results" / "policy" / "metrics.csv"  # the shipped policy's training log
 DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (paper: 100 m, `--prototype-distance 100`)
 STAGE2_ACTORS = ("stage2_actor.pt", "stage2_best_actor.pt", "stage2_final_actor.pt")  # preference order
@@ -79,13 +82,22 @@ def parse_args(argv=None):
     g.add_argument("--out", type=Path, default=None, help="output folder (default runs/evaluate-<time>)")
     g = p.add_argument_group("learned trajectory")
     g.add_argument("--learned", type=Path, nargs="+", default=None, metavar="FILE",
-                   help=f"extracted trajectories (JSON/CSV), one per seed (default {DEFAULT_LEARNED})")
+                   help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
+                        "per seed and speed) or sampled x-z paths (one per seed, rescaled to every speed); "
+                        f"default {DEFAULT_LEARNED}/")
     g.add_argument("--policies", "--policy", dest="policies", type=Path, nargs="+", default=None, metavar="PATH",
                    help="stage-2 actor files or training run folders: extract their trajectories first")
     g.add_argument("--sweep", type=Path, default=None, metavar="DIR",
                    help="a folder of training runs (one per seed): extract each run's trajectory first")
     g.add_argument("--policy-speed", type=float, default=None,
-                   help="m/s commanded in the extraction rollout (default: the policy's training speed)")
+                   help="m/s commanded in the extraction rollout (default: each of --speeds for a policy trained "
+                        "over a speed range, else the policy's training speed)")
+    g.add_argument("--path", dest="path_kind", default="auto", choices=("auto", "commanded", "measured"),
+                   help="extraction: 'commanded' (the foot targets the policy commanded: trot path + its per-leg "
+                        "shift), 'measured' (the paper's: forward kinematics of the joint angles, one leg), or "
+                        "'auto' (default): commanded for foot-mode policies, else measured")
+    g.add_argument("--cycle", default="mean", choices=CYCLE_CHOICES,
+                   help="commanded extraction: average the settled in-band cycles (default) or take the cheapest")
     g.add_argument("--rollout-duration", type=float, default=10.0, help="s of each extraction rollout")
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--speed-tolerance", type=float, default=SPEED_TOLERANCE,
@@ -164,61 +176,127 @@ def unique_labels(labels: list[str]) -> list[str]:
     return out
 
 
-def load_learned(files: list[Path]) -> dict[str, SampledTrajectory]:
-    """Extracted trajectories by label (the provenance's seed, else the file name)."""
-    trajs, labels = [], []
-    for f in files:
+def learned_files(paths: list[Path]) -> list[Path]:
+    """The trajectory files named: files as given, folders expanded to their JSON files (no *_cycles)."""
+    files = []
+    for p in paths:
+        if p.is_dir():
+            found = sorted(f for f in p.glob("*.json") if not f.stem.endswith("_cycles"))
+            if not found:
+                raise UsageError(f"learned trajectory folder {p} holds no JSON file")
+            files += found
+        else:
+            files.append(p)
+    return files
+
+
+def load_learned(paths: list[Path]) -> dict:
+    """Learned trajectories by label (the provenance's seed, else the file name): a commanded path per seed
+    and speed is grouped as {speed: path}; a sampled trajectory stands alone (replayed at every speed)."""
+    learned: dict = {}
+    for f in learned_files(paths):
         if not f.is_file():
             hint = ("" if f != DEFAULT_LEARNED else
-                    " (the shipped learned trajectory is not there yet: train a policy with train.py, then "
-                    "`evaluate.py extract --policy results/policy/stage2_actor.pt` and copy "
-                    "<out>/learned/<label>.json there, or pass --learned FILE / --policies PATH)")
+                    " (train policies with train.py, then `evaluate.py extract --sweep RUNS` and pass its "
+                    "<out>/learned/ folder with --learned)")
             raise UsageError(f"learned trajectory {f} does not exist{hint}")
         try:
-            t = SampledTrajectory.load(f)
+            t = load_foot_path(f)
         except (ValueError, KeyError, json.JSONDecodeError) as err:
             raise UsageError(f"learned trajectory {f} is unreadable: {err}") from None
-        trajs.append(t)
         seed = t.provenance.get("seed")
-        labels.append(f"seed{seed}" if seed is not None else f.stem)
-    return dict(zip(unique_labels(labels), trajs))
+        label = f"seed{seed}" if seed is not None else f.stem
+        if isinstance(t, CommandedPath):
+            group = learned.setdefault(label, {})
+            if not isinstance(group, dict) or t.speed in group:
+                raise UsageError(f"two learned trajectories for {label} at {t.speed:g} m/s ({f})")
+            group[t.speed] = t
+        else:
+            learned[unique_labels(list(learned) + [label])[-1]] = t
+    return learned
 
 
-def extract_policies(paths: list[Path], args, out: Path, log=print) -> dict[str, SampledTrajectory]:
-    """Roll out each policy, extract its cheapest in-band cycle, save it under out/learned/."""
+def flat_learned(learned: dict, speed: float = 1.0) -> dict[str, SampledTrajectory]:
+    """One x-z path per label for the figures: a commanded path's reference leg (LF) at `speed` (or its
+    nearest speed), a sampled trajectory as it is."""
+    out = {}
+    for label, entry in learned.items():
+        if isinstance(entry, dict):
+            v = min(entry, key=lambda s: abs(s - speed))
+            out[label] = entry[v].as_sampled("LF")
+        else:
+            out[label] = entry
+    return out
+
+
+def extraction_speeds(env: C.EnvConfig, args) -> list[float]:
+    """Speeds at which a policy is rolled out for extraction (see --policy-speed)."""
+    if args.policy_speed is not None:
+        return [args.policy_speed]
+    if env.target_speed_range:
+        lo, hi = env.target_speed_range
+        outside = [v for v in args.speeds if not lo - 1e-9 <= v <= hi + 1e-9]
+        if outside:
+            raise UsageError(f"--speeds {outside} lie outside the policy's training range {lo:g}-{hi:g} m/s")
+        return list(args.speeds)
+    return [env.target_speed]
+
+
+def extract_policies(paths: list[Path], args, out: Path, log=print) -> dict:
+    """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
+    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv."""
     from cyberdog.rl.rollout import load_actor, rollout  # torch: only here, only when asked
 
     results, labels = [], []
     for path in paths:
         actor = load_actor(path)
         env = actor.config.env
-        speed = args.policy_speed if args.policy_speed is not None else env.target_speed
-        t0 = time.perf_counter()
-        r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=args.rollout_seed, env_config=env)
+        kind = args.path_kind if args.path_kind != "auto" else ("commanded" if env.action_mode == "foot"
+                                                                  else "measured")
+        if kind == "commanded" and env.action_mode != "foot":
+            raise UsageError(f"{path}: a policy of action_mode {env.action_mode!r} commands no foot path; use "
+                             "--path measured")
         seed = actor.config.train.seed
-        prov = {"policy": str(path), "seed": seed, "policy_meta": actor.meta, "rollout_seed": args.rollout_seed}
-        log(f"rollout {path}: {r.duration:.1f} s at {speed:g} m/s, mean {r.mean_speed:.3f} m/s, "
-            f"E={r.energy:.0f} J, fell={r.fell} ({time.perf_counter() - t0:.0f} s)")
-        try:
-            ex = extract_from_rollout(r, env, args.leg, args.speed_tolerance, provenance=prov)
-        except ExtractionError as err:
-            raise UsageError(f"extraction from {path} failed: {err} (try --speed-tolerance or --policy-speed)")
-        results.append(ex)
+        found = {}
+        for speed in extraction_speeds(env, args):
+            t0 = time.perf_counter()
+            r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=args.rollout_seed,
+                        env_config=env)
+            prov = {"policy": str(path), "seed": seed, "policy_meta": actor.meta, "rollout_seed": args.rollout_seed}
+            log(f"rollout {path} at {speed:g} m/s: {r.duration:.1f} s, mean {r.mean_speed:.3f} m/s, "
+                f"E={r.energy:.0f} J, fell={r.fell} ({time.perf_counter() - t0:.0f} s)")
+            try:
+                if kind == "commanded":
+                    found[speed] = commanded_from_rollout(r, env, args.cycle, args.speed_tolerance, provenance=prov)
+                else:
+                    found[speed] = extract_from_rollout(r, env, args.leg, args.speed_tolerance, provenance=prov)
+            except ExtractionError as err:
+                raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try --speed-tolerance "
+                                 "or --policy-speed)") from None
+        results.append((kind, found))
         labels.append(f"seed{seed}")
     if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
         labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
-    learned = {}
-    for label, ex in zip(unique_labels(labels), results):
-        path = ex.trajectory.save(out / "learned" / f"{label}.json")
-        write_rows(cycle_rows(ex), out / "learned", f"{label}_cycles")
-        c = ex.chosen
-        log(f"{label}: cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), {c.energy:.1f} J, "
-            f"{c.speed:.3f} m/s, H = {ex.trajectory.lift_height:.3f} m -> {path}")
-        learned[label] = ex.trajectory
+    learned: dict = {}
+    for label, (kind, found) in zip(unique_labels(labels), results):
+        for speed, ex in found.items():
+            name = f"{label}_{speed:g}mps"
+            traj = ex.path if kind == "commanded" else ex.trajectory
+            path = traj.save(out / "learned" / f"{name}.json")
+            write_rows(cycle_rows(ex), out / "learned", f"{name}_cycles")
+            if kind == "commanded":
+                log(f"{name}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles ({args.cycle}), "
+                    f"{ex.energy:.1f} J per cycle, own H = {traj.own_lift_height():.4f} m -> {path}")
+                learned.setdefault(label, {})[speed] = traj
+            else:
+                c = ex.chosen
+                log(f"{name}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
+                    f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {traj.lift_height:.3f} m -> {path}")
+                learned.setdefault(label, traj)  # a measured path is rescaled to every speed: the first one
     return learned
 
 
-def learned_trajectories(args, out: Path, log=print) -> dict[str, SampledTrajectory]:
+def learned_trajectories(args, out: Path, log=print) -> dict:
     paths = policy_paths(args)
     if paths:
         return extract_policies(paths, args, out, log)
@@ -243,10 +321,12 @@ def metrics_files(args) -> dict[str, Path]:
 
 def run_compare(cfg: C.WalkConfig, learned: dict, args, out: Path, log=print) -> tuple[list, list, dict]:
     """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power)."""
-    for label, t in learned.items():
-        period = t.provenance.get("period_s")
-        if period is not None and abs(period - cfg.gait.period) > 1e-9:
-            log(f"warning: {label} was recorded with a {period} s gait period, replayed at {cfg.gait.period} s")
+    for label, entry in learned.items():
+        for t in (entry.values() if isinstance(entry, dict) else [entry]):
+            period = t.gait.period if isinstance(t, CommandedPath) else t.provenance.get("period_s")
+            if period is not None and abs(period - cfg.gait.period) > 1e-9:
+                log(f"warning: {label} was recorded with a {period} s gait period; the baselines walk "
+                    f"{cfg.gait.period} s")
     jobs = cmp.comparison_jobs(cfg, learned, args.speeds, args.duration, same_lift=not args.no_same_lift)
     log(f"comparison: {len(jobs)} walks of {args.duration:g} s")
     walks = cmp.run_jobs(jobs, args.workers, log)
@@ -255,15 +335,26 @@ def run_compare(cfg: C.WalkConfig, learned: dict, args, out: Path, log=print) ->
     means = cmp.seed_means(rows)
     write_rows(rows, out, "comparison")
     (out / "comparison.md").write_text(markdown_table(rows, cmp.COLUMNS) + "\n")
-    write_rows(cmp.table5_rows(rows), out, "table5")
-    table5 = cmp.table5_markdown(rows, means)
-    (out / "table5.md").write_text("Table 5: energy consumption of the foot trajectories (kJ) at each speed\n\n"
-                                   + table5 + "\n")
+    write_rows(t5.table5_rows(rows), out, "table5")
+    table5 = t5.table5_markdown(rows, means)
+    summary = t5.summary_rows(rows)
+    write_rows(summary, out, "table5_summary")
+    headline = "\n\n".join(
+        f"{title}\n\n{t5.summary_markdown(summary, set_name)}"
+        for set_name, title in (("same_lift", "Matched conditions: the baselines at the learned path's own lift "
+                                              "height, same step length and period (the headline)"),
+                                ("paper", "The paper's protocol: the baselines at H = "
+                                          f"{cfg.gait.lift_height:g} m"))
+        if t5.summary_markdown(summary, set_name))
+    (out / "table5.md").write_text("Table 5: energy consumption of the foot trajectories at each speed\n\n"
+                                   + headline + "\n\nEvery walk (E in kJ over the walk)\n\n" + table5 + "\n")
     if len(learned) > 1:
         write_rows(means, out, "learned_mean_ci")
     (out / "walks.json").write_text(json.dumps(walks, indent=1))
     np.savez_compressed(out / "power_traces.npz", **{f"walk_{i}": p for i, p in power.items()})
-    print("\nTable 5: energy consumption of the foot trajectories (kJ) over the walk\n")
+    print("\nTable 5: energy consumption of the foot trajectories over the walk\n")
+    print(headline)
+    print("\nEvery walk (E in kJ over the walk)\n")
     print(table5)
     print("\nAll walks (energy per 100 m, cost of transport, mean speed over the last half):\n")
     print(markdown_table(rows, cmp.COLUMNS))
@@ -273,12 +364,22 @@ def run_compare(cfg: C.WalkConfig, learned: dict, args, out: Path, log=print) ->
 def run_prototype_part(cfg: C.WalkConfig, learned: dict, args, out: Path, log=print) -> list[dict]:
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
 
-    label, traj = next(iter(learned.items()))
-    trajectories = {"learned": cmp.pinned_lift(traj, cfg.gait.lift_height), "cycloid": None, "straight": None}
+    label, entry = next(iter(learned.items()))
+    lifts = None
+    if isinstance(entry, dict):  # commanded paths: the baselines at each speed's own lift height (matched)
+        missing = [v for v in args.speeds if not any(abs(v - u) < 1e-6 for u in entry)]
+        if missing:
+            raise UsageError(f"prototype: the learned {label} has no path at {missing} m/s")
+        lifts = {v: t.own_lift_height() for v in args.speeds for u, t in entry.items() if abs(v - u) < 1e-6}
+        trajectories = {"learned": entry, "cycloid": None, "straight": None}
+    else:
+        trajectories = {"learned": cmp.pinned_lift(entry, cfg.gait.lift_height), "cycloid": None, "straight": None}
     log(f"prototype: {len(trajectories) * len(args.speeds) * len(args.prototype_modes)} walks of "
-        f"{args.prototype_distance:g} m (learned = {label})")
+        f"{args.prototype_distance:g} m (learned = {label}"
+        + (", baselines at its own lift height)" if lifts else ")"))
     rows = run_prototype(trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
-                         modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, log=log)
+                         modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, lift_heights=lifts,
+                         log=log)
     write_prototype(rows, out)
     print(f"\nPrototype experiment (Section 4.2) in simulation: {args.prototype_distance:g} m walks "
           f"(paper: 100 m); learned = {label}\n")
@@ -295,7 +396,8 @@ def run_figures(cfg: C.WalkConfig, learned: dict | None, metrics: dict, out: Pat
     else:
         print(f"Figure 6 skipped: no training log ({DEFAULT_METRICS} missing; pass --metrics CSV)")
     if learned:
-        paths += figs.figure7(learned, out, g.straight_shape, g.lift_height, g.swing_time, g.stance_time)
+        paths += figs.figure7(flat_learned(learned), out, g.straight_shape, g.lift_height, g.swing_time,
+                              g.stance_time)
     if walks and power:
         paths += figs.figure10(walks, power, out, g.lift_height)
     if rows:
@@ -327,7 +429,7 @@ def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
     traj = None
     lift = cfg.gait.lift_height
     if name == "learned":
-        label, traj = next(iter(learned.items()))
+        label, traj = next(iter(flat_learned(learned, args.video_speed).items()))
         lift = cmp.learned_lift_height(traj)
     vcfg = cmp.walk_config(cfg, name, args.video_speed, lift)
     path = out / f"trot_{name}_{args.video_speed:g}mps.{args.video_format}"
@@ -356,7 +458,7 @@ def _main(args) -> int:
             raise UsageError("figures needs --from DIR (a folder written by `evaluate.py` all/compare)")
         out = args.out or src
         rows, walks, power, proto, learned = load_saved(src)
-        if learned is None and (args.learned or DEFAULT_LEARNED.is_file()):
+        if learned is None and (args.learned or DEFAULT_LEARNED.is_dir()):
             learned = load_learned(args.learned or [DEFAULT_LEARNED])
         run_figures(cfg, learned, metrics_files(args), out, rows, walks, power, proto)
         return _finish(out, t0)
@@ -378,11 +480,13 @@ def _main(args) -> int:
     learned = None
     if needs_learned:
         learned = learned_trajectories(args, out)
-        for label, t in learned.items():  # the inputs used, copied beside the results
-            if not (out / "learned" / f"{label}.json").is_file():
-                t.save(out / "learned" / f"{label}.json")
+        for label, entry in learned.items():  # the inputs used, copied beside the results
+            for v, t in (entry.items() if isinstance(entry, dict) else [(None, entry)]):
+                name = label if v is None else f"{label}_{v:g}mps"
+                if not (out / "learned" / f"{name}.json").is_file():
+                    t.save(out / "learned" / f"{name}.json")
     if cmd == "extract":
-        figs.figure7(learned, out, cfg.gait.straight_shape, cfg.gait.lift_height)
+        figs.figure7(flat_learned(learned), out, cfg.gait.straight_shape, cfg.gait.lift_height)
         return _finish(out, t0)
     rows = walks = power = proto = None
     if cmd in ("all", "compare"):

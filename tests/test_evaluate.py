@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 
 import evaluate
+from cyberdog import config as C
 from cyberdog.analysis import compare as cmp
+from cyberdog.analysis import table5 as t5
+from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
 
 FIGURES = ("figure4_baseline_trajectories", "figure6_reward_curves", "figure7_learned_trajectory",
@@ -111,10 +115,10 @@ def test_figures_redraw_from_a_saved_folder(reduced_run, tmp_path):
 
 
 def test_missing_learned_trajectory_is_a_clear_error(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(evaluate, "DEFAULT_LEARNED", tmp_path / "results" / "learned_trajectory.json")
+    monkeypatch.setattr(evaluate, "DEFAULT_LEARNED", tmp_path / "results" / "learned")
     assert evaluate.main(["--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "learned_trajectory.json does not exist" in err and "extract --policy" in err
+    assert "results/learned does not exist" in err and "extract --sweep" in err
     assert not (tmp_path / "o").exists()  # nothing started
     assert evaluate.main(["compare", "--learned", str(tmp_path / "nope.json"), "--out", str(tmp_path / "o")]) == 2
     assert evaluate.main(["extract", "--out", str(tmp_path / "o")]) == 2
@@ -137,7 +141,8 @@ def walk_row(walk_id, trajectory, energy, lift, valid=True, seed=""):
     return {"walk_id": walk_id, "trajectory": trajectory, "label": trajectory, "seed": seed,
             "lift_height_m": lift, "speed_command_mps": 1.0, "energy_J": energy, "energy_kJ": energy / 1e3,
             "energy_per_100m_kJ": energy / 100, "valid": valid, "fell": False, "speed_ok": valid,
-            "status": "ok" if valid else "speed miss", "mean_speed_mps": 1.0, "duration_s": 10.0}
+            "status": "ok" if valid else "speed miss", "mean_speed_mps": 1.0, "duration_s": 10.0,
+            "electrical_energy_J": 3.5 * energy, "positive_work_J": 0.5 * energy, "foot_slip_mm_per_cycle": 10.0}
 
 
 def test_decrement_uses_the_cheaper_valid_baseline_of_the_same_set():
@@ -152,5 +157,40 @@ def test_decrement_uses_the_cheaper_valid_baseline_of_the_same_set():
     means = {m["set"]: m for m in cmp.seed_means(rows)}
     assert means["paper"]["n_valid"] == 2 and means["paper"]["D_t_pct_mean"] == pytest.approx(-5.0)
     assert means["paper"]["energy_kJ_ci95"] > 0
-    md = cmp.table5_markdown(rows, cmp.seed_means(rows))
+    md = t5.table5_markdown(rows, cmp.seed_means(rows))
     assert "mean ± 95 % CI over 2 seeds" in md and "(miss: 1.00 m/s)" in md
+
+
+def commanded(speed, dz, seed):
+    """A commanded path: the env's cycloid (H = 0.10 m) with every foot target shifted by dz (m)."""
+    table = np.zeros((4, 40, 3))
+    table[:, :20, 2] = dz * np.sin(np.pi * np.arange(20) / 20)  # swing only: the own lift height is H + dz
+    return CommandedPath(speed, C.GaitConfig(lift_height=0.10), FootOffsetPath(table, 0.4), {"seed": seed})
+
+
+def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_lift():
+    learned = {"seed0": {1.0: commanded(1.0, -0.01, 0), 1.2: commanded(1.2, -0.02, 0)}}
+    jobs = cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.2, 1.4))
+    mine = [j for j in jobs if j.trajectory == "learned"]
+    assert [(j.speed, round(j.lift_height, 3)) for j in mine] == [(1.0, 0.09), (1.2, 0.08)]
+    assert all(j.cfg.gait.lift_height == 0.10 and j.cfg.gait.trajectory == "cycloid" for j in mine)
+    base_lifts = {(j.speed, round(j.lift_height, 3)) for j in jobs if j.trajectory == "cycloid"}
+    assert base_lifts == {(1.0, 0.15), (1.0, 0.09), (1.2, 0.15), (1.2, 0.08), (1.4, 0.15)}
+
+
+def test_summary_pairs_each_learned_walk_with_the_baselines_at_its_own_lift():
+    walks = [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),
+             walk_row(2, "cycloid", 1000.0, 0.09), walk_row(3, "straight", 1100.0, 0.09),
+             walk_row(4, "cycloid", 1000.0, 0.08), walk_row(5, "straight", 700.0, 0.08),
+             walk_row(6, "cycloid", 1600.0, 0.15), walk_row(7, "straight", 2000.0, 0.15)]
+    rows = cmp.comparison_rows(walks, paper_lift=0.15)
+    summary = {r["set"]: r for r in t5.summary_rows(rows)}
+    matched, paper = summary["same_lift"], summary["paper"]
+    assert matched["n_valid"] == 2 and matched["D_t_pct_mean"] == pytest.approx((10.0 - 100 * 100 / 700) / 2)
+    assert matched["cycloid_energy_kJ_mean"] == pytest.approx(1.0)  # one matched cycloid walk per seed
+    assert matched["straight_energy_kJ_mean"] == pytest.approx(0.9)
+    assert paper["D_t_pct_mean"] == pytest.approx((100 * 700 / 1600 + 100 * 800 / 1600) / 2)
+    assert paper["cycloid_energy_kJ_mean"] == pytest.approx(1.6)
+    assert paper["D_t_electrical_pct_mean"] == pytest.approx(paper["D_t_pct_mean"])  # electrical = 3.5 × E here
+    md = t5.summary_markdown(list(summary.values()), "same_lift")
+    assert "2 of 2" in md and "D_t on the electrical energy" in md

@@ -130,14 +130,17 @@ def test_too_short_rollout_raises():
         extract_trajectory(tr, DT, 1.0)
 
 
-def _zero_actor_file(path):
-    """An actor file in the trainer's format whose policy outputs 0: the residual env's trot controller."""
+def _zero_actor_file(path, **env_changes):
+    """An actor file in the trainer's format whose policy outputs 0: the env's trot controller (residual mode
+    by default; `env_changes` e.g. action_mode="foot", target_speed_range=(1.0, 1.4))."""
     torch = pytest.importorskip("torch")
     from cyberdog.envs.cyberdog_env import observation_typical_magnitude
     from cyberdog.rl.networks import TanhActor
 
     cfg = C.ExperimentConfig()
-    actor = TanhActor(len(observation_typical_magnitude()), 12, (8,), observation_typical_magnitude())
+    cfg = C.replace(cfg, env=C.replace(cfg.env, **env_changes))
+    scale = observation_typical_magnitude(cfg.env)
+    actor = TanhActor(len(scale), 12, (8,), scale)
     with torch.no_grad():
         actor.net[-1].weight.zero_()
         actor.net[-1].bias.zero_()
@@ -156,14 +159,31 @@ def test_evaluate_extract_from_a_policy(tmp_path, capsys):
     # 2.6 s: a few cycles after the 1 s speed ramp, while the speed integral still overshoots by 10-20 %
     assert evaluate.main(["extract", "--policy", str(tmp_path), "--rollout-duration", "2.6",
                           "--speed-tolerance", "0.3", "--out", str(out)]) == 0
-    traj = SampledTrajectory.load(out / "learned" / "seed0.json")
+    traj = SampledTrajectory.load(out / "learned" / "seed0_1mps.json")
     p = traj.provenance
     assert p["policy"] == str(actor) and p["seed"] == 0 and p["speed_command_mps"] == 1.0
     assert abs(p["cycle_speed_mps"] - 1.0) <= 0.3 and p["speed_tolerance"] == 0.3
     assert 0.07 < traj.lift_height < 0.13  # the env's trot lifts 0.10 m
-    rows = json.loads((out / "learned" / "seed0_cycles.json").read_text())
+    rows = json.loads((out / "learned" / "seed0_1mps_cycles.json").read_text())
     chosen = [r for r in rows if r["chosen"]]
     assert len(chosen) == 1 and chosen[0]["energy_J"] == pytest.approx(p["cycle_energy_J"])
     assert min(r["energy_J"] for r in rows if r["valid"] and r["speed_ok"]) == pytest.approx(p["cycle_energy_J"])
     assert (out / "figure7_learned_trajectory.png").exists()
     assert "cycle" in capsys.readouterr().out
+
+
+def test_evaluate_extracts_the_commanded_path_of_a_speed_range_policy_at_each_speed(tmp_path, capsys):
+    import evaluate
+    from cyberdog.core.commanded_path import CommandedPath
+
+    _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
+    out = tmp_path / "ex"
+    assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.0", "1.2", "--rollout-duration",
+                          "3.0", "--speed-tolerance", "0.3", "--out", str(out)]) == 0
+    for v in (1.0, 1.2):
+        path = CommandedPath.load(out / "learned" / f"seed0_{v:g}mps.json")
+        assert path.speed == v and path.provenance["path"] == "commanded" and path.provenance["cycle"] == "mean"
+        assert np.all(path.offsets.offsets == 0)  # a zero policy commands the plain trot
+        assert path.own_lift_height() == pytest.approx(0.10, abs=1e-3)  # the env's trot lifts 0.10 m
+    assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.6", "--out", str(tmp_path / "x")]) == 2
+    assert "outside the policy's training range" in capsys.readouterr().err

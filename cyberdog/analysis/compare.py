@@ -12,6 +12,16 @@ Two sets of baselines, because the lift height H alone changes the energy a lot:
   saving when only the shape differs).
 The learned trajectory is always replayed at its own recorded H (its provenance says which).
 
+A learned trajectory is either a `CommandedPath` (what a foot-mode policy commanded: the base trot path plus
+the policy's per-leg shift, recorded at one speed and replayed only at that speed, with no policy in the
+loop) or a `SampledTrajectory` (a single x–z path, e.g. the measured one, replayed at every speed by
+rescaling S). `learned` maps a label (the policy's seed) to one trajectory, or to {speed: trajectory}.
+Its "own H" is a CommandedPath's `own_lift_height` (mean over the legs) or a SampledTrajectory's peak z.
+
+Every walk also reports what Eq. (7) does not see: the electrical energy (copper loss, friction, driver
+efficiency; `cyberdog.core.energy`), the positive mechanical work, and the foot slip per cycle; the learned
+walks get D_t on the electrical energy too.
+
 A walk that falls, or whose mean speed over its last half misses the command by more than 5 %, is reported
 with its status and left out of D_t and of the across-seed means (mean and 95 % Student-t interval,
 `cyberdog.analysis.stats.mean_ci`). Walks run in parallel processes (spawn; one PyBullet client each).
@@ -31,22 +41,18 @@ from cyberdog.analysis.stats import mean_ci
 from cyberdog.analysis.walk import walk
 from cyberdog.config import WalkConfig
 from cyberdog.core import energy as en
+from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.trajectories import SampledTrajectory
+
+LearnedPath = SampledTrajectory | CommandedPath
 
 PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, Table 5
 BASELINES = ("cycloid", "straight")
 SETS = ("paper", "same_lift")
 LIFT_DECIMALS = 4  # lift heights equal to 0.1 mm share their baseline walks
-# the paper's Table 5, kJ over the 10 s walk, for reference beside ours
-PAPER_TABLE5_KJ = {
-    "learned": (1.6236, 1.8152, 2.8261),
-    "cycloid": (1.8451, 2.0489, 3.1021),
-    "straight": (2.3571, 2.7571, 3.2871),
-    "decrement_pct": (12.0, 11.0, 9.0),
-}
 COLUMNS = ["set", "trajectory", "seed", "lift_height_m", "speed_command_mps", "mean_speed_mps", "status",
-           "energy_kJ", "energy_per_100m_kJ", "cost_of_transport", "D_t_pct", "D_t_per_100m_pct",
-           "E_min_trajectory"]
+           "energy_kJ", "energy_per_100m_kJ", "cost_of_transport", "electrical_energy_J", "positive_work_J",
+           "foot_slip_mm_per_cycle", "D_t_pct", "D_t_per_100m_pct", "D_t_electrical_pct", "E_min_trajectory"]
 
 
 @dataclass(frozen=True)
@@ -60,12 +66,25 @@ class WalkJob:
     lift_height: float  # m
     cfg: WalkConfig
     duration: float  # s
-    path: SampledTrajectory | None = None  # the learned path (None: the baseline named by cfg.gait)
+    path: LearnedPath | None = None  # the learned path (None: the baseline named by cfg.gait)
 
 
-def learned_lift_height(traj: SampledTrajectory) -> float:
-    """m, the lift height the learned trajectory was recorded with (its peak z)."""
+def learned_lift_height(traj: LearnedPath) -> float:
+    """m, the learned trajectory's own lift height: a commanded path's mean over its legs, a sampled
+    trajectory's recorded peak z."""
+    if isinstance(traj, CommandedPath):
+        return traj.own_lift_height()
     return float(traj.lift_height)
+
+
+def learned_at(entry, speed: float) -> LearnedPath | None:
+    """The learned trajectory of one label to replay at `speed`: a {speed: path} entry's path for that speed,
+    a commanded path only at its own speed, a sampled trajectory at any speed; None = no walk."""
+    if isinstance(entry, dict):
+        return next((t for v, t in entry.items() if abs(float(v) - speed) < 1e-6), None)
+    if isinstance(entry, CommandedPath):
+        return entry if abs(entry.speed - speed) < 1e-6 else None
+    return entry
 
 
 def pinned_lift(traj: SampledTrajectory, lift_height: float) -> SampledTrajectory:
@@ -82,19 +101,23 @@ def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: fl
     return dataclasses.replace(base, gait=gait)
 
 
-def comparison_jobs(cfg: WalkConfig, learned: dict[str, SampledTrajectory], speeds=PAPER_SPEEDS,
-                    duration: float = 10.0, same_lift: bool = True) -> list[WalkJob]:
-    """Every walk of the comparison, each baseline walk once per distinct lift height."""
+def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duration: float = 10.0,
+                    same_lift: bool = True) -> list[WalkJob]:
+    """Every walk of the comparison, each baseline walk once per speed and distinct lift height."""
     jobs: list[WalkJob] = []
-    lifts = [round(cfg.gait.lift_height, LIFT_DECIMALS)]
-    if same_lift:
-        lifts += [round(learned_lift_height(t), LIFT_DECIMALS) for t in learned.values()]
-    lifts = list(dict.fromkeys(lifts))
     for v in speeds:
-        for label, traj in learned.items():
+        here = {label: t for label, e in learned.items() if (t := learned_at(e, v)) is not None}
+        lifts = [round(cfg.gait.lift_height, LIFT_DECIMALS)]
+        if same_lift:
+            lifts += [round(learned_lift_height(t), LIFT_DECIMALS) for t in here.values()]
+        lifts = list(dict.fromkeys(lifts))
+        for label, traj in here.items():
             h = learned_lift_height(traj)
-            jobs.append(WalkJob(len(jobs), "learned", label, float(v), h, walk_config(cfg, "learned", v, h),
-                                duration, traj))
+            if isinstance(traj, CommandedPath):  # the base path at its own H; the offsets come with the walk
+                job_cfg = dataclasses.replace(cfg, gait=dataclasses.replace(traj.gait, speed=float(v)))
+            else:
+                job_cfg = walk_config(cfg, "learned", v, h)
+            jobs.append(WalkJob(len(jobs), "learned", label, float(v), h, job_cfg, duration, traj))
         for name in BASELINES:
             for h in lifts:
                 jobs.append(WalkJob(len(jobs), name, "", float(v), h, walk_config(cfg, name, v, h), duration))
@@ -104,7 +127,10 @@ def comparison_jobs(cfg: WalkConfig, learned: dict[str, SampledTrajectory], spee
 def run_walk_job(job: WalkJob) -> dict:
     """One walk → a row with its metrics and total joint power trace (runs in a worker process)."""
     t0 = time.perf_counter()
-    r = walk(job.cfg, job.duration, job.path, record=True)
+    if isinstance(job.path, CommandedPath):
+        r = walk(job.cfg, job.duration, None, record=True, foot_offsets=job.path.offsets)
+    else:
+        r = walk(job.cfg, job.duration, job.path, record=True)
     total_power = r.traces["power"].sum(axis=1)  # W, Σ_ij |τ_ij·θ̇_ij|, Eq. (7)'s integrand
     if r.fell:
         status = f"fell at {r.duration:.2f} s"
@@ -121,6 +147,7 @@ def run_walk_job(job: WalkJob) -> dict:
         "duration_s": r.duration, "distance_m": r.distance, "energy_J": r.energy,
         "energy_kJ": r.energy / 1e3, "energy_per_100m_kJ": r.energy_per_100m / 1e3,
         "cost_of_transport": r.cost_of_transport, "electrical_energy_J": r.electrical_energy,
+        "positive_work_J": r.positive_work, "foot_slip_mm_per_cycle": 1e3 * r.foot_slip_per_cycle,
         "peak_torque_Nm": r.peak_torque, "lateral_drift_m": r.lateral_drift,
         "physics_dt_s": job.cfg.sim.physics_dt, "wall_s": time.perf_counter() - t0,
         "power_W": total_power,
@@ -200,13 +227,18 @@ def comparison_rows(walks: list[dict], paper_lift: float) -> list[dict]:
                 d = reduction(cheap["energy_J"], lw["energy_J"]) if cheap and lw["valid"] else float("nan")
                 d100 = (reduction(cheap100["energy_per_100m_kJ"], lw["energy_per_100m_kJ"])
                         if cheap100 and lw["valid"] else float("nan"))
+                cheap_el = min(valid, key=lambda w: w["electrical_energy_J"]) if valid else None
+                d_el = (reduction(cheap_el["electrical_energy_J"], lw["electrical_energy_J"])
+                        if cheap_el and lw["valid"] else float("nan"))
                 out.append({**_public(lw), "set": set_name, "D_t_pct": d, "D_t_per_100m_pct": d100,
+                            "D_t_electrical_pct": d_el,
                             "E_min_trajectory": cheap["label"] if cheap else "",
                             "E_min_kJ": cheap["energy_kJ"] if cheap else float("nan")})
                 for w in base:
                     if not any(o["set"] == set_name and o["walk_id"] == w["walk_id"] for o in out):
                         out.append({**_public(w), "set": set_name, "D_t_pct": float("nan"),
-                                    "D_t_per_100m_pct": float("nan"), "E_min_trajectory": "",
+                                    "D_t_per_100m_pct": float("nan"), "D_t_electrical_pct": float("nan"),
+                                    "E_min_trajectory": "",
                                     "E_min_kJ": float("nan")})
     order = {"learned": 0, "cycloid": 1, "straight": 2}
     out.sort(key=lambda r: (SETS.index(r["set"]),
@@ -233,116 +265,16 @@ def seed_means(rows: list[dict]) -> list[dict]:
             e, e_ci = mean_ci([r["energy_kJ"] for r in ok])
             d, d_ci = mean_ci([r["D_t_pct"] for r in ok])
             d100, d100_ci = mean_ci([r["D_t_per_100m_pct"] for r in ok])
+            d_el, d_el_ci = mean_ci([r["D_t_electrical_pct"] for r in ok])
+            h, h_ci = mean_ci([r["lift_height_m"] for r in ok])
+            slip, slip_ci = mean_ci([r["foot_slip_mm_per_cycle"] for r in ok])
             out.append({"set": set_name, "speed_command_mps": v, "n_seeds": len(group), "n_valid": len(ok),
                         "energy_kJ_mean": e, "energy_kJ_ci95": e_ci, "D_t_pct_mean": d, "D_t_pct_ci95": d_ci,
-                        "D_t_per_100m_pct_mean": d100, "D_t_per_100m_pct_ci95": d100_ci})
+                        "D_t_per_100m_pct_mean": d100, "D_t_per_100m_pct_ci95": d100_ci,
+                        "D_t_electrical_pct_mean": d_el, "D_t_electrical_pct_ci95": d_el_ci,
+                        "lift_height_m_mean": h, "lift_height_m_ci95": h_ci,
+                        "foot_slip_mm_per_cycle_mean": slip, "foot_slip_mm_per_cycle_ci95": slip_ci})
     return out
-
-
-def table5_rows(rows: list[dict]) -> list[dict]:
-    """Table 5, machine-readable: one row per (set, trajectory, seed, speed) with E (kJ) and status, plus a
-    "decrement" row per (set, seed, speed) with D_t (%) by Eq. (12) on those E."""
-    out = []
-    for r in rows:
-        out.append({"set": r["set"], "row": r["trajectory"], "label": r["label"], "seed": r["seed"],
-                    "lift_height_m": r["lift_height_m"], "speed_mps": r["speed_command_mps"],
-                    "energy_kJ": r["energy_kJ"], "valid": r["valid"], "status": r["status"],
-                    "D_t_pct": r["D_t_pct"], "D_t_per_100m_pct": r["D_t_per_100m_pct"],
-                    "E_min_trajectory": r["E_min_trajectory"]})
-    return out
-
-
-def _cell(r: dict) -> str:
-    if r["fell"]:
-        return f"fell ({r['duration_s']:.1f} s)"
-    txt = f"{r['energy_kJ']:.4f}"
-    return txt if r["speed_ok"] else f"{txt} (miss: {r['mean_speed_mps']:.2f} m/s)"
-
-
-def _mean_cell(m: dict) -> str:
-    if not math.isfinite(m["energy_kJ_mean"]):
-        return f"no valid walk (n = {m['n_seeds']})"
-    ci = f" ± {m['energy_kJ_ci95']:.4f}" if math.isfinite(m["energy_kJ_ci95"]) else ""
-    return f"{m['energy_kJ_mean']:.4f}{ci} (n = {m['n_valid']} of {m['n_seeds']})"
-
-
-def _pct(x: float, ci: float | None = None) -> str:
-    if not math.isfinite(x):
-        return "–"
-    return f"{x:.1f} %" + (f" ± {ci:.1f}" if ci is not None and math.isfinite(ci) else "")
-
-
-def table5_markdown(rows: list[dict], means: list[dict] | None = None) -> str:
-    """Table 5 in the paper's layout (energy in kJ over the walk; columns = speeds), both sets, then the
-    paper's own numbers for reference. Cells of walks that fell or missed the speed say so."""
-    speeds = list(dict.fromkeys(r["speed_command_mps"] for r in rows))
-    lines = ["| Energy (kJ) over the walk | " + " | ".join(f"{v:g} m/s" for v in speeds) + " |",
-             "|---|" + "---|" * len(speeds)]
-    means = means or []
-    all_seeds = list(dict.fromkeys(r["seed"] for r in rows if r["trajectory"] == "learned"))
-
-    def line(label: str, cells: list[str]) -> None:
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-
-    def pick(group: list[dict], traj: str, seed: str, v: float) -> dict | None:
-        return next((r for r in group if r["trajectory"] == traj and r["speed_command_mps"] == v
-                     and (traj != "learned" or r["seed"] == seed)), None)
-
-    for set_name in SETS:
-        set_rows = [r for r in rows if r["set"] == set_name]
-        if not set_rows:
-            continue
-        # groups of rows sharing the baselines' lift height (one group in the paper set)
-        lifts = list(dict.fromkeys(round(r["lift_height_m"], LIFT_DECIMALS) for r in set_rows
-                                   if r["trajectory"] in BASELINES))
-        for lift in lifts:
-            seeds = [s for s in all_seeds if any(r["trajectory"] == "learned" and r["seed"] == s
-                                                 for r in set_rows)]
-            if set_name == "same_lift":
-                seeds = [s for s in seeds if any(r["trajectory"] == "learned" and r["seed"] == s
-                                                 and _same(r["lift_height_m"], lift) for r in set_rows)]
-                line(f"*control: baselines at the learned lift height H = {lift:.3f} m*", [""] * len(speeds))
-            base = [r for r in set_rows if r["trajectory"] in BASELINES and _same(r["lift_height_m"], lift)]
-            learned = [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds]
-            group = base + learned
-            for s in seeds:
-                lr = [pick(group, "learned", s, v) for v in speeds]
-                h = next(r["lift_height_m"] for r in lr if r)
-                tag = f" [{s}]" if s else ""
-                line(f"Learned trajectory (H = {h:.3f} m){tag}", [_cell(r) if r else "" for r in lr])
-            for name in BASELINES:
-                br = [pick(group, name, "", v) for v in speeds]
-                first = next((r for r in br if r), None)
-                if first is None:
-                    continue
-                shape = first["label"].partition("(")[2].rstrip(")")
-                nice = "Composite cycloid" if name == "cycloid" else "Straight line" + (f", {shape}" if shape else "")
-                line(f"{nice} (H = {first['lift_height_m']:.3f} m)", [_cell(r) if r else "" for r in br])
-            for s in seeds:
-                lr = [pick(group, "learned", s, v) for v in speeds]
-                tag = f" [{s}]" if len(seeds) > 1 else ""
-                line(f"Decrement D_t, Eq. (12){tag}", [_pct(r["D_t_pct"]) if r else "" for r in lr])
-            if len(seeds) > 1 and set_name == "paper":
-                ms = [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None)
-                      for v in speeds]
-                line(f"Learned, mean ± 95 % CI over {len(seeds)} seeds",
-                     [_mean_cell(m) if m else "" for m in ms])
-                line("Decrement D_t, mean ± 95 % CI", [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else ""
-                                                       for m in ms])
-        if len(all_seeds) > 1 and set_name == "same_lift":
-            ms = [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None)
-                  for v in speeds]
-            line("Decrement D_t at the same lift, mean ± 95 % CI",
-                 [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else "" for m in ms])
-    p = PAPER_TABLE5_KJ
-    idx = [PAPER_SPEEDS.index(v) if v in PAPER_SPEEDS else None for v in speeds]
-    if any(i is not None for i in idx):
-        for key, label in (("learned", "simulation trajectory"), ("cycloid", "composite cycloid"),
-                           ("straight", "straight line")):
-            line(f"*paper, Table 5: {label}*", [f"{p[key][i]:.4f}" if i is not None else "" for i in idx])
-        line("*paper, Table 5: decrement*", [f"{p['decrement_pct'][i]:.0f} %" if i is not None else ""
-                                             for i in idx])
-    return "\n".join(lines)
 
 
 def two_cycle_window(n: int, dt: float, period: float, cycles: int = 2) -> slice:
@@ -353,6 +285,6 @@ def two_cycle_window(n: int, dt: float, period: float, cycles: int = 2) -> slice
     return slice(start, last)
 
 
-__all__ = ["BASELINES", "COLUMNS", "PAPER_SPEEDS", "PAPER_TABLE5_KJ", "SETS", "WalkJob", "comparison_jobs",
-           "comparison_rows", "learned_lift_height", "pinned_lift", "reduction", "run_jobs", "run_walk_job",
-           "seed_means", "table5_markdown", "table5_rows", "two_cycle_window", "walk_config"]
+__all__ = ["BASELINES", "COLUMNS", "LearnedPath", "PAPER_SPEEDS", "SETS", "WalkJob", "comparison_jobs",
+           "comparison_rows", "learned_at", "learned_lift_height", "pinned_lift", "reduction", "run_jobs",
+           "run_walk_job", "seed_means", "two_cycle_window", "walk_config"]

@@ -36,6 +36,8 @@ from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
 from cyberdog.core import energy as en
+from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import FootTrajectory, SampledTrajectory
 
 PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, Section 4.2
@@ -60,6 +62,7 @@ class _Job:
     cfg: WalkConfig
     hardware: HardwareConfig
     distance_m: float
+    foot_offsets: FootOffsetPath | None = None  # a commanded path's shift of the foot targets
 
 
 def time_cap(distance_m: float, speed: float, cfg: WalkConfig) -> float:
@@ -79,7 +82,7 @@ def _run_job(job: _Job) -> dict:
     t0 = time.perf_counter()
     hw = job.hardware if job.mode == "hardware" else None
     r = walk(job.cfg, time_cap(job.distance_m, job.speed, job.cfg), job.trajectory, hardware=hw,
-             distance=job.distance_m)
+             distance=job.distance_m, foot_offsets=job.foot_offsets)
     e_cfg = job.cfg.energy
     ok = r.distance > 0 and r.electrical_energy > 0
     pct = en.battery_percent_used(r.electrical_energy, e_cfg)
@@ -108,14 +111,17 @@ def _check_picklable(name: str, trajectory) -> None:
                          "SampledTrajectory or a name in TRAJECTORY_NAMES") from None
 
 
-def run_prototype(trajectories: dict[str, FootTrajectory | None] | None = None,
+def run_prototype(trajectories: dict | None = None,
                   speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
-                  base_cfg: WalkConfig | None = None, log=print) -> list[dict]:
+                  base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
 
     trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
-        ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own. Default: cycloid and straight.
+        ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own, or {speed: CommandedPath} (a
+        learned path per speed, replayed with its own base trot). Default: cycloid and straight.
+    lift_heights: {speed: m}, the lift height of the FootTrajectory and named walks at that speed (e.g. the
+        learned path's own, for a matched comparison); default `base_cfg.gait.lift_height`.
     modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
@@ -136,11 +142,28 @@ def run_prototype(trajectories: dict[str, FootTrajectory | None] | None = None,
     if not isinstance(hardware, HardwareConfig):
         raise TypeError(f"hardware must be a HardwareConfig, got {type(hardware).__name__}")
     for name, traj in trajectories.items():
+        if isinstance(traj, dict):
+            missing = [v for v in speeds if not any(abs(v - u) < 1e-6 for u in traj)]
+            if missing or not all(isinstance(t, CommandedPath) for t in traj.values()):
+                raise ValueError(f"trajectory {name!r}: a {{speed: CommandedPath}} entry needs a path for every "
+                                 f"speed (missing {missing})")
+            continue
         if traj is not None and not isinstance(traj, FootTrajectory):
-            raise TypeError(f"trajectory {name!r} must be a FootTrajectory or None, got {type(traj).__name__}")
+            raise TypeError(f"trajectory {name!r} must be a FootTrajectory, None or {{speed: CommandedPath}}, "
+                            f"got {type(traj).__name__}")
         _check_picklable(name, traj)
-    jobs = [_Job(name, traj, v, mode, _job_config(base_cfg, name, traj, v), hardware, float(distance_m))
-            for name, traj in trajectories.items() for v in speeds for mode in modes]
+
+    def job(name, traj, v: float, mode: str) -> _Job:
+        if isinstance(traj, dict):
+            path = next(t for u, t in traj.items() if abs(v - u) < 1e-6)
+            cfg = dataclasses.replace(base_cfg, gait=dataclasses.replace(path.gait, speed=v))
+            return _Job(name, None, v, mode, cfg, hardware, float(distance_m), path.offsets)
+        cfg = _job_config(base_cfg, name, traj, v)
+        if lift_heights is not None and v in lift_heights:
+            cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lift_heights[v])))
+        return _Job(name, traj, v, mode, cfg, hardware, float(distance_m))
+
+    jobs = [job(name, traj, v, mode) for name, traj in trajectories.items() for v in speeds for mode in modes]
     workers = min(len(jobs), os.cpu_count() or 1) if workers is None else int(workers)
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers!r}")

@@ -21,6 +21,7 @@ from cyberdog.analysis.hardware import (HardwareSensing, TorqueDelay, draw_mass_
 from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import FootTrajectory
 from cyberdog.sim.robot import Robot
 
@@ -28,6 +29,7 @@ from cyberdog.sim.robot import Robot
 FALL_HEIGHT = EnvConfig.fall_height  # m, body centre below this
 FALL_TILT = np.deg2rad(EnvConfig.fall_tilt_deg)  # rad, |roll| or |pitch| above this
 CONTACT_CHECK_EVERY = 10  # physics steps between checks of which links touch the ground
+SLIP_SAMPLE_EVERY = 5  # physics steps between samples of the feet's positions and contacts (foot slip)
 
 
 @dataclass
@@ -47,6 +49,8 @@ class WalkResult:
     energy: float  # J, Eq. (7) Σ∫|τ·ω|dt over the walk
     energy_per_joint: np.ndarray  # (12,) J
     electrical_energy: float  # J, with copper loss, friction loss and driver efficiency
+    positive_work: float  # J, Σ∫max(τ·ω, 0)dt: the work the motors put in (Eq. 7 also counts braking)
+    foot_slip_per_cycle: float  # m, mean distance a foot slides on the ground per gait cycle
     cost_of_transport: float  # E / (m g d); nan when the robot made no forward progress
     peak_torque: float  # N·m, max |τ| over joints and time
     peak_joint_speed: float  # rad/s
@@ -78,7 +82,8 @@ class WalkResult:
             "height_max_m": self.height_max, "max_roll_rad": self.max_roll, "max_pitch_rad": self.max_pitch,
             "fell": self.fell, "duration_s": self.duration, "distance_m": self.distance,
             "energy_J": self.energy, "energy_per_100m_kJ": self.energy_per_100m / 1e3,
-            "electrical_energy_J": self.electrical_energy, "cost_of_transport": self.cost_of_transport,
+            "electrical_energy_J": self.electrical_energy, "positive_work_J": self.positive_work,
+            "foot_slip_mm_per_cycle": 1e3 * self.foot_slip_per_cycle, "cost_of_transport": self.cost_of_transport,
             "peak_torque_Nm": self.peak_torque, "peak_joint_speed_radps": self.peak_joint_speed,
             "non_foot_contacts": ",".join(self.non_foot_contacts), "speed_ok": self.speed_ok,
         }
@@ -86,11 +91,13 @@ class WalkResult:
 
 def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | None = None,
          robot: Robot | None = None, record: bool = False, hardware: HardwareConfig | None = None,
-         distance: float | None = None) -> WalkResult:
+         distance: float | None = None, foot_offsets: FootOffsetPath | None = None) -> WalkResult:
     """Walk at `cfg.gait.speed` with the trot controller; reuse `robot` if given.
 
     duration: s; the walk's length, or with `distance` its time cap.
     distance: m of forward travel (body x from the start) after which the walk ends; None = a timed walk.
+    foot_offsets: a periodic shift of each foot target over its phase (a learned path's, see
+        `cyberdog.core.foot_offsets`) added to `trajectory`'s targets; None = the plain trajectory.
     hardware: the hardware-like robot (HardwareConfig; None or HardwareConfig() = ideal). With friction on,
         a given `robot` must have been built with `hardware_walk_config(cfg, hardware).actuator`; its mass is
         set to the hardware's draw for the walk.
@@ -110,7 +117,7 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
     try:
         if hardware is not None:
             robot.set_mass_scale(draw_mass_scale(hardware))
-        return _walk(cfg, duration, TrotController(cfg, trajectory), robot, record, hardware, distance)
+        return _walk(cfg, duration, TrotController(cfg, trajectory, foot_offsets), robot, record, hardware, distance)
     finally:
         if own_robot:
             robot.close()
@@ -135,6 +142,8 @@ def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, 
     vx_log, rpy_log, z_log = np.zeros(n_steps), np.zeros((n_steps, 3)), np.zeros(n_steps)
     start = robot.read_state().base_position.copy()
     bad_contacts: set[str] = set()
+    slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_EVERY steps
+    slip_contacts: list[np.ndarray] = []
     fell = False
     steps_done = 0
     goal_x = None if distance is None else start[0] + distance
@@ -155,6 +164,9 @@ def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, 
             contact_log[k] = robot.foot_contacts()
         if k % CONTACT_CHECK_EVERY == 0:
             bad_contacts |= robot.ground_contact_links() - foot_links
+        if k % SLIP_SAMPLE_EVERY == 0:
+            slip_xy.append(robot.foot_positions_world()[:, :2])
+            slip_contacts.append(robot.foot_contacts())
         steps_done = k + 1
         if s.base_position[2] < FALL_HEIGHT or np.max(np.abs(s.base_rpy[:2])) > FALL_TILT:
             fell = True
@@ -166,6 +178,8 @@ def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, 
     travelled = float(end[0] - start[0])  # m, forward
     e_elec = float(np.sum(en.electrical_power(tau_log, dq_log, cfg.actuator, cfg.energy)) * dt)
     mass = cfg.robot.total_mass * robot.mass_scale  # kg, what the robot weighed in this walk
+    slip = en.foot_slip(np.reshape(slip_xy, (-1, 4, 2)), np.reshape(slip_contacts, (-1, 4)))
+    cycles = n * dt / cfg.gait.period
     result = WalkResult(
         speed_command=ctrl.speed, duration=n * dt, fell=fell,
         mean_speed=float(np.mean(vx_log[n // 2:])) if n else 0.0,
@@ -173,6 +187,8 @@ def _walk(cfg: WalkConfig, duration: float, ctrl: TrotController, robot: Robot, 
         height_min=float(z_log.min()), height_max=float(z_log.max()),
         max_roll=float(np.max(np.abs(rpy_log[:, 0]))), max_pitch=float(np.max(np.abs(rpy_log[:, 1]))),
         distance=travelled, energy=float(e_joint.sum()), energy_per_joint=e_joint, electrical_energy=e_elec,
+        positive_work=en.positive_work(tau_log, dq_log, dt),
+        foot_slip_per_cycle=float(slip.mean() / cycles) if cycles > 0 else float("nan"),
         cost_of_transport=(en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, travelled)
                            if travelled > 0 else float("nan")),  # undefined without forward travel
         peak_torque=float(np.max(np.abs(tau_log))), peak_joint_speed=float(np.max(np.abs(dq_log))),

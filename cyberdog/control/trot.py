@@ -26,6 +26,7 @@ import numpy as np
 
 from cyberdog.config import WalkConfig
 from cyberdog.core import kinematics as kin
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
 from cyberdog.core.trajectories import FootTrajectory, make_trajectory, point_evaluator
@@ -80,7 +81,8 @@ class TrotController:
     checks the torque against them).
     """
 
-    def __init__(self, cfg: WalkConfig, trajectory: FootTrajectory | None = None):
+    def __init__(self, cfg: WalkConfig, trajectory: FootTrajectory | None = None,
+                 foot_offset_path: FootOffsetPath | None = None):
         self.cfg = cfg
         self.robot = cfg.robot
         self.gait = cfg.gait
@@ -93,12 +95,19 @@ class TrotController:
         self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
         self.foot_offsets: list[tuple[float, float, float]] | None = None  # m, see set_foot_offsets
         self.foot_offset_rates: list[tuple[float, float, float]] | None = None  # m/s
+        # a periodic shift of each foot target over its phase (a learned trajectory's), on top of the above
+        self.foot_offset_path = foot_offset_path
+        # what the last call of the 1 kHz path commanded: foot targets (4 × (x, y, z)) m, leg frame, and the
+        # offsets in them (None: unshifted); kept for recording, not used by the controller
+        self.last_foot_targets: list[tuple[float, float, float]] | None = None
+        self.last_foot_offsets: list[tuple[float, float, float]] | None = None
         self._point_for = (None, None)  # (trajectory, its float evaluator or None), see _foot_points
 
     def reset(self) -> None:
         self.pid.reset()
         self.speed_correction = 0.0
         self.foot_offsets = self.foot_offset_rates = None
+        self.last_foot_targets = self.last_foot_offsets = None
 
     def set_foot_offsets(self, offsets: np.ndarray | None, rates: np.ndarray | None = None) -> None:
         """Shift each foot target by `offsets` (4, 3), m, leg frame (x forward, y left, z up), legs LF, RF, LH,
@@ -180,11 +189,20 @@ class TrotController:
         feet = [(x, side * l1 + dy, z - self.stand_height) for (x, z, _, _), side in zip(points, LEG_SIDE)]
         foot_vels = [(vx, 0.0, vz) for _, _, vx, vz in points]
         plain_feet = feet
-        if self.foot_offsets is not None:
-            feet = [(x + ox, y + oy, z + oz) for (x, y, z), (ox, oy, oz) in zip(feet, self.foot_offsets)]
-            if self.foot_offset_rates is not None:
-                foot_vels = [(vx + rx, vy + ry, vz + rz)
-                             for (vx, vy, vz), (rx, ry, rz) in zip(foot_vels, self.foot_offset_rates)]
+        offsets, rates = self.foot_offsets, self.foot_offset_rates
+        if self.foot_offset_path is not None:
+            path_offsets, path_rates = self.foot_offset_path.at(phases)
+            if offsets is None:
+                offsets, rates = path_offsets, path_rates
+            else:  # both: the sum (a policy acting on a learned path)
+                offsets = [(a + d, b + e, c + f) for (a, b, c), (d, e, f) in zip(offsets, path_offsets)]
+                rates = path_rates if rates is None else [
+                    (a + d, b + e, c + f) for (a, b, c), (d, e, f) in zip(rates, path_rates)]
+        if offsets is not None:
+            feet = [(x + ox, y + oy, z + oz) for (x, y, z), (ox, oy, oz) in zip(feet, offsets)]
+            if rates is not None:
+                foot_vels = [(vx + rx, vy + ry, vz + rz) for (vx, vy, vz), (rx, ry, rz) in zip(foot_vels, rates)]
+        self.last_foot_targets, self.last_foot_offsets = feet, offsets
         q_t, dq_t = [], []
         for leg, ((x, y, z), (vx, vy, vz), side) in enumerate(zip(feet, foot_vels, LEG_SIDE)):
             try:

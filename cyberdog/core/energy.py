@@ -57,6 +57,28 @@ def joint_energy(tau: Any, omega: Any, dt: float) -> np.ndarray:
     return mechanical_power(tau, omega).reshape(-1, N_JOINTS).sum(axis=0) * dt
 
 
+def positive_work(tau: Any, omega: Any, dt: float) -> float:
+    """J, Σ_ij ∫ max(τ·ω, 0) dt: the work the motors put into the robot (Eq. 7 also counts braking, τ·ω < 0,
+    as spent), samples (n, 12) every dt s."""
+    _check_dt(dt)
+    tau, omega = _joint_arrays(tau, omega)
+    return float(np.maximum(tau * omega, 0.0).sum() * dt)
+
+
+def foot_slip(foot_xy: Any, contacts: Any) -> np.ndarray:
+    """(4,) m: per foot, the horizontal distance it slid while on the ground, from samples of the foot
+    positions foot_xy (n, 4, 2) m (world x, y) and contacts (n, 4) bool; a move between two samples counts
+    when the foot touched the ground at both. Eq. (7) does not see the energy lost in slip (friction work)."""
+    xy = np.asarray(foot_xy, dtype=float)
+    c = np.asarray(contacts, dtype=bool)
+    if xy.ndim != 3 or xy.shape[1:] != (4, 2) or c.shape != xy.shape[:2]:
+        raise ValueError(f"foot_xy must be (n, 4, 2) and contacts (n, 4), got {xy.shape}, {c.shape}")
+    if len(xy) < 2:
+        return np.zeros(4)
+    step = np.linalg.norm(np.diff(xy, axis=0), axis=-1)  # (n − 1, 4)
+    return (step * (c[1:] & c[:-1])).sum(axis=0)
+
+
 def per_leg(joint_values: Any) -> np.ndarray:
     """(..., 4) sums over each leg's 3 joints (LF, RF, LH, RH) of (..., 12) values."""
     v = np.asarray(joint_values, dtype=float)

@@ -77,7 +77,9 @@ class Rollout:
     energy: float  # J, Eq. (7) over the whole rollout
     score: float  # sum of the env's rewards (the reward the env was built with)
     physics_dt: float  # s
-    traces: dict  # t, q, dq, tau (applied motor torque), contacts (4 feet), base_position; (n, ...) arrays
+    traces: dict  # t, q, dq, tau (applied motor torque), contacts (4 feet), base_position; (n, ...) arrays;
+    # foot_targets, foot_offsets (n, 4, 3) m: the trot controller's commanded foot targets and the policy's
+    # shift in them (leg frame; action_mode "foot"; zeros without a shift, nan targets in torque mode)
 
     @property
     def energy_per_metre(self) -> float:
@@ -96,6 +98,10 @@ class Rollout:
                 "energy_per_m_J": self.energy_per_metre, "score": self.score}
 
 
+_NO_TARGET = [(float("nan"),) * 3] * 4
+_NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
+
+
 class _PhysicsRecorder:
     """Wraps the env's robot so that each physics step's state and applied torque are kept.
 
@@ -103,10 +109,11 @@ class _PhysicsRecorder:
     are intercepted on the instance only, so the env's own code path is the one being measured.
     """
 
-    def __init__(self, robot):
-        self.robot = robot
+    def __init__(self, robot, controller):
+        self.robot, self.controller = robot, controller
         self._step, self._read = robot.step, robot.read_state
         self.q, self.dq, self.tau, self.contacts, self.base = [], [], [], [], []
+        self.foot_targets, self.foot_offsets = [], []  # what the trot controller commanded (leg frame, m)
         self._last_state = None
         robot.step = self.step
         robot.read_state = self.read_state
@@ -123,14 +130,23 @@ class _PhysicsRecorder:
         self.tau.append(np.array(applied, dtype=float))
         self.base.append(s.base_position.copy())
         self.contacts.append(np.asarray(self.robot.foot_contacts(), dtype=bool))
+        c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
+        self.foot_targets.append(c.last_foot_targets or _NO_TARGET)
+        self.foot_offsets.append(c.last_foot_offsets or _NO_OFFSET)
         return applied
+
+    def clear(self) -> None:
+        for trace in (self.q, self.dq, self.tau, self.contacts, self.base, self.foot_targets, self.foot_offsets):
+            trace.clear()
 
     def traces(self, dt: float) -> dict:
         n = len(self.tau)
         stack = (lambda xs, w: np.array(xs, dtype=float).reshape(n, w))
         return {"t": np.arange(n) * dt, "q": stack(self.q, 12), "dq": stack(self.dq, 12),
                 "tau": stack(self.tau, 12), "base_position": stack(self.base, 3),
-                "contacts": np.array(self.contacts, dtype=bool).reshape(n, 4)}
+                "contacts": np.array(self.contacts, dtype=bool).reshape(n, 4),
+                "foot_targets": np.array(self.foot_targets, dtype=float).reshape(n, 4, 3),
+                "foot_offsets": np.array(self.foot_offsets, dtype=float).reshape(n, 4, 3)}
 
 
 def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed: int = 0,
@@ -146,9 +162,9 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
         obs, _ = env.reset(seed=seed, options={"target_speed": float(speed)})
-        rec = _PhysicsRecorder(env.robot)
+        rec = _PhysicsRecorder(env.robot, env.controller)
         start = env.robot.read_state().base_position.copy()
-        rec.q.clear(), rec.dq.clear(), rec.tau.clear(), rec.contacts.clear(), rec.base.clear()
+        rec.clear()
         n_steps = int(round(duration / cfg.control_dt))
         score, fell = 0.0, False
         for _ in range(n_steps):
