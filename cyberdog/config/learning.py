@@ -14,6 +14,9 @@ from cyberdog.config.robot import GaitConfig, WalkConfig
 REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E
 
 
+ENERGY_MODELS = ("mechanical", "electrical")  # what the reward's energy term measures
+
+
 @dataclass(frozen=True)
 class RewardConfig:
     """Weights of the reward terms, Eq. (10); defaults are the paper's Eq. (11): A…E = −2, −20, −50, 25, −0.2.
@@ -30,6 +33,9 @@ class RewardConfig:
     keep_moving: float = 25.0  # D, on r_Keep moving = Ts / Tf (sums to D over a full episode)
     energy: float = -0.2  # E, per J, on r_E = Σ_ij ∫|τ_ij · θ̇_ij| dt over the step (Eq. 7)
     z_nominal: float = 0.30  # m, body height the fuselage term measures from (= RobotConfig.body_height)
+    # what r_E measures: "mechanical" (Eq. 7, the paper's) or "electrical" (what the battery pays: copper loss,
+    # friction and driver efficiency of `cyberdog.core.energy.electrical_power`, about 3.5x Eq. 7 at 1 m/s)
+    energy_model: str = "mechanical"
 
     @property
     def weights(self) -> dict[str, float]:
@@ -44,6 +50,8 @@ class RewardConfig:
             _check(ok, f"RewardConfig.{n}", rule, v)
         _check(0 < self.z_nominal <= 0.5 and math.isfinite(self.z_nominal), "RewardConfig.z_nominal",
                "in (0, 0.5] m", self.z_nominal)
+        _check(self.energy_model in ENERGY_MODELS, "RewardConfig.energy_model", f"one of {ENERGY_MODELS}",
+               self.energy_model)
 
 
 STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0
@@ -100,6 +108,7 @@ class EnvConfig:
     action_mode: str = "residual"
     action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
     foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
+    foot_offset_scale_z: Optional[float] = None  # m per unit action on the vertical axis; None = foot_offset_scale
     observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
     #                                    in foot mode it is the offset the next action ramps from, which sets
     #                                    the step's jerk and energy; without it the critics cannot see that cost
@@ -147,6 +156,9 @@ class EnvConfig:
         m = self.mass_scale_range
         _check(len(m) == 0 or (len(m) == 2 and 0 < m[0] <= m[1]), "EnvConfig.mass_scale_range",
                "() or (low, high) with 0 < low <= high", m)
+        _check(self.foot_offset_scale_z is None or (math.isfinite(self.foot_offset_scale_z)
+                                                     and self.foot_offset_scale_z > 0),
+               "EnvConfig.foot_offset_scale_z", "None or a finite number > 0 (m)", self.foot_offset_scale_z)
         _check(self.joint_range_deg <= 180, "EnvConfig.joint_range_deg", "in (0, 180]", self.joint_range_deg)
 
 
@@ -217,6 +229,9 @@ class StageConfig:
     keep_moving_weight: Optional[float] = None  # D of Eq. (10) for this stage; None = the preset's (25): the
     #                                             survival bonus per episode, which must outweigh the energy
     #                                             cost of walking or falling at once becomes the best policy
+    energy_model: Optional[str] = None  # what this stage's energy term measures (RewardConfig.energy_model);
+    #                                     None = "mechanical" (Eq. 7). With buffer_between_stages="relabel" both
+    #                                     stages must name the same model: the stored step energy is the model's
     action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
     actor_lr: Optional[float] = None  # the actor's learning rate in this stage; None = agent.actor_lr
     fresh_actor_optimizer: bool = False  # start the stage with a new Adam for the actor: the moments it kept
@@ -239,6 +254,8 @@ class StageConfig:
                                                     and self.keep_moving_weight >= 0),
                "StageConfig.keep_moving_weight", "None (the preset's) or a finite number >= 0",
                self.keep_moving_weight)
+        _check(self.energy_model is None or self.energy_model in ENERGY_MODELS, "StageConfig.energy_model",
+               f"None or one of {ENERGY_MODELS}", self.energy_model)
         _check(self.actor_lr is None or (math.isfinite(self.actor_lr) and self.actor_lr > 0),
                "StageConfig.actor_lr", "None (agent.actor_lr) or a finite number > 0", self.actor_lr)
         _check(self.critic_warmup_updates >= 0, "StageConfig.critic_warmup_updates", ">= 0",
@@ -251,14 +268,16 @@ class StageConfig:
 
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
-    """The reward weights one training stage uses: its preset, with `energy_weight` and `keep_moving_weight`
-    if set."""
+    """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight` and
+    `energy_model` if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
     changes = {}
     if stage.energy_weight is not None:
         changes["energy"] = float(stage.energy_weight)
     if stage.keep_moving_weight is not None:
         changes["keep_moving"] = float(stage.keep_moving_weight)
+    if stage.energy_model is not None:
+        changes["energy_model"] = stage.energy_model
     return dataclasses.replace(preset, **changes) if changes else preset
 
 
@@ -298,6 +317,10 @@ class TrainConfig:
                self.collection)
         _check(self.buffer_between_stages in BUFFER_POLICIES, "TrainConfig.buffer_between_stages",
                f"one of {BUFFER_POLICIES}", self.buffer_between_stages)
+        models = [s.energy_model or "mechanical" for s in (self.stage1, self.stage2)]
+        _check(self.buffer_between_stages != "relabel" or models[0] == models[1], "TrainConfig.stage1.energy_model",
+               f"the same as stage2's ({models[1]!r}) with buffer_between_stages='relabel' (the stored step "
+               "energy is the model's)", models[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         for n in ("init_random_frames", "learning_starts", "num_threads"):

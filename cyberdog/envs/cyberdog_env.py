@@ -10,6 +10,7 @@ import numpy as np
 
 from cyberdog import config as C
 from cyberdog.control.trot import BodyFeedback, TrotController
+from cyberdog.core import energy as en
 from cyberdog.core import kinematics as kin
 from cyberdog.core import rewards
 from cyberdog.core.estimator import SimulatedIMU, VelocityEstimator, leg_odometry_velocity
@@ -67,8 +68,9 @@ class CyberDogEnv(gym.Env):
     - `action_mode="residual"` (default): the action is added to the torque of the diagonal trot controller
       (trajectory + IK + PID), so that a policy learns corrections to a walking gait — practical on a CPU;
     - `action_mode="foot"`: the action shifts the trot controller's foot targets by up to
-      ±`foot_offset_scale` (0.03 m) per axis, (Δx, Δy, Δz) per leg in the same leg order, reached by a
-      linear ramp over the agent step from the last action's; the controller's IK + PID track the shifted
+      ±`foot_offset_scale` (0.03 m) per axis (z: `foot_offset_scale_z` if set), (Δx, Δy, Δz) per leg in the
+      same leg order, reached by a linear ramp over the agent step from the last action's; the controller's
+      IK + PID track the shifted
       path. The policy reshapes the foot trajectory itself (a trajectory-modulating policy, cf. Iscen et al.
       2018, "Policies Modulating Trajectory Generators"), which a torque residual barely can: the 1 kHz PID
       (60 N·m/rad) pulls the joints back to the path, and the residual policies stayed within 0.5 % of the
@@ -108,7 +110,10 @@ class CyberDogEnv(gym.Env):
     **Reward**, Eq. (10): r = A·(v_cmd − v_x)² + B·y² + C·(z − z_nom)² + D·Ts/Tf + E·Σ∫|τ·ω|dt, with
     (A, B, C, D, E) = (−2, −20, −50, 25, −0.2) (Eq. 11; `reward="stage1"` sets E = 0). `info` carries every
     term unweighted (`reward_terms`) and weighted (`reward_weighted`), which sum to the reward, plus
-    `step_energy_J`, `forward_speed` (true) and `forward_speed_used` (what the reward saw).
+    `step_energy_J` (Eq. 7), `forward_speed` (true) and `forward_speed_used` (what the reward saw). With
+    `reward.energy_model="electrical"` the energy term is the electrical energy drawn over the step (copper
+    loss, friction, driver efficiency: `cyberdog.core.energy.electrical_power`), also in
+    `step_electrical_energy_J` (None otherwise).
 
     **Episode end.** `terminated` when the body falls below `fall_height` (0.15 m), tilts beyond
     `fall_tilt_deg` (45°) in roll or pitch, or the state is not finite; `truncated` only by the time limit
@@ -159,6 +164,8 @@ class CyberDogEnv(gym.Env):
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (12,), dtype=np.float32)
         self.estimator_every = int(round(cfg.estimator_dt / self.dt))
+        z_scale = cfg.foot_offset_scale if cfg.foot_offset_scale_z is None else cfg.foot_offset_scale_z
+        self._foot_offset_scale = np.array([cfg.foot_offset_scale, cfg.foot_offset_scale, z_scale])  # m, x y z
         self._state = None
 
     # ----------------------------------------------------------------------------------------------------
@@ -212,7 +219,7 @@ class CyberDogEnv(gym.Env):
             # that the target path stays continuous (a 25 ms staircase of targets made the PID jerk: lowering
             # the swing feet by 1-3 cm that way cost 10-75 % more energy, measured)
             start = self._foot_offset
-            self._foot_offset = np.clip(a, -1.0, 1.0).reshape(4, 3) * self.cfg.foot_offset_scale
+            self._foot_offset = np.clip(a, -1.0, 1.0).reshape(4, 3) * self._foot_offset_scale
             rate = (self._foot_offset - start) / self.cfg.control_dt  # m/s
             tau_action = 0.0
         else:
@@ -220,6 +227,9 @@ class CyberDogEnv(gym.Env):
         residual = mode != "torque"  # the trot controller runs (residual and foot modes)
         estimated = self.cfg.observation_source == "estimated"
         step_energy = 0.0
+        electrical = self.cfg.reward.energy_model == "electrical"
+        if electrical:  # the step's torques and speeds, for one vectorised electrical-power call after the loop
+            taus, omegas = np.empty((self.decimation, 12)), np.empty((self.decimation, 12))
         s = self._state
         for k in range(self.decimation):  # 1 kHz: keep this loop lean (see bench/env_throughput.py)
             tau = tau_action
@@ -238,15 +248,21 @@ class CyberDogEnv(gym.Env):
             # self.robot.step / read_state, looked up per call: rl.rollout wraps them on the instance
             applied = self.robot.step(tau)
             step_energy += float(np.abs(applied * s.dq).sum()) * dt  # Eq. (7), rectangle rule
+            if electrical:
+                taus[k], omegas[k] = applied, s.dq
             self.t += dt
             s = self.robot.read_state()
             self.steps += 1
             if self.steps % self.estimator_every == 0:
                 self._update_estimator(s)
         self._state, self.last_torque = s, applied
-        return self._finish_step(s, step_energy)
+        step_electrical = None
+        if electrical:
+            walk = self.cfg.walk
+            step_electrical = float(en.electrical_power(taus, omegas, walk.actuator, walk.energy).sum()) * dt
+        return self._finish_step(s, step_energy, step_electrical)
 
-    def _finish_step(self, s, step_energy: float):
+    def _finish_step(self, s, step_energy: float, step_electrical: float | None = None):
         cfg = self.cfg
         v_true = float(s.base_linear_velocity_world[0])
         v_used = float(self._velocity_estimate_world[0]) if cfg.observation_source == "estimated" else v_true
@@ -254,13 +270,15 @@ class CyberDogEnv(gym.Env):
         v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
         terms = rewards.reward_terms(v_x=v_used, v_target=v_cmd, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
-                                     episode_time=cfg.episode_time, step_energy_J=step_energy)
+                                     episode_time=cfg.episode_time,
+                                     step_energy_J=step_energy if step_electrical is None else step_electrical)
         weighted = rewards.weighted_terms(terms, cfg.reward)
         reward = float(sum(weighted.values()))
         finite = np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.base_position))
         fallen = s.base_position[2] < cfg.fall_height or np.max(np.abs(s.base_rpy[:2])) > self.fall_tilt
         terminated = bool(fallen or not finite)
         info = {"reward_terms": terms, "reward_weighted": weighted, "step_energy_J": step_energy,
+                "step_electrical_energy_J": step_electrical,
                 "forward_speed": v_true, "forward_speed_used": v_used, "target_speed": self.target_speed,
                 "velocity_estimate": self._velocity_estimate_world.copy(), "fallen": bool(fallen),
                 "time": self.t}

@@ -24,7 +24,9 @@ class FlatInfo(gym.Wrapper):
     def _flat(self, info: dict) -> dict:
         weighted = info.get("reward_weighted", {})
         flat = {f"reward_{n}": weighted.get(n, 0.0) for n in REWARD_TERM_NAMES}
-        flat["energy_J"] = info.get("step_energy_J", 0.0)
+        # the step energy the reward's energy term measured (Eq. 7, or electrical: RewardConfig.energy_model),
+        # stored per transition so that rewards can be relabelled with another energy weight
+        flat["energy_J"] = info.get("reward_terms", {}).get("energy", 0.0)
         flat["forward_speed"] = info.get("forward_speed", 0.0)
         return {k: np.float32(v) for k, v in flat.items()}
 

@@ -171,6 +171,10 @@ class Trainer:
             if other:  # only the energy (stored per step) and the constant keep-moving term can be recomputed
                 raise ValueError(f"buffer_between_stages='relabel' recomputes the energy and keep-moving terms "
                                  f"only, but the weights of {other} differ between stage {old} and stage {new}")
+            if r_old.energy_model != r_new.energy_model:  # the stored step energy is the old stage's model's
+                raise ValueError(f"buffer_between_stages='relabel' needs one energy model in both stages, got "
+                                 f"{r_old.energy_model!r} (stage {old}) and {r_new.energy_model!r} (stage {new}): "
+                                 f"set train.stage{old}.energy_model too")
             keep_moving = rewards.keep_moving_term(self.cfg.env.control_dt, self.cfg.env.episode_time)
             relabel_rewards(self.rb, w_new["energy"] - w_old["energy"],
                             (w_new["keep_moving"] - w_old["keep_moving"]) * keep_moving)
