@@ -65,6 +65,8 @@ def experiment(args, collection: str, steps: int) -> C.ExperimentConfig:
             f"train.frames_per_batch={args.frames_per_batch}", "train.buffer_size=100000"]
     if collection != "sync":  # (so that the script also runs against code without the option)
         sets.append(f"train.collection={collection}")
+    if args.torchrl_update:
+        sets.append("agent.fast_update=false")
     return C.override(C.ExperimentConfig(env=env), sets)
 
 
@@ -228,6 +230,8 @@ def main() -> None:
     p.add_argument("--env-steps", type=int, default=400, help="steps of the env-only measurement (0: skip)")
     p.add_argument("--no-sb3", action="store_true", help="skip Stable-Baselines3")
     p.add_argument("--bare-only", action="store_true", help="only the bare update rates")
+    p.add_argument("--torchrl-update", action="store_true",
+                   help="our updates through TorchRL's TD3Loss (agent.fast_update=false) instead of the direct losses")
     args = p.parse_args()
     if not args.no_sb3:
         import_sb3()

@@ -27,6 +27,7 @@ from torchrl.objectives import DDPGLoss, SoftUpdate, TD3Loss
 
 from cyberdog.config import AgentConfig
 from cyberdog.envs.cyberdog_env import observation_typical_magnitude
+from cyberdog.rl.fast_td3 import FastTD3Losses
 from cyberdog.rl.networks import make_actor, make_critic
 
 
@@ -165,6 +166,7 @@ class Agent:
         td3 = isinstance(self.loss, TD3Loss)
         self._value_loss = self.loss.value_loss if td3 else self.loss.loss_value
         self._actor_loss = self.loss.actor_loss if td3 else self.loss.loss_actor
+        self._fast = FastTD3Losses(self.loss) if td3 and cfg.fast_update else None
         self.updates = 0  # critic updates done
         self.actor_updates = 0  # actor (and target) updates done
         self._last_actor_loss = torch.tensor(math.nan, device=self.device)
@@ -189,15 +191,21 @@ class Agent:
         `metrics_to_float` when logging. Raises `NonFiniteError` before any step that would write NaN/inf."""
         if batch.device != self.device:
             batch = batch.to(self.device)
-        value_loss, meta = self._value_loss(batch)
-        q = meta["pred_value"].detach()
+        if self._fast is not None:
+            value_loss, q = self._fast.value_loss(batch)
+        else:
+            value_loss, meta = self._value_loss(batch)
+            q = meta["pred_value"].detach()
         _finite(critic_loss=value_loss, Q_value=q)
         self._step(self.critic_optimizer, value_loss, self.critic_params)
         self.updates += 1
         if actor and self.updates % self.policy_delay == 0:
-            actor_loss, _ = self._actor_loss(batch)
-            if self.action_l2 > 0 or self.cfg.action_smoothness > 0:
-                actor_loss = actor_loss + self._action_penalties(batch)
+            if self._fast is not None:
+                actor_loss = self._fast_actor_loss(batch)
+            else:
+                actor_loss, _ = self._actor_loss(batch)
+                if self.action_l2 > 0 or self.cfg.action_smoothness > 0:
+                    actor_loss = actor_loss + self._action_penalties(batch)
             _finite(actor_loss=actor_loss)
             self._step(self.actor_optimizer, actor_loss, self.actor_params)
             self.target_updater.step()
@@ -205,6 +213,22 @@ class Agent:
             self._last_actor_loss = actor_loss.detach()
         return {"critic_loss": value_loss.detach(), "actor_loss": self._last_actor_loss, "q_mean": q.mean(),
                 "q_max": q.max()}
+
+    def _fast_actor_loss(self, batch: TensorDictBase) -> torch.Tensor:
+        """The actor loss plus `_action_penalties`, by `FastTD3Losses`: μ(s) (and μ(s') for the smoothness
+        term) in one forward pass, shared by the loss and the penalties."""
+        fast, obs = self._fast, batch["observation"]
+        smooth = self.cfg.action_smoothness > 0
+        if smooth:
+            now, nxt = fast.actor_actions(torch.cat([obs, batch["next", "observation"]])).chunk(2)
+        else:
+            now = fast.actor_actions(obs)
+        loss = fast.actor_loss(obs, now)
+        if self.action_l2 > 0:
+            loss = loss + self.action_l2 * now.pow(2).mean()
+        if smooth:
+            loss = loss + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
+        return loss
 
     def _action_penalties(self, batch: TensorDictBase) -> torch.Tensor:
         """`action_l2 · mean(μ(s)²) + action_smoothness · mean((μ(s') − μ(s))²)` over the batch, through the
@@ -241,6 +265,8 @@ class Agent:
 
     def load_state_dict(self, state: dict, optimizers: bool = True) -> None:
         self.loss.load_state_dict(state["loss"])
+        if self._fast is not None:
+            self._fast.refresh()
         if optimizers:
             self.actor_optimizer.load_state_dict(state["actor_optimizer"])
             self.critic_optimizer.load_state_dict(state["critic_optimizer"])
