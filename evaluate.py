@@ -17,7 +17,9 @@ Sub-commands (default: all):
   figures     Figures 4, 6, 7, 10, 13 from saved results (--from DIR: a folder written by `all` or `compare`)
   video       a GIF (or MP4) of the trot with one trajectory (--video-trajectory, --video-speed)
 
-Outputs go to --out (default runs/evaluate-<time>/), never over inputs; every file written is listed at the end:
+Outputs go to --out (default runs/evaluate-<time>/), never over inputs; a folder that already holds results is
+refused unless --force (which first removes the files earlier runs recorded in its outputs.json); every file this
+run writes is listed at the end and recorded in outputs.json:
   table5.{md,csv,json}          Table 5 (E in kJ per walk, D_t by Eq. 12; paper set and same-lift control set)
   comparison.{md,csv,json}      every walk: E, energy per 100 m, CoT, mean speed, status, D_t (also per 100 m)
   learned_mean_ci.*             across seeds: mean and 95 % CI of E and D_t (with several learned trajectories)
@@ -47,6 +49,7 @@ from cyberdog.analysis.extract import (CYCLE_CHOICES, SPEED_TOLERANCE, Extractio
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.core.commanded_path import CommandedPath, load_foot_path
 from cyberdog.core.trajectories import SampledTrajectory
+from cyberdog.output_folder import OutputFolder, OutputFolderError
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",
@@ -80,6 +83,9 @@ def parse_args(argv=None):
     g.add_argument("--no-same-lift", action="store_true",
                    help="compare: skip the control set of baselines at the learned trajectory's lift height")
     g.add_argument("--out", type=Path, default=None, help="output folder (default runs/evaluate-<time>)")
+    g.add_argument("--force", action="store_true",
+                   help="write into an --out folder that already holds results: the files earlier evaluate.py runs "
+                        "recorded there (outputs.json) are removed first; without --force such a folder is refused")
     g = p.add_argument_group("learned trajectory")
     g.add_argument("--learned", type=Path, nargs="+", default=None, metavar="FILE",
                    help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
@@ -438,18 +444,50 @@ def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
 
 # ---------------------------------------------------------------------------------------------------------
 
+_OUTPUT: dict = {}  # this run's OutputFolder, for _finish
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return _main(args)
     except UsageError as err:
         print(f"evaluate.py: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("\nevaluate.py: interrupted", file=sys.stderr)
+        return 130
+
+
+def _open_output(out: Path, args, append: bool = False) -> None:
+    """Refuse an --out folder that holds results (unless --force); remember what is there before this run."""
+    try:
+        _OUTPUT["folder"] = folder = OutputFolder(out, force=args.force, append=append, command=args.command,
+                                                  argv=getattr(args, "argv", ()))
+    except OutputFolderError as err:
+        raise UsageError(str(err)) from None
+    for note in folder.notes:
+        print(note)
+
+
+def _new_out() -> Path:
+    """runs/evaluate-<time>, with a suffix if a run in the same second took that name."""
+    base = Path("runs") / time.strftime("evaluate-%Y%m%d-%H%M%S")
+    out, k = base, 1
+    while out.exists():
+        k += 1
+        out = base.with_name(f"{base.name}-{k}")
+    return out
 
 
 def _main(args) -> int:
-    cfg = C.load(C.WalkConfig, args.config) if args.config else C.WalkConfig()
-    cfg = C.override(cfg, args.set)
+    _OUTPUT.clear()
+    try:
+        cfg = C.load(C.WalkConfig, args.config) if args.config else C.WalkConfig()
+        cfg = C.override(cfg, args.set)
+    except (ValueError, OSError) as err:
+        raise UsageError(f"config error: {err}") from None
     t0 = time.perf_counter()
     cmd = args.command
     if cmd == "figures":
@@ -457,6 +495,7 @@ def _main(args) -> int:
         if src is None or not src.is_dir():
             raise UsageError("figures needs --from DIR (a folder written by `evaluate.py` all/compare)")
         out = args.out or src
+        _open_output(out, args, append=out.resolve() == src.resolve())  # figures beside the results they draw
         rows, walks, power, proto, learned = load_saved(src)
         if learned is None and (args.learned or DEFAULT_LEARNED.is_dir()):
             learned = load_learned(args.learned or [DEFAULT_LEARNED])
@@ -469,7 +508,8 @@ def _main(args) -> int:
     if needs_learned and not policy_paths(args):  # check the inputs before any long work
         load_learned(args.learned or [DEFAULT_LEARNED])
     metrics = metrics_files(args) if cmd == "all" else {}
-    out = args.out or Path("runs") / time.strftime("evaluate-%Y%m%d-%H%M%S")
+    out = args.out or _new_out()
+    _open_output(out, args)
     out.mkdir(parents=True, exist_ok=True)
     C.save(cfg, out / "config.yaml")
     if cmd == "baselines":
@@ -504,8 +544,9 @@ def _main(args) -> int:
 
 
 def _finish(out: Path, t0: float) -> int:
-    """List every file in the output folder."""
-    files = sorted(p for p in out.rglob("*") if p.is_file())
+    """List exactly the files this run wrote (also recorded in the folder's outputs.json)."""
+    folder = _OUTPUT.pop("folder", None)
+    files = folder.finish() if folder is not None else sorted(p for p in out.rglob("*") if p.is_file())
     print(f"\nwrote {len(files)} files in {out}/ ({time.perf_counter() - t0:.1f} s):")
     for p in files:
         print(f"  {p}")

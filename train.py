@@ -16,14 +16,32 @@ Seeds at scale (one run per seed in RUN_DIR/seed<N>/, retried from its checkpoin
   python train.py --aggregate runs/sweep_quick               # (re)write curves, evaluation and tables
 
 Outputs in the run folder: config.yaml (resolved), metrics.csv (one row per episode), tb/ (TensorBoard),
-checkpoint.pt (resume point), stage<N>_final.pt, stage<N>_best_actor.pt, saved/ (agents above save_score).
+checkpoint.pt (resume point: agent, optimizers, RNG states and the replay buffer, about 0.5 kB per stored
+transition), stage<N>_final.pt (the agent for --init-from, no replay buffer: about 1 MB), stage<N>_final_actor.pt
+and stage<N>_best_actor.pt (the actor for evaluate.py), saved/ (agents above save_score).
 Outputs in a sweep folder: sweep.json, sweep_config.yaml, sweep_status.json (live, per seed), seed<N>/ (run
 folders, each with train.log), learning_curves.png/.csv, evaluation.json, aggregate.csv/.md.
+
+One process per run folder: every run folder this script writes (a new run, --resume, --init-from, each seed
+of a sweep) is locked by the file RUN_DIR/.train.lock (pid, host, start time and command of the holder) for
+as long as the training runs. A second process on the same folder is refused with a message naming the
+holder; a lock left by a process that died on this machine (killed, crashed) is taken over with a warning.
+On a file system shared by several machines (NFS, a cluster's scratch), a live holder on another machine is
+refused too: through the kernel lock where the file system makes flock coherent across hosts (NFSv4, CephFS,
+Lustre mounted with -o flock), else by the lock file's contents. A dead holder on another machine cannot be
+told from a live one: the lock is refused, naming that host and pid; delete RUN_DIR/.train.lock once you know
+that process is gone (or resume on that host, which can see it). A sweep clears the lock of its own attempts
+when it retries them. Not detected: two processes starting within the same instant on two machines whose
+shared file system has no coherent flock.
+
+A setting that would make a stage end without any gradient update (a budget shorter than learning_starts,
+init_random_frames or batch_size) is refused before anything starts.
 """
 from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from pathlib import Path
 
 from cyberdog import config as C
@@ -111,6 +129,10 @@ def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
                 sys.exit("--seeds trains --stage both or 1 (stage 2 alone needs a stage-1 agent per seed)")
             seeds = parse_seeds(args.seeds)
             cfg, name = _resolve_config(args)
+            try:
+                C.check_planned_updates(cfg, (1, 2) if args.stage == "both" else (int(args.stage),))
+            except ValueError as e:
+                sys.exit(f"config error: {e}")
             sweep_dir = args.run_dir or Path("runs") / f"sweep_{name}"
             create_sweep(sweep_dir, cfg, seeds, args.stage, source_config=args.config, overrides=args.overrides)
             print(f"sweep: seeds {seeds} in {sweep_dir}")
@@ -173,8 +195,13 @@ def _resolve_config(args):
     return cfg, (args.config.stem if args.config else "default")
 
 
+def _warning_line(message, category, filename, lineno, line=None) -> str:
+    return f"warning: {message}\n"
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
+    warnings.formatwarning = _warning_line  # one plain line per warning (a lock taken over, a cut metrics.csv)
     if args.seeds is not None or args.aggregate is not None:
         return _sweep_main(args, None, resume=False)
     if args.resume is not None and (args.resume / "sweep.json").is_file():  # a sweep folder
@@ -185,19 +212,15 @@ def main(argv=None) -> int:
     used = [_flag(o) for o in SWEEP_OPTIONS if getattr(args, o) is not None]
     if used:
         sys.exit(f"{', '.join(used)} only apply to sweeps (--seeds, --resume SWEEP_DIR, --aggregate)")
-    from cyberdog.rl import CheckpointError, NonFiniteError, Trainer  # slow import after --help
-
     if args.resume is not None:
         if args.config or args.overrides or args.seed is not None or args.init_from:
             sys.exit("--resume uses the run folder's config.yaml; do not combine it with --config, --set, "
                      "--seed or --init-from")
-        cfg_path = args.resume / "config.yaml"
-        if not cfg_path.is_file():
-            sys.exit(f"--resume {args.resume}: no config.yaml there")
-        cfg = C.load(C.ExperimentConfig, cfg_path)
         if args.device:
             sys.exit("--device cannot be combined with --resume: the run continues with its saved train.device")
+        cfg = _resumable_config(args.resume)
         trainer_kwargs = dict(run_dir=args.resume, resume=True)
+        run_dir = args.resume
     else:
         cfg, name = _resolve_config(args)
         run_dir = args.run_dir or Path("runs") / f"{name}_seed{cfg.train.seed}"
@@ -210,14 +233,45 @@ def main(argv=None) -> int:
             if not init_from.is_file():
                 sys.exit(f"--stage 2 needs a stage-1 agent: pass --init-from, or run stage 1 in {run_dir} first")
         trainer_kwargs = dict(run_dir=run_dir, stages=stages, init_from=init_from)
+    from cyberdog.rl import CheckpointError, NonFiniteError, Trainer  # slow import after --help
+    from cyberdog.runlock import RunFolderError
+
     try:
         summary = Trainer(cfg, progress=not args.no_progress, **trainer_kwargs).run()
-    except (CheckpointError, NonFiniteError) as e:
+    except (CheckpointError, NonFiniteError, RunFolderError) as e:
         sys.exit(f"error: {e}")
+    except (ValueError, OSError) as e:  # settings refused before the start (no update would happen, no CUDA)
+        sys.exit(f"error: {e}")
+    except KeyboardInterrupt:
+        print(f"\ninterrupted; continue with: python train.py --resume {run_dir}", file=sys.stderr)
+        return 130
     print("done: " + ", ".join(f"{k}={v}" for k, v in summary.items()
                                if k in ("stage", "env_steps", "episodes", "updates", "buffer_size",
                                         "window_mean_score")))
     return 0
+
+
+def _resumable_config(run_dir: Path):
+    """The saved config of the training run in `run_dir`, or exit with one line saying why it is not one."""
+    cfg_path = run_dir / "config.yaml"
+    if not run_dir.is_dir():
+        sys.exit(f"--resume {run_dir}: no such folder (a training run folder holds config.yaml and checkpoint.pt)")
+    if not cfg_path.is_file():
+        sys.exit(f"--resume {run_dir}: not a training run (no config.yaml there)")
+    try:
+        cfg = C.load(C.ExperimentConfig, cfg_path)
+    except (ValueError, OSError) as e:
+        try:
+            C.load(C.WalkConfig, cfg_path)
+            what = "an evaluate.py output folder (its config.yaml is a walk config)"
+        except (ValueError, OSError):
+            what = f"its config.yaml is not an experiment config ({str(e)[:300]})"
+        sys.exit(f"--resume {run_dir}: not a training run of train.py: {what}")
+    if not (run_dir / "checkpoint.pt").is_file():
+        sys.exit(f"--resume {run_dir}: no checkpoint.pt there, nothing to resume (a run stopped before its first "
+                 f"checkpoint, every train.checkpoint_every={cfg.train.checkpoint_every} env steps, or a folder of "
+                 f"exported actors); start a new run: --config {cfg_path} --run-dir NEW_FOLDER")
+    return cfg
 
 
 if __name__ == "__main__":

@@ -115,7 +115,7 @@ def _tiny(hidden=(8,)) -> C.ExperimentConfig:
 def test_corrupt_checkpoint_raises_clear_error(tmp_path):
     trainer = Trainer(_tiny(), tmp_path / "run", progress=False)
     path = trainer.save()
-    trainer.logger.close()
+    trainer.close()  # releases the run folder
     data = path.read_bytes()
     path.write_bytes(data[: len(data) // 2])
     with pytest.raises(CheckpointError, match="corrupt"):
@@ -130,7 +130,7 @@ def test_corrupt_checkpoint_raises_clear_error(tmp_path):
 def test_mismatched_checkpoint_raises_clear_error(tmp_path):
     trainer = Trainer(_tiny((8,)), tmp_path / "small", progress=False)
     path = trainer.save()
-    trainer.logger.close()
+    trainer.close()  # releases the run folder
     with pytest.raises(CheckpointError, match="does not match the configured networks"):
         Trainer(_tiny((16,)), tmp_path / "big", init_from=path, progress=False)
     # resuming with an edited config.yaml is refused too

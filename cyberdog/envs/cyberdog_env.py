@@ -120,7 +120,8 @@ class CyberDogEnv(gym.Env):
     of the registration.
 
     **Options** (keyword arguments of `gymnasium.make("CyberDog-v0", ...)`): `config` (an `EnvConfig`),
-    `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array" or "human"), and any
+    `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array", or "human": a PyBullet window;
+    on a machine without a display it runs without one, with a warning), and any
     top-level `EnvConfig` field, e.g. `action_mode="torque"`, `target_speed=1.2`,
     `observation_source="estimated"`.
     """

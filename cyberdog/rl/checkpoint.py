@@ -2,6 +2,10 @@
 
 A checkpoint that cannot be read, is not ours, or does not fit the networks of the current config raises
 `CheckpointError` with the reason: never a silent fresh start.
+
+Tensors that are views of a larger storage (a slice of the replay buffer's preallocated storage) are copied
+before saving: `torch.save` writes a view's whole storage, which made a checkpoint of 1,600 transitions as
+large as one of the full 100,000-transition buffer.
 """
 from __future__ import annotations
 
@@ -21,6 +25,24 @@ class CheckpointError(RuntimeError):
     """A checkpoint is missing, corrupt, of another format, or does not match the configuration."""
 
 
+def compact(obj):
+    """`obj` with every tensor that views a larger storage replaced by a copy of just its elements."""
+    if isinstance(obj, torch.Tensor):
+        if obj.untyped_storage().nbytes() > obj.numel() * obj.element_size():
+            return obj.clone(memory_format=torch.contiguous_format)
+        return obj
+    if isinstance(obj, dict):
+        return {k: compact(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return type(obj)(compact(v) for v in obj)
+    return obj
+
+
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+TEMPORARY_GLOB = ".*.pt.*.tmp"  # what save_atomic leaves behind when its process is killed mid-write
+
+
 def save_atomic(obj: dict, path: str | Path) -> Path:
     """Write to a temporary file in the same folder, fsync, then `os.replace` (never a half-written file)."""
     path = Path(path)
@@ -28,15 +50,30 @@ def save_atomic(obj: dict, path: str | Path) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as f:
-            torch.save(obj, f)
+            torch.save(compact(obj), f)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes it private; the result is an ordinary file
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
     return path
+
+
+def remove_stale_temporaries(run_dir: str | Path) -> list[Path]:
+    """Delete the temporary files of `save_atomic` that a killed process left in `run_dir` and `run_dir/saved`
+    (call it only while holding the run folder's lock: a live writer's temporary file would go too)."""
+    removed = []
+    for folder in (Path(run_dir), Path(run_dir) / "saved"):
+        for p in folder.glob(TEMPORARY_GLOB) if folder.is_dir() else ():
+            try:
+                p.unlink()
+                removed.append(p)
+            except FileNotFoundError:
+                pass
+    return removed
 
 
 def save_checkpoint(state: dict, path: str | Path) -> Path:
@@ -52,6 +89,9 @@ def load_checkpoint(path: str | Path) -> dict:
     except Exception as e:  # truncated or otherwise unreadable file
         raise CheckpointError(f"checkpoint {path} is corrupt or unreadable ({type(e).__name__}: {e}); "
                               f"delete it or resume from another run folder") from e
+    if isinstance(state, dict) and "actor" in state and "format" not in state:
+        raise CheckpointError(f"{path} is an actor file (for evaluate.py), not a checkpoint: use a run's "
+                              f"checkpoint.pt or stage<N>_final.pt")
     if not isinstance(state, dict) or state.get("format") != FORMAT:
         raise CheckpointError(f"{path} is not a {FORMAT} file")
     if state.get("version") != VERSION:

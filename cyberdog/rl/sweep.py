@@ -38,6 +38,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from cyberdog import config as C
+from cyberdog.runlock import break_lock
 from cyberdog.rl.sweep_process import (ATTEMPT_FILE, LOG_FILE, SWEEP_FILE, LocalBackend, RayBackend, SweepError,
                                        available_cores)
 
@@ -402,6 +403,10 @@ def run_sweep(sweep_dir, backend: str = "local", workers: int | None = None, max
                         f"window score {score}, {st.wall_s:.0f} s")
                 else:
                     st.errors.append(f"attempt {st.attempts}: {error}")
+                    # the attempt has ended: its run-folder lock must not block the retry, on whichever node
+                    a = _read_attempt(Path(st.run_dir))
+                    if a.get("attempt") == st.attempts:
+                        break_lock(st.run_dir, a.get("pid"), a.get("host"))
                     if st._tries <= max_retries:
                         st.state = "retrying"
                         queue.insert(0, s)

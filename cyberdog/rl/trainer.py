@@ -14,12 +14,21 @@ the right reward. A stage's first `critic_warmup_updates` updates train the crit
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
 the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
 at any moment. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
-buffer but it is not logged as an episode.
+buffer but it is not logged as an episode. Only `checkpoint.pt` carries the replay buffer and the Adam
+moments: the stage-final files (`stage<N>_final.pt`: networks, targets, counters; `stage<N>_final_actor.pt`:
+the actor) hold what `--init-from` and the evaluation need: about 1 MB with 128-unit layers.
+
+One process per run folder: the trainer holds `cyberdog.runlock.RunLock` on `run_dir` from its construction
+to the end of `run()` (or `close()`), and refuses, before any work, a stage that would end without a single
+gradient update (`cyberdog.config.check_planned_updates`). A stage that still ends without one (it reached its
+`stop_score` before learning started) saves its actor as `stage<N>_untrained_actor.pt`, with a warning, and
+writes no stage-final files.
 """
 from __future__ import annotations
 
 import math
 import random
+import sys
 import time
 from collections import deque
 from pathlib import Path
@@ -33,13 +42,14 @@ from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
 from cyberdog.envs.cyberdog_env import observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
-from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, rng_state, save_atomic,
-                                    save_checkpoint, set_rng_state)
+from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, remove_stale_temporaries,
+                                    rng_state, save_atomic, save_checkpoint, set_rng_state)
 from cyberdog.rl.collect import ProcessCollector, make_collector
 from cyberdog.rl.env import make_env
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
                                 transitions)
+from cyberdog.runlock import RunFolderError, RunLock
 
 OBSERVATION_SIZE, ACTION_SIZE = 50, 12  # Table 3's observation (62 with env.observe_last_action), actions
 
@@ -60,11 +70,27 @@ def _differences(a, b, prefix: str = "") -> list[str]:
 
 
 class Trainer:
-    """Runs `stages` (e.g. (1, 2)) of one experiment in `run_dir`."""
+    """Runs `stages` (e.g. (1, 2)) of one experiment in `run_dir`, which it locks until `run()` ends (or
+    `close()`): a second process (or a second Trainer) on the same folder raises `RunLockedError`."""
 
     def __init__(self, cfg: C.ExperimentConfig, run_dir: str | Path, stages=(1, 2), resume: bool = False,
                  init_from: str | Path | None = None, progress: bool = True):
         self.cfg, self.run_dir, self.progress = cfg, Path(run_dir), progress
+        self.lock = None
+        init_state = None
+        if not resume:  # bad settings fail here, before the folder is touched
+            if init_from is not None:
+                init_state = load_checkpoint(init_from)
+            trained = init_state is not None and int((init_state.get("agent") or {}).get("updates", 0)) > 0
+            C.check_planned_updates(cfg, tuple(stages), trained=trained)
+        self.lock = RunLock(self.run_dir).acquire()
+        try:
+            self._setup(cfg, stages, resume, init_from, init_state)
+        except BaseException:
+            self.close()
+            raise
+
+    def _setup(self, cfg, stages, resume, init_from, init_state) -> None:
         tc = cfg.train
         if tc.num_threads:
             torch.set_num_threads(tc.num_threads)
@@ -85,16 +111,38 @@ class Trainer:
                       stage_updates=0, update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
         self.scores: deque = deque(maxlen=tc.score_window)
         self.best_score = -math.inf
+        self.logger = None
         self.run_dir.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(self.run_dir)  # half-written files of a process killed while saving
         if resume:
             self._restore(load_checkpoint(self.run_dir / "checkpoint.pt"), self.run_dir / "checkpoint.pt")
         else:
-            if init_from is not None:
-                self._load_agent(load_checkpoint(init_from), init_from)
+            self._check_empty()
+            if init_state is not None:
+                self._load_agent(init_state, init_from)
             C.save(cfg, self.run_dir / "config.yaml")
         self.logger = EpisodeLogger(self.run_dir, rows=self.c["csv_rows"],
                                     purge_step=self.c["env_steps"] if resume else None)
+        self.c["csv_rows"] = self.logger.rows  # fewer if metrics.csv lost rows (the logger warned)
         self.last = {"actor_loss": math.nan, "critic_loss": math.nan, "q_mean": math.nan, "q_max": math.nan}
+
+    def _check_empty(self) -> None:
+        """A fresh start never appends to an earlier run's logs."""
+        if (self.run_dir / "checkpoint.pt").exists():
+            raise RunFolderError(f"{self.run_dir} already holds a run (checkpoint.pt): continue it with --resume "
+                                 f"{self.run_dir}, or choose another --run-dir")
+        metrics = self.run_dir / "metrics.csv"
+        if metrics.exists() and metrics.stat().st_size > 0:
+            raise RunFolderError(f"{self.run_dir} holds the logs of an earlier run stopped before its first "
+                                 f"checkpoint (metrics.csv but no checkpoint.pt): delete the folder (or its "
+                                 f"metrics.csv and tb/) to start it again, or choose another --run-dir")
+
+    def close(self) -> None:
+        """Close the logs and release the run folder (idempotent; `run()` does it when it ends)."""
+        if getattr(self, "logger", None) is not None:
+            self.logger.close()
+        if self.lock is not None:
+            self.lock.release()
 
     # ---- checkpoints -----------------------------------------------------------------------------------
     def _state(self) -> dict:
@@ -108,8 +156,29 @@ class Trainer:
         return save_checkpoint(self._state(), self.run_dir / name)
 
     def _load_agent(self, state: dict, path) -> None:
-        check_shapes(state["agent"]["loss"], self.agent.loss.state_dict(), "the agent", path)
-        self.agent.load_state_dict(state["agent"])
+        if "agent" not in state:
+            raise CheckpointError(f"{path} holds no agent (an actor file?); --init-from needs checkpoint.pt or "
+                                  f"stage<N>_final.pt of a run")
+        agent = state["agent"]
+        check_shapes(agent["loss"], self.agent.loss.state_dict(), "the agent", path)
+        if "actor_optimizer" in agent:  # checkpoint.pt: the whole agent
+            self.agent.load_state_dict(agent)
+        else:  # stage<N>_final.pt: networks, targets, exploration and counters; new Adam moments
+            self.agent.load_state_dict(agent, optimizers=False)
+            self.agent.policy.load_state_dict(agent["exploration"])
+            self.agent.updates, self.agent.actor_updates = int(agent["updates"]), int(agent["actor_updates"])
+
+    def _final_state(self, stage: int, score: float) -> dict:
+        """stage<N>_final.pt: what `--init-from` needs (the agent's networks and their targets, exploration
+        state, counters) and what the evaluation reads (`actor` and `config`, as in the actor files); not the
+        replay buffer nor the Adam moments (half the agent's size), which only checkpoint.pt carries: a run
+        started `--init-from` a stage-final file begins with new optimizer moments."""
+        agent = {k: v for k, v in self.agent.state_dict().items() if not k.endswith("_optimizer")}
+        return {"kind": "stage_final", "config": C.to_dict(self.cfg), "stages": self.stages,
+                "counters": {**self.c, "finished": True}, "agent": agent,
+                "actor": self.agent.actor.state_dict(), "stage": stage, "score": score,
+                "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
+                "stage_updates": self.c["stage_updates"], "scores": list(self.scores), "best_score": self.best_score}
 
     def _restore(self, state: dict, path) -> None:
         try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
@@ -133,8 +202,8 @@ class Trainer:
 
     def _save_actor(self, name: str, score: float) -> None:
         save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
-                     "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"]},
-                    self.run_dir / name)
+                     "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
+                     "stage_updates": self.c["stage_updates"]}, self.run_dir / name)
 
     # ---- the loop --------------------------------------------------------------------------------------
     def run(self) -> dict:
@@ -142,9 +211,15 @@ class Trainer:
             while not self.c["finished"]:
                 stage = self.c["stage"]
                 self._run_stage(stage)
-                self._save_actor(f"stage{stage}_final_actor.pt", self.scores[-1] if self.scores else math.nan)
-                save_checkpoint({**self._state(), "counters": {**self.c, "finished": True}},
-                                self.run_dir / f"stage{stage}_final.pt")
+                score = self.scores[-1] if self.scores else math.nan
+                if self.c["stage_updates"] > 0:
+                    self._save_actor(f"stage{stage}_final_actor.pt", score)
+                    save_checkpoint(self._final_state(stage, score), self.run_dir / f"stage{stage}_final.pt")
+                else:  # e.g. its stop_score was reached before learning started: not a trained actor
+                    self._save_actor(f"stage{stage}_untrained_actor.pt", score)
+                    print(f"WARNING: stage {stage} ended after {self.c['stage_env_steps']} env steps without a single "
+                          f"gradient update; its actor is saved as stage{stage}_untrained_actor.pt, and no "
+                          f"stage{stage}_final files are written", file=sys.stderr, flush=True)
                 rest = [s for s in self.stages if s > stage]
                 if rest:  # next stage: same agent, fresh counters and score window
                     self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0, stage_updates=0)
@@ -155,7 +230,7 @@ class Trainer:
                     self.c["finished"] = True
                 self.save()
         finally:
-            self.logger.close()
+            self.close()
         return {**self.c, "updates": self.agent.updates, "buffer_size": len(self.rb),
                 "window_mean_score": float(np.mean(self.scores)) if self.scores else math.nan}
 

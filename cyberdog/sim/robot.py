@@ -15,13 +15,22 @@ only place in the project where pybullet is called. Facts it relies on (measured
   this trunk). Every base pose and velocity in this class is converted to the trunk's URDF link frame (the
   body frame of `cyberdog.core.kinematics`), both when read and when reset.
 
+- PyBullet's GUI connection calls the C `exit()` when it cannot open an X display (no exception, the
+  interpreter just ends): `gui=True` is checked first (`display_problem`) and falls back to a DIRECT
+  connection, without a window, with a warning.
+
 Friction: Bullet multiplies the two bodies' friction coefficients, so every robot link gets lateral friction
 1.0 and the plane gets `SimConfig.ground_friction`; the foot–ground coefficient is then exactly that value.
 All arrays are numpy, SI units; joint arrays are (12,) in the order LF, RF, LH, RH × abad, hip, knee.
 """
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import math
+import os
+import sys
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -79,6 +88,30 @@ def resolve_path(path: str) -> Path:
     return p if p.is_absolute() else REPO_ROOT / p
 
 
+def display_problem() -> str | None:
+    """Why PyBullet's GUI cannot open a window here (None if it can): checked before connecting, because a
+    failed GUI connection ends the process instead of raising."""
+    if sys.platform in ("darwin", "win32"):
+        return None
+    display = os.environ.get("DISPLAY")
+    if not display:
+        if os.environ.get("WAYLAND_DISPLAY"):
+            return ("WAYLAND_DISPLAY is set but DISPLAY is not (PyBullet's window is an X11 window; XWayland "
+                    "provides DISPLAY)")
+        return "neither DISPLAY nor WAYLAND_DISPLAY is set (a headless machine)"
+    try:
+        x11 = ctypes.CDLL(ctypes.util.find_library("X11") or "libX11.so.6")
+    except OSError:
+        return f"DISPLAY={display} is set but libX11 cannot be loaded"
+    x11.XOpenDisplay.restype, x11.XOpenDisplay.argtypes = ctypes.c_void_p, [ctypes.c_char_p]
+    handle = x11.XOpenDisplay(display.encode())
+    if not handle:
+        return f"cannot connect to the X server of DISPLAY={display}"
+    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    x11.XCloseDisplay(handle)
+    return None
+
+
 class Robot:
     """CyberDog on a flat plane, driven by joint torques at every physics step (see the module docstring)."""
 
@@ -93,6 +126,13 @@ class Robot:
         self.robot_config, self.actuator_config, self.sim_config = robot, actuator, sim
         self.actuator = ActuatorModel(actuator)
         self.dt = sim.physics_dt
+        if gui:
+            problem = display_problem()
+            if problem:
+                warnings.warn(f"no window for the simulation: {problem}; running without one (PyBullet DIRECT). "
+                              f"Set DISPLAY to a reachable X server to watch it", RuntimeWarning, stacklevel=3)
+                gui = False
+        self.gui = gui  # whether a PyBullet window is open
         self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         c = self.client
         c.setGravity(0.0, 0.0, -sim.gravity)

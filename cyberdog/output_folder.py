@@ -1,0 +1,122 @@
+"""Output folders of `evaluate.py`: the results of two runs never mix silently.
+
+A folder that already holds files is refused unless the user asks to write into it (`force=True`); then the
+files that earlier runs recorded in the folder's `outputs.json` are removed first, so that `config.yaml` and
+every result recorded there come from this run. Files no run recorded (a folder written before
+`outputs.json` existed, or someone else's) are kept and named in a note. `append=True` is for a run that
+adds to the results it reads from the same folder (`evaluate.py figures --from DIR`): nothing is refused or
+removed.
+
+Every run appends to `outputs.json` its command, arguments, start and end time and exactly the files it wrote
+(new or rewritten); a file rewritten by a later run leaves the earlier run's list. So the folder says what is
+whose, and `finish()` returns exactly this run's files for the summary. Standard library only.
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+
+MANIFEST = "outputs.json"
+FORMAT = "cyberdog-evaluate-outputs"
+
+
+class OutputFolderError(RuntimeError):
+    """The output folder cannot be used as asked; the message says what to do."""
+
+
+def _snapshot(out: Path) -> dict[str, tuple]:
+    """Every file under `out` (but the manifest): relative path -> (mtime_ns, size, inode)."""
+    if not out.is_dir():
+        return {}
+    files = {}
+    for p in out.rglob("*"):
+        if p.is_file() and not p.is_symlink():
+            st = p.stat()
+            files[p.relative_to(out).as_posix()] = (st.st_mtime_ns, st.st_size, st.st_ino)
+    files.pop(MANIFEST, None)
+    return files
+
+
+def read_manifest(out: str | Path) -> dict:
+    """The folder's outputs.json ({"runs": []} if there is none or it cannot be read)."""
+    try:
+        data = json.loads((Path(out) / MANIFEST).read_text())
+        if isinstance(data, dict) and data.get("format") == FORMAT and isinstance(data.get("runs"), list):
+            return data
+    except (OSError, ValueError):
+        pass
+    return {"format": FORMAT, "runs": []}
+
+
+def _examples(names, n: int = 3) -> str:
+    names = sorted(names)
+    return ", ".join(names[:n]) + (f" and {len(names) - n} more" if len(names) > n else "")
+
+
+class OutputFolder:
+    """One run's use of the output folder `out`: `OutputFolder(out, ...)` before writing, `finish()` after."""
+
+    def __init__(self, out: str | Path, force: bool = False, append: bool = False, command: str = "",
+                 argv=()):
+        self.out, self.command, self.argv = Path(out), command, [str(a) for a in argv]
+        self.notes: list[str] = []
+        self.removed: list[Path] = []
+        if self.out.exists() and not self.out.is_dir():
+            raise OutputFolderError(f"--out {self.out} is a file, not a folder")
+        existing = _snapshot(self.out)
+        if existing and not append:
+            if not force:
+                raise OutputFolderError(
+                    f"--out {self.out} already holds {len(existing)} file(s) ({_examples(existing)}): this run's "
+                    f"results would mix with them; choose a new --out, or pass --force to replace the results "
+                    f"that earlier evaluate.py runs wrote there")
+            self._remove_earlier(existing)
+        self.started = time.time()
+        self.before = _snapshot(self.out)
+
+    def _remove_earlier(self, existing: dict) -> None:
+        recorded = {f for run in read_manifest(self.out)["runs"] for f in run.get("files", [])}
+        for rel in sorted(recorded & set(existing)):
+            path = self.out / rel
+            path.unlink()
+            self.removed.append(path)
+        (self.out / MANIFEST).unlink(missing_ok=True)
+        emptied = {p.parent for p in self.removed if p.parent != self.out}
+        for d in sorted(emptied, key=lambda p: len(p.parts), reverse=True):  # e.g. learned/
+            if d.is_dir() and not any(d.iterdir()):
+                d.rmdir()
+        if self.removed:
+            self.notes.append(f"--force: removed {len(self.removed)} file(s) that earlier evaluate.py runs wrote "
+                              f"in {self.out}")
+        kept = set(existing) - recorded
+        if kept:
+            self.notes.append(f"--force: kept {len(kept)} file(s) in {self.out} that no evaluate.py run recorded "
+                              f"({_examples(kept)}); {MANIFEST} lists the files this run writes")
+
+    def written(self) -> list[Path]:
+        """The files this run has written so far (new, or rewritten since it started)."""
+        now = _snapshot(self.out)
+        return [self.out / rel for rel, stat in sorted(now.items()) if self.before.get(rel) != stat]
+
+    def finish(self) -> list[Path]:
+        """Record this run in outputs.json; returns the files it wrote, outputs.json included."""
+        files = self.written()
+        rel = [p.relative_to(self.out).as_posix() for p in files]
+        manifest = read_manifest(self.out)
+        mine = set(rel)
+        runs = []
+        for run in manifest["runs"]:  # a file rewritten now is no longer the earlier run's
+            run["files"] = [f for f in run.get("files", []) if f not in mine and (self.out / f).is_file()]
+            if run["files"]:
+                runs.append(run)
+        runs.append({"command": self.command, "argv": self.argv,
+                     "started": time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(self.started)),
+                     "finished": time.strftime("%Y-%m-%d %H:%M:%S"), "files": rel})
+        manifest["runs"] = runs
+        self.out.mkdir(parents=True, exist_ok=True)
+        tmp = self.out / f".{MANIFEST}.{os.getpid()}.tmp"
+        tmp.write_text(json.dumps(manifest, indent=1) + "\n")
+        os.replace(tmp, self.out / MANIFEST)
+        return files + [self.out / MANIFEST]
