@@ -2,16 +2,20 @@
 """Evaluate foot trajectories on the simulated CyberDog (paper Sections 3 and 4).
 
 Sub-commands (default: all):
-  all         compare + prototype + figures (+ a video with --video), on the learned trajectory
-              (default results/learned_trajectory.json; --learned FILE..., or --policies/--sweep to extract first)
+  all         compare + prototype + figures (+ a video with --video), on the learned trajectories
+              (default results/learned/: one commanded path per seed and speed; --learned FILE|DIR..., or
+              --policies/--sweep to extract first)
   baselines   walk 10 s at 1.0, 1.2 and 1.4 m/s with the composite cycloid and straight-line trajectories and
               print speed, drift, posture, energy (Eq. 7), energy per 100 m, CoT, peak torque and speed
-  extract     roll out trained stage-2 policies (--policy/--policies PATH, --sweep DIR), cut each rollout into
-              gait cycles, keep the cheapest cycle within ±5 % of the command and save its foot path
-              (learned/<label>.json, with provenance) and every cycle (learned/<label>_cycles.csv)
+  extract     roll out trained stage-2 policies (--policy/--policies PATH, --sweep DIR) at each speed (a policy
+              trained over a speed range: each of --speeds) and save the learned path (learned/<label>_<v>mps.json)
+              and every cycle (learned/<label>_<v>mps_cycles.csv): the commanded foot path (trot path + the
+              policy's per-leg shift, mean of the settled cycles within ±5 % of the command) for foot-mode
+              policies, or with --path measured the paper's way (the measured foot path of the cheapest cycle)
   compare     Section 4.1: replay the learned, cycloid and straight-line trajectories with the IK + PID trot for
-              --duration s at each speed; Table 5 (paper lift height, and a control set at the learned lift
-              height), D_t by Eq. (12); Figures 10 and 13
+              --duration s at each speed; Table 5 (the headline: baselines at the learned path's own lift
+              height; and the paper's protocol: baselines at 0.15 m), D_t by Eq. (12) on Eq. (7) and on the
+              electrical energy, positive work and foot slip; Figures 10 and 13
   prototype   Section 4.2 in simulation: walks of --prototype-distance m (default 20; the paper's 100) on the
               ideal and a hardware-like robot, battery use (Eq. 13), range, sim-to-real gap
   figures     Figures 4, 6, 7, 10, 13 from saved results (--from DIR: a folder written by `all` or `compare`)
@@ -20,7 +24,10 @@ Sub-commands (default: all):
 Outputs go to --out (default runs/evaluate-<time>/), never over inputs; a folder that already holds results is
 refused unless --force (which first removes the files earlier runs recorded in its outputs.json); every file this
 run writes is listed at the end and recorded in outputs.json:
-  table5.{md,csv,json}          Table 5 (E in kJ per walk, D_t by Eq. 12; paper set and same-lift control set)
+  table5.md                     Table 5: matched-lift and paper-protocol summaries (mean ± 95 % CI over seeds),
+                                then every walk
+  table5_summary.{csv,json}     the summaries, machine-readable
+  table5.{csv,json}             every walk's E (kJ) and D_t by Eq. 12, both sets
   comparison.{md,csv,json}      every walk: E, energy per 100 m, CoT, mean speed, status, D_t (also per 100 m)
   learned_mean_ci.*             across seeds: mean and 95 % CI of E and D_t (with several learned trajectories)
   walks.json, power_traces.npz  per walk metadata and total joint power Σ|τ·θ̇| at the physics rate (Figure 10)
@@ -57,7 +64,7 @@ BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "latera
 COMMANDS = ("all", "baselines", "extract", "compare", "prototype", "figures", "video")
 ROOT = Path(__file__).resolve().parent
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
-DEFAULT_METRICS = ROOT / "results" / "policy" / "metrics.csv"  # the shipped policy's training log
+DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
 DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (paper: 100 m, `--prototype-distance 100`)
 STAGE2_ACTORS = ("stage2_actor.pt", "stage2_best_actor.pt", "stage2_final_actor.pt")  # preference order
 
