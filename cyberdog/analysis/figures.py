@@ -189,8 +189,15 @@ def figure7(learned: dict, out_dir, straight_shape: str = "rectangle", paper_lif
     for ax in axes:
         ax.grid(alpha=0.3)
     prov = first.provenance
-    info = (f"cycle {prov.get('cycle_index', '?')} of the rollout at {prov.get('speed_command_mps', '?')} m/s, "
-            f"E = {prov.get('cycle_energy_J', float('nan')):.1f} J per cycle" if prov else "")
+    if prov.get("path") == "commanded":  # the commanded path of one leg, averaged over the settled cycles
+        used = prov.get("cycles_used", [])
+        which = (f"LF's commanded path, mean of {len(used)} cycles" if prov.get("cycle") == "mean"
+                 else f"LF's commanded path, cycle {used[0] if used else '?'}")
+    else:
+        which = f"cycle {prov.get('cycle_index', '?')}"
+    info = (f"{which} of the rollout at {prov.get('speed_command_mps', '?')} m/s "
+            f"(seed {prov.get('seed', '?')}), E = {prov.get('cycle_energy_J', float('nan')):.1f} J per cycle"
+            if prov else "")
     fig.suptitle(f"Figure 7: extracted learned foot trajectory (S = {S:.2f} m; {info})", fontsize=10)
     return save_figure(fig, out_dir, "figure7_learned_trajectory")
 
