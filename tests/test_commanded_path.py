@@ -189,3 +189,20 @@ def test_replaying_the_commanded_path_reproduces_the_closed_loop_energy():
     assert settled_cycle_energy(replay) < 0.95 * settled_cycle_energy(plain)
     measured = extract_from_rollout(r, env, settle_time=2.0)
     assert measured.trajectory.lift_height > 0.05
+
+
+def test_the_shipped_learned_paths_cover_five_seeds_at_the_papers_speeds():
+    """results/learned/ (Table 5's input): one commanded path per seed and speed, each from a rollout at that
+    speed that did not fall, built from settled in-band cycles."""
+    import evaluate
+
+    learned = evaluate.load_learned([evaluate.DEFAULT_LEARNED])
+    assert sorted(learned) == [f"seed{s}" for s in range(5)]
+    for label, by_speed in learned.items():
+        assert sorted(by_speed) == [1.0, 1.2, 1.4]
+        for v, path in by_speed.items():
+            p = path.provenance
+            assert isinstance(path, CommandedPath) and path.speed == v == p["speed_command_mps"]
+            assert p["path"] == "commanded" and p["cycle"] == "mean" and not p["rollout_fell"]
+            assert len(p["cycles_used"]) >= 10 and abs(p["cycle_speed_mps"] - v) <= 0.05 * v
+            assert 0.08 < path.own_lift_height() < 0.11 and path.offsets.n == 400
