@@ -66,7 +66,9 @@ ROOT = Path(__file__).resolve().parent
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
 DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
 DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (paper: 100 m, `--prototype-distance 100`)
-STAGE2_ACTORS = ("stage2_actor.pt", "stage2_best_actor.pt", "stage2_final_actor.pt")  # preference order
+# preference order: the shipped name, then the actor at the end of stage 2 (fixed in advance), then the one of
+# its best-scoring episode (chosen on a noisy score)
+STAGE2_ACTORS = ("stage2_actor.pt", "stage2_final_actor.pt", "stage2_best_actor.pt")
 
 
 class UsageError(Exception):
