@@ -446,7 +446,7 @@ def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
     name = args.video_trajectory
     traj = None
     lift = cfg.gait.lift_height
-    if name == "learned":
+    if name == "learned":  # a commanded path is shown as its LF leg's x-z path on all four legs
         label, traj = next(iter(flat_learned(learned, args.video_speed).items()))
         lift = cmp.learned_lift_height(traj)
     vcfg = cmp.walk_config(cfg, name, args.video_speed, lift)
