@@ -271,15 +271,21 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
                       provenance=prov)
 
 
-def extract_from_rollout(rollout, env_config, leg: str = "LF", speed_tolerance: float = SPEED_TOLERANCE,
-                         settle_time: float = 1.0, n_points: int = 100, provenance: dict | None = None
-                         ) -> Extraction:
-    """`extract_trajectory` on a `cyberdog.rl.rollout.Rollout` run in the env `env_config` (an EnvConfig)."""
+def rollout_provenance(rollout, env_config, provenance: dict | None = None) -> dict:
+    """What an extracted trajectory records of the rollout it came from (and a warning if it fell)."""
     prov = {"rollout_mean_speed_mps": rollout.mean_speed, "rollout_fell": bool(rollout.fell),
             "rollout_duration_s": rollout.duration, "rollout_energy_J": rollout.energy,
             "action_mode": env_config.action_mode, **(provenance or {})}
     if rollout.fell:
         prov["warning"] = f"the rollout fell after {rollout.duration:.2f} s"
+    return prov
+
+
+def extract_from_rollout(rollout, env_config, leg: str = "LF", speed_tolerance: float = SPEED_TOLERANCE,
+                         settle_time: float = 1.0, n_points: int = 100, provenance: dict | None = None
+                         ) -> Extraction:
+    """`extract_trajectory` on a `cyberdog.rl.rollout.Rollout` run in the env `env_config` (an EnvConfig)."""
+    prov = rollout_provenance(rollout, env_config, provenance)
     return extract_trajectory(rollout.traces, rollout.physics_dt, rollout.speed_command, env_config.walk.robot,
                               env_config.walk.gait, leg, speed_tolerance, settle_time, n_points, provenance=prov)
 
@@ -365,11 +371,7 @@ def commanded_from_rollout(rollout, env_config, cycle: str = "mean", speed_toler
     if env_config.action_mode != "foot":
         raise ExtractionError(f"a policy of action_mode {env_config.action_mode!r} commands no foot path; "
                               "use the measured-path extraction")
-    prov = {"rollout_mean_speed_mps": rollout.mean_speed, "rollout_fell": bool(rollout.fell),
-            "rollout_duration_s": rollout.duration, "rollout_energy_J": rollout.energy,
-            "action_mode": env_config.action_mode, **(provenance or {})}
-    if rollout.fell:
-        prov["warning"] = f"the rollout fell after {rollout.duration:.2f} s"
+    prov = rollout_provenance(rollout, env_config, provenance)
     return extract_commanded(rollout.traces, rollout.physics_dt, rollout.speed_command, env_config.walk.gait,
                              cycle, speed_tolerance, settle_time, prov)
 
