@@ -36,13 +36,16 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-import pybullet
-import pybullet_data
-from pybullet_utils.bullet_client import BulletClient
 
 from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig, SimConfig
 from cyberdog.core.actuator import ActuatorModel
 from cyberdog.core.kinematics import standing_joint_angles
+from cyberdog.sim.quiet import quiet_pybullet
+
+with quiet_pybullet():  # without pybullet's build banner
+    import pybullet
+    import pybullet_data
+    from pybullet_utils.bullet_client import BulletClient
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SPAWN_CLEARANCE = 0.002  # m, default base height above robot.body_height so the feet start just off the ground
@@ -133,7 +136,8 @@ class Robot:
                               f"Set DISPLAY to a reachable X server to watch it", RuntimeWarning, stacklevel=3)
                 gui = False
         self.gui = gui  # whether a PyBullet window is open
-        self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        with quiet_pybullet():  # without the "argv[0]=" line of every connection
+            self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         c = self.client
         c.setGravity(0.0, 0.0, -sim.gravity)
         c.setPhysicsEngineParameter(fixedTimeStep=sim.physics_dt, numSolverIterations=sim.solver_iterations,
