@@ -1,8 +1,11 @@
-"""Per-episode metrics to a CSV file and TensorBoard scalars, both resumable."""
+"""Per-episode metrics to a CSV file and TensorBoard scalars, both resumable; TorchRL's console lines in
+colour only on a terminal."""
 from __future__ import annotations
 
 import csv
+import logging
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -13,6 +16,39 @@ COLUMNS = (("stage", "episode", "stage_episode", "env_steps", "length", "score")
            + ("energy_J", "mean_speed", "window_mean_score", "actor_loss", "critic_loss", "q_mean", "q_max",
               "updates", "env_steps_per_s", "updates_per_s", "wall_time_s"))
 TIMING_COLUMNS = ("env_steps_per_s", "updates_per_s", "wall_time_s")  # differ between identical reruns
+
+
+ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")  # terminal colour and cursor codes
+
+
+class _ColourOnTerminal(logging.Formatter):
+    """TorchRL's own console format, with its colour codes removed unless the stream is a terminal: a
+    train.log or a redirected stdout gets plain text (NO_COLOR, https://no-color.org, removes them always)."""
+
+    def __init__(self, coloured: logging.Formatter, stream):
+        super().__init__()
+        self.coloured, self.stream = coloured, stream
+
+    def format(self, record: logging.LogRecord) -> str:
+        text = self.coloured.format(record)
+        try:
+            terminal = self.stream.isatty() and not os.environ.get("NO_COLOR")
+        except (AttributeError, ValueError):  # a closed or file-less stream
+            terminal = False
+        return text if terminal else ANSI_ESCAPE.sub("", text)
+
+
+def plain_torchrl_log_off_terminal() -> None:
+    """Wrap the formatter of TorchRL's console handler (installed when torchrl is imported; it colours every
+    line with ANSI codes whatever the stream) in `_ColourOnTerminal`. Idempotent."""
+    import torchrl  # noqa: F401  the "torchrl" logger and its handler are created by this import
+
+    for handler in logging.getLogger("torchrl").handlers:
+        if handler.formatter is not None and not isinstance(handler.formatter, _ColourOnTerminal):
+            handler.setFormatter(_ColourOnTerminal(handler.formatter, getattr(handler, "stream", None)))
+
+
+plain_torchrl_log_off_terminal()  # every training process (train.py, a sweep's seed) imports this module
 
 
 class EpisodeLogger:
