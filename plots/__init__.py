@@ -1,0 +1,80 @@
+"""The paper's figures, drawn from saved results only (matplotlib; each figure as PNG and PDF).
+
+One module per figure; none runs physics or imports the simulator or torch (`tests/test_plots.py` checks):
+
+    figure4          the common foot trajectories (computed by the pure-numpy `cyberdog.core.trajectories`)
+    figure6          the training curve: episode score over episodes, from a run's metrics.csv
+    figure7          the learned foot trajectory against the common ones, from learned/*.json
+    figure10         joint power Σ|τ·θ̇| over two gait cycles, from walks.json + power_traces.npz
+    figure13         energy (comparison.json) and battery use (prototype.json) against speed
+    learning_curves  a seed sweep's curves with a 95 % band, from its learning_curves.csv
+    results          reading a results folder written by `evaluate.py`
+    shipped          the README's copies of Figures 7, 10 and 13 and the small inputs they are drawn from
+
+`draw_all(results_dir, out_dir)` draws every figure the folder has inputs for; `python -m plots` does the same
+from the command line (`python -m plots --help`).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from plots.figure4 import figure4
+from plots.figure6 import figure6
+from plots.figure7 import figure7
+from plots.figure10 import figure10
+from plots.figure13 import figure13
+from plots.learning_curves import CSV_NAME, learning_curves
+from plots.results import load_results
+from plots.style import DPI
+
+FIGURES = ("4", "6", "7", "10", "13", "learning_curves")
+
+
+def draw_all(results_dir: str | Path, out_dir: str | Path, metrics=None, only=None, dpi: int = DPI,
+             pdf: bool = True, log=print) -> list[Path]:
+    """Draw every figure that `results_dir` (a folder written by `evaluate.py`) has the inputs for into
+    `out_dir`; returns the files written.
+
+    metrics: training logs for Figure 6 ({label: metrics.csv} or a list of paths); default: the folder's own
+    metrics.csv if it is a training run folder. only: figure names to draw (of FIGURES; default all).
+    """
+    results = load_results(results_dir)
+    wanted = set(FIGURES if only is None else (str(f) for f in only))
+    unknown = wanted - set(FIGURES)
+    if unknown:
+        raise ValueError(f"unknown figure(s) {sorted(unknown)}; choose from {', '.join(FIGURES)}")
+    if metrics is None and (results.folder / "metrics.csv").is_file():
+        metrics = [results.folder / "metrics.csv"]
+    g, save = results.gait, {"dpi": dpi, "pdf": pdf}
+    skipped, paths = [], []
+    if "4" in wanted:
+        paths += figure4(out_dir, 0.2, g.lift_height, g.straight_shape, g.swing_time, g.stance_time, **save)
+    if "6" in wanted:
+        if metrics:
+            paths += figure6(metrics, out_dir, **save)
+        else:
+            skipped.append("6 (no training log: pass metrics.csv)")
+    if "7" in wanted:
+        if results.learned:
+            paths += figure7(results.learned, out_dir, g.straight_shape, g.lift_height, g.swing_time,
+                             g.stance_time, **save)
+        else:
+            skipped.append("7 (no learned/*.json)")
+    if "10" in wanted:
+        if results.walks:
+            paths += figure10(results.walks, results.power, out_dir, g.lift_height, **save)
+        else:
+            skipped.append("10 (no walks.json + power_traces.npz)")
+    if "13" in wanted:
+        if results.rows:
+            paths += figure13(results.rows, out_dir, results.prototype_rows, **save)
+        else:
+            skipped.append("13 (no comparison.json)")
+    if "learning_curves" in wanted and (results.folder / CSV_NAME).is_file():
+        paths += learning_curves(results.folder, out_dir, **save)
+    if skipped and log:
+        log(f"figures skipped (no input in {results.folder}): {'; '.join(skipped)}")
+    return paths
+
+
+__all__ = ["FIGURES", "draw_all", "figure10", "figure13", "figure4", "figure6", "figure7", "learning_curves"]

@@ -1,0 +1,141 @@
+"""Figure 13: energy against speed, by foot trajectory. (a) E by Eq. (7) over the comparison walk (the
+paper's protocol; learned: mean ± 95 % CI over seeds); (b) battery used per 100 m, Eq. (13), in the
+prototype experiment on the ideal (plain) and hardware-like (dotted) robot.
+
+Drawn from `comparison.json` and `prototype.json`. A bar counts only if its walk neither fell nor missed the
+command by more than the speed band (`cyberdog.config.paper.SPEED_BAND`, ±5 %); every other bar is faded
+and cross-hatched, in both panels. The prototype walks are shorter than the paper's 100 m (20 m by
+default): (b) scales their battery use to 100 m, and its title says from which distance.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from cyberdog.analysis.stats import mean_ci
+from cyberdog.config.paper import PAPER_DISTANCE_M, SPEED_BAND, speed_within_band
+from plots.style import COLORS, FADED_ALPHA, NAMES, save_figure, styled
+
+STEM = "figure13_energy_vs_speed"
+Bar = tuple[float, float, bool]  # (value, 95 % CI half-width or nan, counts)
+
+
+def bars(ax, speeds, groups: dict[str, list[Bar]], ylabel: str, title: str,
+         styles: dict[str, tuple[str, str | None]]) -> None:
+    """Grouped bars: per speed one bar per group; `styles` gives each group's colour and hatch; a bar that
+    does not count is faded and cross-hatched."""
+    keys = list(groups)
+    width = 0.8 / max(1, len(keys))
+    x = np.arange(len(speeds))
+    for i, key in enumerate(keys):
+        color, hatch = styles[key]
+        for j, (val, ci, ok) in enumerate(groups[key]):
+            if not math.isfinite(val):
+                continue
+            ax.bar(x[j] + (i - (len(keys) - 1) / 2) * width, val, width, color=color,
+                   alpha=1.0 if ok else FADED_ALPHA, hatch=hatch if ok else "xx", edgecolor="k", lw=0.5,
+                   yerr=ci if math.isfinite(ci) else None, capsize=3, label=key if j == 0 else None)
+    ax.set_xticks(x, [f"{v:g} m/s" for v in speeds])
+    ax.set_xlabel("commanded speed")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+
+
+def simulation_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar]], dict[str, tuple]]:
+    """Panel (a) from the paper set's comparison rows: per trajectory one bar per speed, in kJ."""
+    paper = [r for r in rows if r["set"] == "paper"]
+    speeds = sorted(dict.fromkeys(r["speed_command_mps"] for r in paper))
+    groups: dict[str, list[Bar]] = {}
+    styles: dict[str, tuple] = {}
+    for key in ("learned", "cycloid", "straight"):
+        mine = [r for r in paper if r["trajectory"] == key]
+        if not mine:
+            continue
+        vals: list[Bar] = []
+        for v in speeds:
+            sel = [r for r in mine if r["speed_command_mps"] == v]
+            ok = [r["energy_kJ"] for r in sel if r["valid"]]  # valid = did not fall, kept the speed band
+            if ok:
+                vals.append((*mean_ci(ok), True))
+            elif sel:
+                vals.append((float(np.mean([r["energy_kJ"] for r in sel])), math.nan, False))
+            else:
+                vals.append((math.nan, math.nan, False))
+        n_seeds = len(dict.fromkeys(r["seed"] for r in mine))
+        if n_seeds > 1:
+            label = f"{NAMES['learned']}, mean ± 95 % CI of {n_seeds} seeds (own H)"
+        else:
+            label = ((mine[0]["label"] if key != "learned" else NAMES["learned"])
+                     + f" (H = {mine[0]['lift_height_m']:.3f} m)")
+        groups[label] = vals
+        styles[label] = (COLORS[key], None)
+    return speeds, groups, styles
+
+
+def prototype_counts(row: dict) -> bool:
+    """A prototype walk counts if it reached the distance, did not fall and kept the speed band."""
+    return (bool(row["reached"]) and not row["fell"]
+            and speed_within_band(row["mean_speed_mps"], row["speed_mps"], SPEED_BAND))
+
+
+def prototype_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar]], dict[str, tuple]]:
+    """Panel (b): per trajectory and robot, battery % per 100 m at each speed."""
+    speeds = sorted(dict.fromkeys(r["speed_mps"] for r in rows))
+    groups: dict[str, list[Bar]] = {}
+    styles: dict[str, tuple] = {}
+    for name in dict.fromkeys(r["trajectory"] for r in rows):
+        for robot in ("ideal", "hardware"):
+            vals: list[Bar] = []
+            for v in speeds:
+                r = next((r for r in rows if r["trajectory"] == name and r["speed_mps"] == v
+                          and r["robot"] == robot), None)
+                if r is None or not r["distance_m"] > 0:
+                    vals.append((math.nan, math.nan, False))
+                    continue
+                per_100m = PAPER_DISTANCE_M * r["battery_used_pct"] / r["distance_m"]
+                vals.append((per_100m, math.nan, prototype_counts(r)))
+            if any(math.isfinite(v[0]) for v in vals):
+                key = f"{name} ({robot} robot)"
+                groups[key] = vals
+                styles[key] = (COLORS.get(name.split(" ")[0], "gray"), ".." if robot == "hardware" else None)
+    return speeds, groups, styles
+
+
+def walk_length(rows: list[dict]) -> str:
+    """The prototype walks' distance in words (the median walked, rounded: every walk is asked for the same)."""
+    d = [r["distance_m"] for r in rows if r["distance_m"] > 0]
+    return f"{float(np.median(d)):.0f} m" if d else "? m"
+
+
+@styled
+def draw(rows: list[dict], prototype_rows: list[dict] | None = None) -> Figure:
+    """`rows`: comparison rows (energy_kJ per walk); `prototype_rows`: prototype walks, or None for (a) only."""
+    n_panels = 2 if prototype_rows else 1
+    fig = Figure(figsize=(6 * n_panels, 4.6))
+    axes = fig.subplots(1, n_panels, squeeze=False)[0]
+    speeds, groups, styles = simulation_groups(rows)
+    duration = max((r["duration_s"] for r in rows if r["set"] == "paper"), default=math.nan)
+    bars(axes[0], speeds, groups, "energy over the walk, Eq. (7) (kJ)",
+         f"(a) simulation, {duration:g} s walks (Table 5)", styles)
+    if prototype_rows:
+        p_speeds, pgroups, pstyles = prototype_groups(prototype_rows)
+        bars(axes[1], p_speeds, pgroups, f"battery used per {PAPER_DISTANCE_M:g} m, Eq. (13) (% of the pack)",
+             f"(b) prototype in simulation: {walk_length(prototype_rows)} walks scaled to {PAPER_DISTANCE_M:g} m",
+             pstyles)
+    fig.suptitle(f"Figure 13: energy against speed, by foot trajectory (faded, cross-hatched: the walk fell or "
+                 f"missed the speed by > {100 * SPEED_BAND:g} %)", fontsize=10, y=1.0)
+    return fig
+
+
+def figure13(rows: list[dict], out_dir: str | Path, prototype_rows: list[dict] | None = None, **save) -> list[Path]:
+    """Draw Figure 13 and write it into `out_dir`."""
+    return save_figure(draw(rows, prototype_rows), out_dir, STEM, **save)
+
+
+__all__ = ["STEM", "bars", "draw", "figure13", "prototype_counts", "prototype_groups", "simulation_groups",
+           "walk_length"]
