@@ -102,7 +102,7 @@ def _flag(name: str) -> str:
 
 def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
     """--seeds, --resume of a sweep folder, --aggregate."""
-    from cyberdog.rl.sweep import SweepError, create_sweep, parse_seeds, run_sweep
+    from cyberdog.sweeps import SweepError, create_sweep, parse_seeds, run_sweep
 
     try:
         if args.aggregate is not None:
@@ -157,7 +157,7 @@ def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
 
 
 def _check_eval_args(args) -> None:
-    from cyberdog.rl.sweep import SweepError
+    from cyberdog.sweeps import SweepError
 
     if args.eval_duration is not None and not args.eval_duration >= 0:
         raise SweepError(f"--eval-duration must be >= 0 s (0 = no evaluation), got {args.eval_duration}")
@@ -166,8 +166,8 @@ def _check_eval_args(args) -> None:
 
 
 def _aggregate(args, sweep_dir: Path) -> int:
-    from cyberdog.analysis.aggregate import aggregate_sweep
-    from cyberdog.rl.sweep import SweepError, available_cores
+    from cyberdog.sweeps import SweepError, available_cores
+    from cyberdog.sweeps.aggregate import aggregate_sweep
 
     try:
         _check_eval_args(args)

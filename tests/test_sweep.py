@@ -6,6 +6,7 @@ it with `--resume`. Ray runs on one local instance with 2 CPUs shared by the mod
 """
 from __future__ import annotations
 
+import ast
 import csv
 import importlib.util
 import json
@@ -22,12 +23,13 @@ import pytest
 
 from cyberdog import config as C
 from cyberdog.analysis.stats import mean_ci
-from cyberdog.analysis.aggregate import aggregate_sweep, learning_curves, stage_curves
 from cyberdog.rl.checkpoint import load_checkpoint
-from cyberdog.rl.sweep import (STATUS_FILE, SweepError, create_sweep, load_sweep, parse_seeds, run_sweep,
-                               stage_budget)
+from cyberdog.sweeps import (STATUS_FILE, SweepError, create_sweep, load_sweep, parse_seeds, run_sweep,
+                             stage_budget)
+from cyberdog.sweeps.aggregate import aggregate_sweep, learning_curves, stage_curves
 
 ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "cyberdog"
 TINY = ROOT / "configs/tiny.yaml"
 SHORT = ["train.stage1.max_env_steps=100", "train.stage2.max_env_steps=50", "train.checkpoint_every=50",
          "train.init_random_frames=50"]
@@ -323,3 +325,45 @@ def test_aggregate_bands_and_tables_from_metrics(tmp_path):
     only1 = aggregate_sweep(tmp_path / "stage1_only", eval_duration=0, progress=False)
     assert list(only1["curves"]) == [1] and not any("stage2" in c for c in only1["stats"])
     assert np.isfinite(result["stats"]["stage1_final_window_score"]["ci95"])
+
+
+# ---- the sweeps layer ---------------------------------------------------------------------------------------------
+def imported_modules(path: Path) -> set[str]:
+    """Every module a source file imports, at any depth (`from cyberdog import sweeps` counts as cyberdog.sweeps)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            names.update(f"{node.module}.{a.name}" for a in node.names)
+    return names
+
+
+def test_no_layer_below_sweeps_imports_them():
+    """Sweeps are the orchestration on top of the package (DESIGN.md layers): analysis, rl and everything
+    else below never import them."""
+    offenders = {}
+    for path in PACKAGE.rglob("*.py"):
+        if (PACKAGE / "sweeps") in path.parents:
+            continue
+        bad = sorted(m for m in imported_modules(path) if m == "cyberdog.sweeps" or m.startswith("cyberdog.sweeps."))
+        if bad:
+            offenders[str(path.relative_to(ROOT))] = bad
+    assert offenders == {}
+    assert imported_modules(PACKAGE / "sweeps" / "aggregate.py") >= {"cyberdog.analysis.parallel"}  # the check sees
+
+
+def test_sweeps_import_without_torch():
+    """A sweep driver (and a Ray node's attempt) needs neither torch nor PyBullet: only the trainings it starts do."""
+    code = ("import sys, cyberdog.sweeps, cyberdog.sweeps.process, cyberdog.sweeps.aggregate\n"
+            "print(sorted(m for m in ('torch', 'torchrl', 'pybullet') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_attempt_module_is_standard_library_only():
+    """RayBackend ships cyberdog.sweeps.process to the workers by value: it must not need the package there."""
+    stdlib = sys.stdlib_module_names
+    outside = {m for m in imported_modules(PACKAGE / "sweeps" / "process.py") if m.split(".")[0] not in stdlib}
+    assert outside <= {"__future__", "ray"}, outside

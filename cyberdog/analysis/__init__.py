@@ -1,2 +1,3 @@
 """Experiments on the walking robot: scripted walks, trajectory extraction and comparison (Table 5), the
-prototype run, across-seed aggregation, statistics, figures and videos. May import every layer above it."""
+prototype run, statistics, figures and videos, and `parallel`, the one process pool for independent walks.
+May import every layer above it; never the sweeps (the orchestration on top of the package)."""

@@ -13,6 +13,10 @@ Written into the sweep folder (inputs — the seed run folders — are only read
 Evaluation is one deterministic `rollout` per actor (`cyberdog.rl.rollout`, the env the actor was trained in,
 `speed` m/s for `duration` s): mean speed over the second half, fell, energy per metre (Eq. 7 energy over
 forward distance), and the stage-2 vs stage-1 change of energy per metre in %. `duration=0` skips it.
+
+Part of the sweeps package (the design's "sweeps" layer owns aggregation): it reads the sweep folder's
+format (sweep.json, seed<N>/), so it lives beside the code that writes that format, and the analysis layer
+below knows nothing about sweeps.
 """
 from __future__ import annotations
 
@@ -20,13 +24,16 @@ import csv
 import json
 import math
 import re
-from concurrent.futures import ProcessPoolExecutor
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
+from cyberdog.analysis.parallel import map_in_processes
 from cyberdog.analysis.report import markdown_table
 from cyberdog.analysis.stats import mean_ci, mean_ci_band
+from cyberdog.sweeps.folder import is_sweep_dir, load_sweep, seed_dir
+from cyberdog.sweeps.process import SweepError
 
 EVAL_FORMAT, EVAL_VERSION = "cyberdog-sweep-evaluation", 1
 ROLLOUT_METRICS = ("mean_speed_mps", "fell", "energy_per_m_J", "distance_m", "energy_J")
@@ -39,8 +46,6 @@ PARALLEL_EVAL_MIN_S = 60.0
 def seed_runs(sweep_dir) -> list[tuple[str, Path]]:
     """(label, run folder) of every seed: from sweep.json if the folder is a sweep, else every sub-folder with a
     metrics.csv (so a hand-made folder of runs aggregates too)."""
-    from cyberdog.rl.sweep import SweepError, is_sweep_dir, load_sweep, seed_dir
-
     sweep_dir = Path(sweep_dir)
     if not sweep_dir.is_dir():
         raise SweepError(f"{sweep_dir} is not a folder")
@@ -159,8 +164,6 @@ def aggregate_sweep(sweep_dir, eval_duration: float = 10.0, eval_speed: float = 
     summary table into `sweep_dir`. Seeds without data are listed under "missing", not fatal."""
     from tqdm import tqdm
 
-    from cyberdog.rl.sweep import SweepError
-
     if not (math.isfinite(eval_duration) and eval_duration >= 0):
         raise SweepError(f"--eval-duration must be >= 0 s (0 = no evaluation), got {eval_duration}")
     if not (math.isfinite(eval_speed) and eval_speed >= 0):
@@ -189,20 +192,13 @@ def aggregate_sweep(sweep_dir, eval_duration: float = 10.0, eval_speed: float = 
         bar = tqdm(total=len(jobs), unit="rollout", desc="evaluate", disable=not progress, dynamic_ncols=True)
         parallel = workers > 1 and len(jobs) > 1 and eval_duration * len(jobs) >= PARALLEL_EVAL_MIN_S
         try:
-            if parallel:
-                import multiprocessing
-
-                with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn")) as ex:
-                    futures = [(i, n, ex.submit(evaluate_actor, p, eval_speed, eval_duration)) for i, n, p in jobs]
-                    for i, n, fut in futures:
-                        entries[i]["metrics"][n] = fut.result()
-                        bar.update()
-            else:
-                for i, n, p in jobs:
-                    entries[i]["metrics"][n] = evaluate_actor(p, eval_speed, eval_duration)
-                    bar.update()
+            metrics = map_in_processes(partial(evaluate_actor, speed=eval_speed, duration=eval_duration),
+                                       [p for _, _, p in jobs], workers=min(workers, len(jobs)) if parallel else 1,
+                                       on_result=lambda *_: bar.update())
         finally:
             bar.close()
+        for (i, n, _), m in zip(jobs, metrics):
+            entries[i]["metrics"][n] = m
         for e in entries:
             m = e["metrics"]
             if "stage1" in m and "stage2" in m:

@@ -2,7 +2,8 @@
 
 Standard library only, on purpose: `RayBackend` ships this module's functions to the Ray workers by value
 (`ray.cloudpickle.register_pickle_by_value`), so a worker starts the training process without importing torch
-or the `cyberdog` package itself. The sweep logic (seeds, status, retries) is in `cyberdog.rl.sweep`.
+or the `cyberdog` package itself. The sweep folder is in `cyberdog.sweeps.folder`, the driver loop (queue,
+status, retries) in `cyberdog.sweeps.run`.
 """
 from __future__ import annotations
 
@@ -20,15 +21,9 @@ LOG_FILE, ATTEMPT_FILE, SWEEP_FILE = "train.log", "sweep_attempt.json", "sweep.j
 RAY_MISSING = ("--backend ray needs Ray, which is not installed: pip install -e '.[ray]' (or pip install 'ray>=2.9'),"
                " or use the default --backend local")
 
+
 class SweepError(RuntimeError):
     """Bad sweep input or a sweep folder that cannot be used; the message says what to do."""
-
-
-def available_cores() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not Linux
-        return max(1, os.cpu_count() or 1)
 
 
 # ---- one attempt: a training process. Standard library only (shipped by value to Ray workers) ------------------
@@ -150,7 +145,8 @@ class RayBackend:
 
     name = "ray"
 
-    def __init__(self, workers: int | None, address: str | None, script: Path, echo=print):
+    def __init__(self, workers: int | None, address: str | None, script: Path, local_cpus: int, echo=print):
+        """local_cpus: CPUs of a Ray instance started here when neither `workers` nor `address` is given."""
         try:
             import ray
         except ImportError as e:
@@ -169,7 +165,7 @@ class RayBackend:
                 echo(f"sweep: joining the Ray cluster at {address}" + (f" (shipping {root})" if ship else ""))
                 ray.init(address=address, **kwargs)
             else:
-                ray.init(num_cpus=workers or available_cores(), **kwargs)
+                ray.init(num_cpus=workers or local_cpus, **kwargs)
             self.owns = True
         elif address:
             echo(f"sweep: Ray is already initialised in this process; --ray-address {address} is not used")

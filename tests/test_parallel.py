@@ -1,0 +1,78 @@
+"""The one process pool (`cyberdog.analysis.parallel`): order, in-process shortcut, errors naming the job,
+worker reuse, and a failure that does not wait for the other jobs."""
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from cyberdog.analysis.parallel import ProcessMap, available_cores, map_in_processes, resolve_workers
+
+
+def pid_after(delay_s: float) -> tuple[float, int]:
+    """Sleeps, then says which process ran it (module level: spawned workers import it by name)."""
+    time.sleep(delay_s)
+    return delay_s, os.getpid()
+
+
+def fail_on_three(x: int) -> int:
+    if x == 3:
+        raise KeyError(f"no value for {x}")
+    return x * x
+
+
+def fail_fast_or_sleep(delay_s: float) -> float:
+    if delay_s == 0:
+        raise RuntimeError("the quick job failed")
+    time.sleep(delay_s)
+    return delay_s
+
+
+def test_results_in_job_order_while_workers_finish_out_of_order():
+    delays = [2.0, 0.0, 0.3, 0.0]  # the first job finishes last (by far: spawn start-up times vary)
+    seen = []
+    out = map_in_processes(pid_after, delays, workers=2, on_result=lambda i, r, done: seen.append((i, done)))
+    assert [d for d, _ in out] == delays
+    assert os.getpid() not in {pid for _, pid in out}, "two workers and four jobs: spawned processes"
+    assert sorted(i for i, _ in seen) == [0, 1, 2, 3] and [done for _, done in seen] == [1, 2, 3, 4]
+    assert seen[-1][0] == 0, "on_result follows the finishing order"
+
+
+@pytest.mark.parametrize("workers, jobs", [(1, [0.0, 0.0, 0.0]), (4, [0.0])])
+def test_one_worker_or_one_job_runs_in_this_process(workers, jobs):
+    assert {pid for _, pid in map_in_processes(pid_after, jobs, workers=workers)} == {os.getpid()}
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_failing_job_keeps_its_error_type_and_is_named(workers):
+    with pytest.raises(KeyError, match="no value for 3") as e:
+        map_in_processes(fail_on_three, [1, 2, 3, 4], workers=workers, describe=lambda x: f"x={x}")
+    assert any("job 2 of 4" in note and "x=3" in note for note in e.value.__notes__), e.value.__notes__
+
+
+def test_a_failure_stops_the_other_jobs():
+    """A failed job must not wait for minutes of walks whose results will not be used."""
+    t0 = time.perf_counter()
+    with pytest.raises(RuntimeError, match="quick job failed"):
+        map_in_processes(fail_fast_or_sleep, [120.0, 0.0], workers=2)
+    assert time.perf_counter() - t0 < 60.0
+
+
+def test_process_map_keeps_its_workers_between_calls_and_recovers_after_a_failure():
+    with ProcessMap(2) as run:
+        first = {pid for _, pid in run(pid_after, [0.2, 0.2])}
+        second = {pid for _, pid in run(pid_after, [0.2, 0.2])}
+        assert len(first | second) <= 2 and os.getpid() not in first
+        with pytest.raises(KeyError):
+            run(fail_on_three, [3, 1])
+        assert run(fail_on_three, [1, 2]) == [1, 4]
+
+
+def test_workers_are_checked():
+    assert resolve_workers(None, 1000) == available_cores() and resolve_workers(None, 1) == 1
+    assert resolve_workers(np.int64(3), 10) == 3
+    for bad in (0, -1, 2.5, "2", True):
+        with pytest.raises(ValueError, match="workers"):
+            resolve_workers(bad, 4)
