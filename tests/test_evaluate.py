@@ -13,6 +13,7 @@ from cyberdog.analysis import table5 as t5
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
+from cyberdog.evaluation import learned as learned_module
 
 FIGURES = ("figure4_baseline_trajectories", "figure6_reward_curves", "figure7_learned_trajectory",
            "figure10_power", "figure13_energy_vs_speed")
@@ -115,7 +116,7 @@ def test_figures_redraw_from_a_saved_folder(reduced_run, tmp_path):
 
 
 def test_missing_learned_trajectory_is_a_clear_error(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(evaluate, "DEFAULT_LEARNED", tmp_path / "results" / "learned")
+    monkeypatch.setattr(learned_module, "DEFAULT_LEARNED", tmp_path / "results" / "learned")
     assert evaluate.main(["--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "results/learned does not exist" in err and "extract --sweep" in err

@@ -150,7 +150,8 @@ def test_a_second_out_into_a_used_folder_is_refused_and_force_replaces_it(tmp_pa
     assert not (out / "stale_table5.md").exists() and (out / "my_notes.txt").read_text() == "mine"
     assert "my_notes.txt" in text and "removed 5 file(s)" in text
     assert C.load(C.WalkConfig, out / "config.yaml").gait.lift_height == 0.1
-    listed = [ln.strip() for ln in text.split("wrote ")[-1].splitlines()[1:] if ln.strip()]
+    *listed, last = [ln.strip() for ln in text.split("wrote ")[-1].splitlines()[1:] if ln.strip()]
+    assert last == f"output folder: {out}/"  # the last line names the folder
     assert sorted(Path(p).name for p in listed) == ["baselines.csv", "baselines.json", "baselines.md", "config.yaml",
                                                     MANIFEST]
     runs = json.loads((out / MANIFEST).read_text())["runs"]

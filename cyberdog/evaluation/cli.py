@@ -1,0 +1,274 @@
+"""The command line of `evaluate.py`: one sub-parser per sub-command, each with only the options it uses.
+
+Options shared by several sub-commands are declared once, in parent parsers. This module imports neither
+the simulator nor numpy, so that `evaluate.py SUB --help` answers at once; values are checked here, before
+any long work starts, with one-line errors naming the option.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from cyberdog.config import LEG_NAMES
+from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS, PAPER_WALK_DURATION, SPEED_BAND
+
+# Literal copies of library constants whose modules import the simulator or numpy (a test keeps them equal):
+BASELINE_CHOICES = ("cycloid", "straight")  # cyberdog.analysis.baselines.BASELINES
+CYCLE_CHOICES = ("mean", "cheapest")  # cyberdog.analysis.extract.CYCLE_CHOICES
+DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (the paper's 100 with --prototype-distance)
+DEFAULT_COMMAND = "all"
+
+
+class UsageError(Exception):
+    """Bad or missing input, reported in one line before any long work starts."""
+
+
+DESCRIPTION = """\
+Evaluate foot trajectories on the simulated CyberDog (paper Sections 3 and 4).
+
+Without a sub-command, `all` runs. `evaluate.py SUB --help` lists the options of one sub-command.
+
+Outputs go to --out (default runs/evaluate-<time>/), never over inputs; a folder that already holds results is
+refused unless --force (which first removes the files earlier runs recorded in its outputs.json); every file a
+run writes is listed at the end and recorded in outputs.json; the last line names the folder.
+"""
+
+COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of its own --help)
+    "all": ("compare + prototype + figures (+ --video) on the learned trajectories (the default)",
+            "compare, prototype and figures (+ a video with --video) on the learned trajectories (default "
+            "results/learned/: one commanded path per seed and speed; --learned FILE|DIR..., or --policies/"
+            "--sweep to extract them first). Writes table5.md, table5_summary.*, table5.*, comparison.*, "
+            "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.*, "
+            "figure{4,6,7,10,13}_*.{png,pdf} and learned/<label>.json (the trajectories used)."),
+    "baselines": ("walk the composite cycloid and the straight line at each speed",
+                  "walk --duration s at each of --speeds with the composite cycloid and straight-line "
+                  "trajectories and print speed, drift, posture, energy (Eq. 7), energy per 100 m, CoT, peak "
+                  "torque and joint speed. Writes baselines.{csv,json,md}."),
+    "extract": ("roll out trained stage-2 policies and save their learned foot paths",
+                "roll out trained stage-2 policies (--policy/--policies PATH, --sweep DIR) at each speed (a "
+                "policy trained over a speed range: each of --speeds) and save the learned path "
+                "(learned/<label>_<v>mps.json) and every cycle (learned/<label>_<v>mps_cycles.csv): the "
+                "commanded foot path (trot path + the policy's per-leg shift, mean of the settled cycles within "
+                "±5 % of the command) for foot-mode policies, or with --path measured the paper's way (the "
+                "measured foot path of the cheapest cycle). Also draws Figure 7."),
+    "compare": ("Section 4.1: Table 5, D_t (Eq. 12), Figures 10 and 13",
+                "replay the learned, cycloid and straight-line trajectories with the IK + PID trot for "
+                "--duration s at each speed; Table 5 (the headline: baselines at the learned path's own lift "
+                "height; and the paper's protocol: baselines at 0.15 m), D_t by Eq. (12) on Eq. (7) and on the "
+                "electrical energy, positive work and foot slip; Figures 10 and 13."),
+    "prototype": ("Section 4.2 in simulation: battery use and range",
+                  "walks of --prototype-distance m (default 20; the paper's 100) on the ideal and a "
+                  "hardware-like robot: battery use (Eq. 13), range, sim-to-real gap. Writes prototype.* and "
+                  "prototype_gaps.*."),
+    "figures": ("redraw Figures 4, 6, 7, 10, 13 from saved results",
+                "Figures 4, 6, 7, 10 and 13 from saved results (--from DIR: a folder written by `all` or "
+                "`compare`); by default they are written beside those results."),
+    "video": ("a GIF (or MP4) of the trot with one trajectory",
+              "a GIF (or MP4) of the trot with one trajectory (--video-trajectory, --video-speed)."),
+}
+
+
+# ---- value checks: argparse turns ArgumentTypeError into "evaluate.py SUB: error: argument --x: ..." --------
+
+def _number(text: str, kind, ok, allowed: str):
+    try:
+        value = kind(text)
+    except ValueError:
+        value = None
+    if value is None or not ok(value):
+        raise argparse.ArgumentTypeError(f"must be {allowed}, got {text!r}")
+    return value
+
+
+def positive(text: str) -> float:
+    return _number(text, float, lambda v: math.isfinite(v) and v > 0, "a number > 0")
+
+
+def non_negative(text: str) -> float:
+    return _number(text, float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
+
+
+def share(text: str) -> float:
+    return _number(text, float, lambda v: 0 < v < 1, "a number in (0, 1)")
+
+
+def at_least_one(text: str) -> int:
+    return _number(text, int, lambda v: v >= 1, "a whole number >= 1")
+
+
+# ---- parent parsers: each group of options declared once ----------------------------------------------------
+
+def _parent() -> argparse.ArgumentParser:
+    return argparse.ArgumentParser(add_help=False)
+
+
+def _output_options() -> argparse.ArgumentParser:
+    p = _parent()
+    g = p.add_argument_group("walk config and output folder")
+    g.add_argument("--config", type=Path, default=None,
+                   help="YAML walk config (WalkConfig sections: robot, actuator, sim, gait, pid, controller, "
+                        "energy); default: the built-in defaults (paper lift height 0.15 m)")
+    g.add_argument("--set", nargs="*", default=[], metavar="SECTION.FIELD=VALUE",
+                   help="config overrides, e.g. gait.lift_height=0.1 gait.straight_shape=trapezoid")
+    g.add_argument("--out", type=Path, default=None, help="output folder (default runs/evaluate-<time>)")
+    g.add_argument("--force", action="store_true",
+                   help="write into an --out folder that already holds results: the files earlier evaluate.py runs "
+                        "recorded there (outputs.json) are removed first; without --force such a folder is refused")
+    return p
+
+
+def _speed_options(check=positive) -> argparse.ArgumentParser:
+    p = _parent()
+    p.add_argument("--speeds", type=check, nargs="+", default=list(PAPER_SPEEDS),
+                   help="commanded speeds in m/s (default " + " ".join(f"{v:g}" for v in PAPER_SPEEDS) + ")")
+    return p
+
+
+def _duration_option() -> argparse.ArgumentParser:
+    p = _parent()
+    p.add_argument("--duration", type=positive, default=PAPER_WALK_DURATION,
+                   help=f"s per walk (default {PAPER_WALK_DURATION:g}, the paper's)")
+    return p
+
+
+def _workers_option() -> argparse.ArgumentParser:
+    p = _parent()
+    p.add_argument("--workers", type=at_least_one, default=None, help="parallel walk processes (default: CPU count)")
+    return p
+
+
+def _learned_option() -> argparse.ArgumentParser:
+    p = _parent()
+    p.add_argument("--learned", type=Path, nargs="+", default=None, metavar="FILE",
+                   help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
+                        "per seed and speed) or sampled x-z paths (one per seed, rescaled to every speed); "
+                        "default results/learned/")
+    return p
+
+
+def _extraction_options() -> argparse.ArgumentParser:
+    p = _parent()
+    g = p.add_argument_group("extraction from trained policies")
+    g.add_argument("--policies", "--policy", dest="policies", type=Path, nargs="+", default=None, metavar="PATH",
+                   help="stage-2 actor files or training run folders: extract their trajectories first")
+    g.add_argument("--sweep", type=Path, default=None, metavar="DIR",
+                   help="a folder of training runs (one per seed): extract each run's trajectory first")
+    g.add_argument("--policy-speed", type=positive, default=None,
+                   help="m/s commanded in the extraction rollout (default: each of --speeds for a policy trained "
+                        "over a speed range, else the policy's training speed)")
+    g.add_argument("--path", dest="path_kind", default="auto", choices=("auto", "commanded", "measured"),
+                   help="'commanded' (the foot targets the policy commanded: trot path + its per-leg shift), "
+                        "'measured' (the paper's: forward kinematics of the joint angles, one leg), or 'auto' "
+                        "(default): commanded for foot-mode policies, else measured")
+    g.add_argument("--cycle", default="mean", choices=CYCLE_CHOICES,
+                   help="commanded path: average the settled in-band cycles (default) or take the cheapest")
+    g.add_argument("--rollout-duration", type=positive, default=10.0, help="s of each extraction rollout")
+    g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
+    g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
+                   help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
+    g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the reference foot")
+    return p
+
+
+def _prototype_options() -> argparse.ArgumentParser:
+    p = _parent()
+    g = p.add_argument_group("prototype experiment (Section 4.2)")
+    g.add_argument("--prototype-distance", type=positive, default=DEFAULT_PROTOTYPE_DISTANCE,
+                   help=f"m per walk (default {DEFAULT_PROTOTYPE_DISTANCE:g}, so that the default run stays under "
+                        f"5 min on 2 cores; the paper's is {PAPER_DISTANCE_M:g}: about 5x the time). Battery use "
+                        "and range are also reported per 100 m")
+    g.add_argument("--prototype-modes", nargs="+", default=["ideal", "hardware"], choices=["ideal", "hardware"])
+    return p
+
+
+def _metrics_option() -> argparse.ArgumentParser:
+    p = _parent()
+    p.add_argument("--metrics", type=Path, nargs="+", default=None, metavar="CSV",
+                   help="training logs for Figure 6 (default: the policies' metrics.csv, else "
+                        "results/policy_speeds/metrics.csv)")
+    return p
+
+
+def _video_options() -> argparse.ArgumentParser:
+    p = _parent()
+    g = p.add_argument_group("video")
+    g.add_argument("--video-trajectory", default="learned", choices=["learned", *BASELINE_CHOICES])
+    g.add_argument("--video-speed", type=positive, default=1.0, help="m/s")
+    g.add_argument("--video-duration", type=positive, default=4.0, help="s of simulated walking")
+    g.add_argument("--video-format", default="gif", choices=["gif", "mp4"])
+    return p
+
+
+# ---- the parser ---------------------------------------------------------------------------------------------
+
+class _Parser(argparse.ArgumentParser):
+    """An unknown option that another sub-command takes is named with the sub-commands that take it."""
+
+    known: dict[str, list[str]] = {}  # option string -> sub-commands that accept it, filled by build_parser
+
+    def error(self, message):
+        if message.startswith("unrecognized arguments:"):
+            hints = [f"{opt} is an option of: {', '.join(self.known[opt])}"
+                     for opt in message.split(":", 1)[1].split() if opt in self.known]
+            if hints:
+                message += " (" + "; ".join(hints) + ")"
+        super().error(message)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    output, speeds, duration, workers = _output_options(), _speed_options(), _duration_option(), _workers_option()
+    learned, extraction, prototype = _learned_option(), _extraction_options(), _prototype_options()
+    metrics, video = _metrics_option(), _video_options()
+    parents = {
+        "all": [output, speeds, duration, workers, learned, extraction, prototype, metrics, video],
+        "baselines": [output, _speed_options(non_negative), duration],
+        "extract": [output, speeds, extraction],
+        "compare": [output, speeds, duration, workers, learned, extraction],
+        "prototype": [output, speeds, workers, learned, extraction, prototype],
+        "figures": [output, metrics, learned],
+        "video": [output, learned, extraction, video],
+    }
+    top = _Parser(prog="evaluate.py", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
+    subs = top.add_subparsers(dest="command", metavar="SUB-COMMAND", parser_class=_Parser, required=True)
+    sub = {}
+    for name, (line, paragraph) in COMMANDS.items():
+        sub[name] = subs.add_parser(name, parents=parents[name], help=line, description=f"{name}: {paragraph}")
+    # the options only one sub-command has
+    sub["all"].add_argument("--no-same-lift", action="store_true",
+                            help="skip the control set of baselines at the learned trajectory's lift height")
+    sub["all"].add_argument("--no-prototype", action="store_true", help="skip the prototype experiment")
+    sub["all"].add_argument("--video", action="store_true", help="also write a video")
+    sub["compare"].add_argument("--no-same-lift", action="store_true",
+                                help="skip the control set of baselines at the learned trajectory's lift height")
+    sub["baselines"].add_argument("--trajectories", nargs="+", default=list(BASELINE_CHOICES),
+                                  choices=BASELINE_CHOICES, help="which common trajectories to walk")
+    sub["figures"].add_argument("--from", dest="from_dir", type=Path, default=None, metavar="DIR",
+                                help="the results folder to draw from (default: --out)")
+    known: dict[str, list[str]] = {}
+    for name, p in sub.items():
+        for action in p._actions:
+            for opt in action.option_strings:
+                if opt not in ("-h", "--help"):
+                    known.setdefault(opt, []).append(name)
+    _Parser.known = known
+    top.sub_commands = sub
+    return top
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Parse `argv` (without the program name); no sub-command means `all`, as in `evaluate.py --out DIR`.
+    An option the sub-command does not take ends the program (status 2) with a line naming the sub-commands
+    that do take it."""
+    argv = list(argv)
+    if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
+        argv.insert(0, DEFAULT_COMMAND)
+    top = build_parser()
+    args, extras = top.parse_known_args(argv)
+    if extras:  # reported by the sub-command's parser, with its own usage line
+        top.sub_commands[args.command].error(f"unrecognized arguments: {' '.join(extras)}")
+    return args
+
+
+__all__ = ["BASELINE_CHOICES", "COMMANDS", "CYCLE_CHOICES", "DEFAULT_PROTOTYPE_DISTANCE", "UsageError",
+           "build_parser", "parse_args"]

@@ -1,0 +1,180 @@
+"""One function per `evaluate.py` sub-command, and `run`: check inputs, open the output folder, run the
+parts, list what was written. Nothing long starts before the inputs are checked; a user mistake ends
+with one line on stderr and exit status 2."""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from cyberdog import config as C
+from cyberdog.evaluation.cli import UsageError
+from cyberdog.evaluation import learned as L
+
+BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
+                    "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",
+                    "cost_of_transport", "peak_torque_Nm", "peak_joint_speed_radps"]
+
+
+class Run:
+    """One evaluate.py run's output folder: refused if it holds results (unless --force), and at the end the
+    list of exactly the files this run wrote (recorded in the folder's outputs.json)."""
+
+    def __init__(self, args, out: Path, append: bool = False):
+        from cyberdog.output_folder import OutputFolder, OutputFolderError
+
+        self.out, self.t0 = out, time.perf_counter()
+        try:
+            self.folder = OutputFolder(out, force=args.force, append=append, command=args.command,
+                                       argv=getattr(args, "argv", ()))
+        except OutputFolderError as err:
+            raise UsageError(str(err)) from None
+        for note in self.folder.notes:
+            print(note)
+
+    def finish(self) -> int:
+        files = self.folder.finish()
+        print(f"\nwrote {len(files)} files in {self.out}/ ({time.perf_counter() - self.t0:.1f} s):")
+        for p in files:
+            print(f"  {p}")
+        print(f"output folder: {self.out}/")  # the last line: where to look
+        return 0
+
+
+def new_out() -> Path:
+    """runs/evaluate-<time>, with a suffix if a run in the same second took that name."""
+    base = Path("runs") / time.strftime("evaluate-%Y%m%d-%H%M%S")
+    out, k = base, 1
+    while out.exists():
+        k += 1
+        out = base.with_name(f"{base.name}-{k}")
+    return out
+
+
+def walk_config(args) -> C.WalkConfig:
+    try:
+        cfg = C.load(C.WalkConfig, args.config) if args.config else C.WalkConfig()
+        return C.override(cfg, args.set)
+    except (ValueError, OSError) as err:
+        raise UsageError(f"config error: {err}") from None
+
+
+def open_run(args, cfg: C.WalkConfig) -> Run:
+    """The output folder of a sub-command that walks: --out (default runs/evaluate-<time>) with config.yaml."""
+    run = Run(args, args.out or new_out())
+    run.out.mkdir(parents=True, exist_ok=True)
+    C.save(cfg, run.out / "config.yaml")
+    return run
+
+
+# ---- the sub-commands ---------------------------------------------------------------------------------------
+
+def cmd_baselines(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.analysis.baselines import baseline_rows
+    from cyberdog.analysis.report import markdown_table, write_rows
+
+    run = open_run(args, cfg)
+    rows = baseline_rows(cfg, args.speeds, args.trajectories, args.duration)
+    write_rows(rows, run.out, "baselines")
+    print(markdown_table(rows, BASELINE_COLUMNS))
+    return run.finish()
+
+
+def cmd_extract(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.evaluation.parts import run_figures
+
+    if not (args.policies or args.sweep):
+        raise UsageError("extract needs --policy PATH (actor file or run folder), --policies ... or --sweep DIR")
+    L.check_learned_inputs(args)
+    run = open_run(args, cfg)
+    L.learned_trajectories(args, run.out, args.speeds)  # extracted and saved in run.out/learned/
+    run_figures(run.out, only=("figure7",))
+    return run.finish()
+
+
+def cmd_compare(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.evaluation.parts import run_compare, run_figures
+
+    L.check_learned_inputs(args)
+    run = open_run(args, cfg)
+    learned = L.learned_trajectories(args, run.out, args.speeds)
+    rows, walks, power = run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift,
+                                     args.workers, run.out)
+    run_figures(run.out, only=("figure10", "figure13"))
+    return run.finish()
+
+
+def cmd_prototype(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.evaluation.parts import run_prototype_part
+
+    L.check_learned_inputs(args)
+    run = open_run(args, cfg)
+    learned = L.learned_trajectories(args, run.out, args.speeds)
+    run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
+                       run.out)
+    return run.finish()
+
+
+def cmd_all(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.evaluation.parts import run_compare, run_figures, run_prototype_part, run_video
+
+    L.check_learned_inputs(args)
+    metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
+    run = open_run(args, cfg)
+    learned = L.learned_trajectories(args, run.out, args.speeds)
+    rows, walks, power = run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift,
+                                     args.workers, run.out)
+    proto = None
+    if not args.no_prototype:
+        proto = run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes,
+                                   args.workers, run.out)
+    run_figures(run.out, metrics=metrics)
+    if args.video:
+        run_video(cfg, learned, args, run.out)
+    return run.finish()
+
+
+def cmd_figures(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.evaluation.parts import run_figures
+
+    src = args.from_dir or args.out
+    if src is None or not src.is_dir():
+        raise UsageError("figures needs --from DIR (a folder written by `evaluate.py` all/compare)")
+    out = args.out or src
+    run = Run(args, out, append=out.resolve() == src.resolve())  # figures beside the results they draw
+    run_figures(src, out, metrics=L.metrics_files(args.metrics), learned=args.learned)
+    return run.finish()
+
+
+def cmd_video(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.evaluation.parts import run_video
+
+    learned = None
+    if args.video_trajectory == "learned":
+        L.check_learned_inputs(args)
+    run = open_run(args, cfg)
+    if args.video_trajectory == "learned":  # a policy is rolled out at the video's speed
+        learned = L.learned_trajectories(args, run.out, [args.video_speed])
+    run_video(cfg, learned, args, run.out)
+    return run.finish()
+
+
+COMMAND_FUNCTIONS = {"all": cmd_all, "baselines": cmd_baselines, "extract": cmd_extract, "compare": cmd_compare,
+                     "prototype": cmd_prototype, "figures": cmd_figures, "video": cmd_video}
+
+
+def run(args, argv: list[str]) -> int:
+    """Run the sub-command `args.command` (parsed by `cyberdog.evaluation.cli.parse_args` from `argv`);
+    returns the exit status."""
+    args.argv = list(argv)  # as typed, for outputs.json
+    try:
+        return COMMAND_FUNCTIONS[args.command](args, walk_config(args))
+    except UsageError as err:
+        print(f"evaluate.py: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\nevaluate.py: interrupted", file=sys.stderr)
+        return 130
+
+
+__all__ = ["BASELINE_COLUMNS", "COMMAND_FUNCTIONS", "run"]

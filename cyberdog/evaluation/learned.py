@@ -1,0 +1,217 @@
+"""The learned trajectories `evaluate.py` walks: loaded from files, or extracted from trained policies first.
+
+A learned trajectory is either a commanded path per seed and speed (`CommandedPath`, grouped by label as
+{speed: path}) or one sampled x-z path per seed (`SampledTrajectory`, rescaled to every speed). Labels are
+the provenance's seed ("seed3"), else the file or run folder name.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from cyberdog import config as C
+from cyberdog.analysis.extract import ExtractionError, commanded_from_rollout, cycle_rows, extract_from_rollout
+from cyberdog.analysis.report import write_rows
+from cyberdog.core.commanded_path import CommandedPath, load_foot_path
+from cyberdog.core.trajectories import SampledTrajectory
+from cyberdog.evaluation.cli import UsageError
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
+DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
+# preference order: the shipped name, then the actor at the end of stage 2 (fixed in advance), then the one of
+# its best-scoring episode (chosen on a noisy score)
+STAGE2_ACTORS = ("stage2_actor.pt", "stage2_final_actor.pt", "stage2_best_actor.pt")
+
+
+def policy_file(path: Path) -> Path:
+    """An actor file, or the stage-2 actor of a training run folder."""
+    if path.is_file():
+        return path
+    if path.is_dir():
+        for name in STAGE2_ACTORS:
+            if (path / name).is_file():
+                return path / name
+        raise UsageError(f"{path} holds no stage-2 actor (looked for {', '.join(STAGE2_ACTORS)})")
+    raise UsageError(f"policy {path} does not exist")
+
+
+def policy_paths(policies: list[Path] | None, sweep: Path | None) -> list[Path]:
+    """The actor files of --policies and of every run folder of --sweep."""
+    paths = [policy_file(p) for p in (policies or [])]
+    if sweep is not None:
+        if not sweep.is_dir():
+            raise UsageError(f"--sweep {sweep} is not a folder")
+        runs = sorted(d for d in sweep.iterdir() if d.is_dir() and any((d / n).is_file() for n in STAGE2_ACTORS))
+        if not runs:
+            raise UsageError(f"--sweep {sweep} has no run folder with a stage-2 actor ({', '.join(STAGE2_ACTORS)})")
+        paths += [policy_file(d) for d in runs]
+    return paths
+
+
+def unique_labels(labels: list[str]) -> list[str]:
+    out, seen = [], {}
+    for lab in labels:
+        seen[lab] = seen.get(lab, 0) + 1
+        out.append(lab if labels.count(lab) == 1 else f"{lab}-{seen[lab]}")
+    return out
+
+
+def learned_files(paths: list[Path]) -> list[Path]:
+    """The trajectory files named: files as given, folders expanded to their JSON files (no *_cycles)."""
+    files = []
+    for p in paths:
+        if p.is_dir():
+            found = sorted(f for f in p.glob("*.json") if not f.stem.endswith("_cycles"))
+            if not found:
+                raise UsageError(f"learned trajectory folder {p} holds no JSON file")
+            files += found
+        else:
+            files.append(p)
+    return files
+
+
+def load_learned(paths: list[Path]) -> dict:
+    """Learned trajectories by label (the provenance's seed, else the file name): a commanded path per seed
+    and speed is grouped as {speed: path}; a sampled trajectory stands alone (replayed at every speed)."""
+    learned: dict = {}
+    for f in learned_files(paths):
+        if not f.is_file():
+            hint = ("" if f != DEFAULT_LEARNED else
+                    " (train policies with train.py, then `evaluate.py extract --sweep RUNS` and pass its "
+                    "<out>/learned/ folder with --learned)")
+            raise UsageError(f"learned trajectory {f} does not exist{hint}")
+        try:
+            t = load_foot_path(f)
+        except (ValueError, KeyError, json.JSONDecodeError) as err:
+            raise UsageError(f"learned trajectory {f} is unreadable: {err}") from None
+        seed = t.provenance.get("seed")
+        label = f"seed{seed}" if seed is not None else f.stem
+        if isinstance(t, CommandedPath):
+            group = learned.setdefault(label, {})
+            if not isinstance(group, dict) or t.speed in group:
+                raise UsageError(f"two learned trajectories for {label} at {t.speed:g} m/s ({f})")
+            group[t.speed] = t
+        else:
+            learned[unique_labels(list(learned) + [label])[-1]] = t
+    return learned
+
+
+def flat_learned(learned: dict, speed: float = 1.0) -> dict[str, SampledTrajectory]:
+    """One x-z path per label for the figures: a commanded path's reference leg (LF) at `speed` (or its
+    nearest speed), a sampled trajectory as it is."""
+    out = {}
+    for label, entry in learned.items():
+        if isinstance(entry, dict):
+            v = min(entry, key=lambda s: abs(s - speed))
+            out[label] = entry[v].as_sampled("LF")
+        else:
+            out[label] = entry
+    return out
+
+
+def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float | None) -> list[float]:
+    """Speeds at which a policy is rolled out for extraction (see --policy-speed)."""
+    if policy_speed is not None:
+        return [policy_speed]
+    if env.target_speed_range:
+        lo, hi = env.target_speed_range
+        outside = [v for v in speeds if not lo - 1e-9 <= v <= hi + 1e-9]
+        if outside:
+            raise UsageError(f"--speeds {outside} lie outside the policy's training range {lo:g}-{hi:g} m/s")
+        return list(speeds)
+    return [env.target_speed]
+
+
+def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print) -> dict:
+    """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
+    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv."""
+    from cyberdog.rl.rollout import load_actor, rollout  # torch: only here, only when asked
+
+    results, labels = [], []
+    for path in paths:
+        actor = load_actor(path)
+        env = actor.config.env
+        kind = args.path_kind if args.path_kind != "auto" else ("commanded" if env.action_mode == "foot"
+                                                                  else "measured")
+        if kind == "commanded" and env.action_mode != "foot":
+            raise UsageError(f"{path}: a policy of action_mode {env.action_mode!r} commands no foot path; use "
+                             "--path measured")
+        seed = actor.config.train.seed
+        found = {}
+        for speed in extraction_speeds(env, speeds, args.policy_speed):
+            t0 = time.perf_counter()
+            r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=args.rollout_seed,
+                        env_config=env)
+            prov = {"policy": str(path), "seed": seed, "policy_meta": actor.meta, "rollout_seed": args.rollout_seed}
+            log(f"rollout {path} at {speed:g} m/s: {r.duration:.1f} s, mean {r.mean_speed:.3f} m/s, "
+                f"E={r.energy:.0f} J, fell={r.fell} ({time.perf_counter() - t0:.0f} s)")
+            try:
+                if kind == "commanded":
+                    found[speed] = commanded_from_rollout(r, env, args.cycle, args.speed_tolerance, provenance=prov)
+                else:
+                    found[speed] = extract_from_rollout(r, env, args.leg, args.speed_tolerance, provenance=prov)
+            except ExtractionError as err:
+                raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try --speed-tolerance "
+                                 "or --policy-speed)") from None
+        results.append((kind, found))
+        labels.append(f"seed{seed}")
+    if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
+        labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
+    learned: dict = {}
+    for label, (kind, found) in zip(unique_labels(labels), results):
+        for speed, ex in found.items():
+            name = f"{label}_{speed:g}mps"
+            traj = ex.path if kind == "commanded" else ex.trajectory
+            path = traj.save(out / "learned" / f"{name}.json")
+            write_rows(cycle_rows(ex), out / "learned", f"{name}_cycles")
+            if kind == "commanded":
+                log(f"{name}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles ({args.cycle}), "
+                    f"{ex.energy:.1f} J per cycle, own H = {traj.own_lift_height():.4f} m -> {path}")
+                learned.setdefault(label, {})[speed] = traj
+            else:
+                c = ex.chosen
+                log(f"{name}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
+                    f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {traj.lift_height:.3f} m -> {path}")
+                learned.setdefault(label, traj)  # a measured path is rescaled to every speed: the first one
+    return learned
+
+
+def check_learned_inputs(args) -> None:
+    """Fail now, before any walk, on a missing or unreadable trajectory file or policy."""
+    if not policy_paths(args.policies, args.sweep):
+        load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
+
+
+def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> dict:
+    """Extract from --policies/--sweep when given, else load --learned (default results/learned/); the
+    trajectories used are copied to out/learned/ beside the results."""
+    paths = policy_paths(args.policies, args.sweep)
+    if paths:
+        learned = extract_policies(paths, args, speeds, out, log)
+    else:
+        learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
+    for label, entry in learned.items():
+        for v, t in (entry.items() if isinstance(entry, dict) else [(None, entry)]):
+            name = label if v is None else f"{label}_{v:g}mps"
+            if not (out / "learned" / f"{name}.json").is_file():
+                t.save(out / "learned" / f"{name}.json")
+    return learned
+
+
+def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict[str, Path]:
+    """Training logs for Figure 6 by label: --metrics, else the policies' metrics.csv, else the shipped one."""
+    if metrics:
+        missing = [m for m in metrics if not m.is_file()]
+        if missing:
+            raise UsageError(f"--metrics file(s) do not exist: {', '.join(map(str, missing))}")
+        return dict(zip(unique_labels([m.parent.name or m.stem for m in metrics]), metrics))
+    found = [p.parent / "metrics.csv" for p in policies if (p.parent / "metrics.csv").is_file()]
+    if not found and DEFAULT_METRICS.is_file():
+        found = [DEFAULT_METRICS]
+    return dict(zip(unique_labels([m.parent.name for m in found]), found))
+
+
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "STAGE2_ACTORS", "check_learned_inputs", "extract_policies",
+           "flat_learned", "learned_trajectories", "load_learned", "metrics_files", "policy_paths"]

@@ -1,0 +1,120 @@
+"""The parts `evaluate.py` is made of: the comparison walks (Section 4.1), the prototype experiment (Section
+4.2), the figures and the video. Each writes its results into `out` and prints its table."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from cyberdog import config as C
+from cyberdog.analysis import compare as cmp
+from cyberdog.analysis import table5 as t5
+from cyberdog.analysis.report import markdown_table, write_rows
+from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.evaluation.cli import UsageError
+from cyberdog.evaluation.learned import flat_learned
+
+FIGURES = ("figure4", "figure6", "figure7", "figure10", "figure13")
+
+
+def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration: float, same_lift: bool,
+                workers: int | None, out: Path, log=print) -> tuple[list, list, dict]:
+    """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power)."""
+    for label, entry in learned.items():
+        for t in (entry.values() if isinstance(entry, dict) else [entry]):
+            period = t.gait.period if isinstance(t, CommandedPath) else t.provenance.get("period_s")
+            if period is not None and abs(period - cfg.gait.period) > 1e-9:
+                log(f"warning: {label} was recorded with a {period} s gait period; the baselines walk "
+                    f"{cfg.gait.period} s")
+    jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift)
+    log(f"comparison: {len(jobs)} walks of {duration:g} s")
+    walks = cmp.run_jobs(jobs, workers, log)
+    power = {w["walk_id"]: w.pop("power_W") for w in walks}
+    rows = cmp.comparison_rows(walks, cfg.gait.lift_height)
+    means = cmp.seed_means(rows)
+    write_rows(rows, out, "comparison")
+    (out / "comparison.md").write_text(markdown_table(rows, cmp.COLUMNS) + "\n")
+    write_rows(t5.table5_rows(rows), out, "table5")
+    # every walk of the paper's set, per seed (the matched-lift walks, one baseline pair per seed and lift
+    # height, are in comparison.md; the summaries above average them)
+    table5 = t5.table5_markdown([r for r in rows if r["set"] == "paper"], means)
+    summary = t5.summary_rows(rows)
+    write_rows(summary, out, "table5_summary")
+    headline = "\n\n".join(
+        f"{title}\n\n{t5.summary_markdown(summary, set_name)}"
+        for set_name, title in (("same_lift", "Matched conditions: the baselines at the learned path's own lift "
+                                              "height, same step length and period (the headline)"),
+                                ("paper", "The paper's protocol: the baselines at H = "
+                                          f"{cfg.gait.lift_height:g} m"))
+        if t5.summary_markdown(summary, set_name))
+    (out / "table5.md").write_text("Table 5: energy consumption of the foot trajectories at each speed\n\n"
+                                   + headline + "\n\nEvery walk of the paper's protocol (E in kJ over the walk; the "
+                                   "matched-lift walks are in comparison.md)\n\n" + table5 + "\n")
+    if len(learned) > 1:
+        write_rows(means, out, "learned_mean_ci")
+    (out / "walks.json").write_text(json.dumps(walks, indent=1))
+    np.savez_compressed(out / "power_traces.npz", **{f"walk_{i}": p for i, p in power.items()})
+    print("\nTable 5: energy consumption of the foot trajectories over the walk\n")
+    print(headline)
+    print("\nEvery walk of the paper's protocol (E in kJ over the walk; matched-lift walks: comparison.md)\n")
+    print(table5)
+    print("\nAll walks (energy per 100 m, cost of transport, mean speed over the last half):\n")
+    print(markdown_table(rows, cmp.COLUMNS))
+    return rows, walks, power
+
+
+def run_prototype_part(cfg: C.WalkConfig, learned: dict, speeds: list[float], distance_m: float, modes: list[str],
+                       workers: int | None, out: Path, log=print) -> list[dict]:
+    """Section 4.2 in simulation: the first learned trajectory and both baselines → prototype.*."""
+    from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
+
+    label, entry = next(iter(learned.items()))
+    lifts = None
+    if isinstance(entry, dict):  # commanded paths: the baselines at each speed's own lift height (matched)
+        missing = [v for v in speeds if not any(abs(v - u) < 1e-6 for u in entry)]
+        if missing:
+            raise UsageError(f"prototype: the learned {label} has no path at {missing} m/s")
+        lifts = {v: t.own_lift_height() for v in speeds for u, t in entry.items() if abs(v - u) < 1e-6}
+        trajectories = {"learned": entry, "cycloid": None, "straight": None}
+    else:
+        trajectories = {"learned": cmp.pinned_lift(entry, cfg.gait.lift_height), "cycloid": None, "straight": None}
+    log(f"prototype: {len(trajectories) * len(speeds) * len(modes)} walks of {distance_m:g} m (learned = {label}"
+        + (", baselines at its own lift height)" if lifts else ")"))
+    rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
+                         base_cfg=cfg, lift_heights=lifts, log=log)
+    write_prototype(rows, out)
+    print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks (paper: 100 m); "
+          f"learned = {label}\n")
+    print(prototype_table(rows))
+    return rows
+
+
+def run_figures(results_dir: Path, out: Path | None = None, *, metrics: dict | None = None, learned=None,
+                only=None) -> list[Path]:
+    """The figures of `only` (default: all) that the results saved in `results_dir` have inputs for, drawn by
+    `plots` (from the saved files only, never running physics) into `out` (default: beside the results)."""
+    import plots  # matplotlib: only when drawing
+
+    try:
+        return plots.draw_all(results_dir, out or results_dir, metrics, only, learned=learned)
+    except (OSError, ValueError) as err:  # a missing or unreadable input file: the user's to fix
+        raise UsageError(f"figures: {err}") from None
+
+
+def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
+    """A GIF/MP4 of the trot with --video-trajectory at --video-speed."""
+    from cyberdog.analysis.video import record_video
+
+    name = args.video_trajectory
+    traj = None
+    lift = cfg.gait.lift_height
+    if name == "learned":  # a commanded path is shown as its LF leg's x-z path on all four legs
+        label, traj = next(iter(flat_learned(learned, args.video_speed).items()))
+        lift = cmp.learned_lift_height(traj)
+    vcfg = cmp.walk_config(cfg, name, args.video_speed, lift)
+    path = out / f"trot_{name}_{args.video_speed:g}mps.{args.video_format}"
+    return record_video(vcfg, traj, path, args.video_duration, label=name)
+
+
+__all__ = ["FIGURES", "run_compare", "run_figures", "run_prototype_part", "run_video"]
