@@ -177,6 +177,7 @@ def _aggregate(args, sweep_dir: Path) -> int:
     except SweepError as e:
         sys.exit(f"error: {e}")
     print((sweep_dir / "aggregate.md").read_text())
+    print(f"sweep folder: {sweep_dir}/")  # the last line: where the sweep and its aggregate are
     return 0
 
 
@@ -248,6 +249,7 @@ def main(argv=None) -> int:
     print("done: " + ", ".join(f"{k}={v}" for k, v in summary.items()
                                if k in ("stage", "env_steps", "episodes", "updates", "buffer_size",
                                         "window_mean_score")))
+    print(f"run folder: {run_dir}/")  # the last line: where the run was written
     return 0
 
 
