@@ -324,17 +324,18 @@ def test_read_state_equals_the_eager_reference():
         assert robot.read_state().q[0] != 123.0
 
 
-def test_env_joint_stop_is_off_inside_the_range_and_a_spring_damper_outside():
-    from cyberdog.envs.cyberdog_env import CyberDogEnv
-    env = CyberDogEnv()
-    try:
-        assert env._joint_stop_torque(env.q_stand, np.ones(12)) is None
-        q = env.q_stand.copy()
-        q[1], q[5] = env.q_high[1] + 0.1, env.q_low[5] - 0.2
-        dq = np.arange(12.0)
-        over = np.minimum(q - env.q_low, 0.0) + np.maximum(q - env.q_high, 0.0)
-        want = -env.cfg.joint_stop_stiffness * over - env.cfg.joint_stop_damping * dq * (over != 0)
-        np.testing.assert_array_equal(env._joint_stop_torque(q, dq), want)
-        assert np.count_nonzero(want) == 2
-    finally:
-        env.close()
+def test_joint_stop_is_off_inside_the_range_and_a_spring_damper_outside():
+    from cyberdog.control.joint_stop import JointStop
+    from cyberdog.core import kinematics as kin
+    cfg = C.EnvConfig()
+    robot = cfg.walk.robot
+    stop = JointStop(robot, np.deg2rad(cfg.joint_range_deg), cfg.joint_stop_stiffness, cfg.joint_stop_damping)
+    q_stand = kin.standing_joint_angles(robot).ravel()
+    assert stop.torque(q_stand, np.ones(12)) is None
+    q = q_stand.copy()
+    q[1], q[5] = stop.q_high[1] + 0.1, stop.q_low[5] - 0.2
+    dq = np.arange(12.0)
+    tau = stop.torque(q, dq)
+    k, c = cfg.joint_stop_stiffness, cfg.joint_stop_damping
+    assert tau[1] == pytest.approx(-k * 0.1 - c * dq[1]) and tau[5] == pytest.approx(k * 0.2 - c * dq[5])
+    assert np.count_nonzero(tau) == 2

@@ -7,7 +7,7 @@ import pytest
 
 from cyberdog import config as C
 from cyberdog.analysis import prototype as proto
-from cyberdog.analysis.hardware import TorqueDelay, draw_mass_scale, hardware_walk_config
+from cyberdog.sim.hardware import TorqueDelay, draw_mass_scale, hardware_walk_config
 from cyberdog.analysis.walk import walk
 from cyberdog.core import energy as en
 from cyberdog.sim.robot import Robot

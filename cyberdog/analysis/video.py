@@ -12,11 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from cyberdog.analysis.walk import FALL_HEIGHT, FALL_TILT
 from cyberdog.config import WalkConfig
-from cyberdog.control.trot import BodyFeedback, TrotController
+from cyberdog.control.trot import TrotController
 from cyberdog.core.trajectories import FootTrajectory
-from cyberdog.sim.robot import Robot
+from cyberdog.loop.walker import Walker
 
 FORMATS = (".gif", ".mp4")
 
@@ -34,18 +33,15 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
     every = max(1, int(round(1.0 / (fps * dt))))
     ctrl = TrotController(cfg, trajectory)
     frames = []
-    energy = 0.0
-    with Robot(cfg.robot, cfg.actuator, cfg.sim) as robot:
-        robot.reset()
-        ctrl.reset()
-        start = robot.read_state().base_position.copy()
+    with Walker(cfg, ctrl) as walker:
+        start = walker.start
         for k in range(int(round(duration / dt))):
-            s = robot.read_state()
-            tau = robot.step(ctrl.torque(k * dt, s.q, s.dq, BodyFeedback.from_state(s, start)))
-            energy += float(np.abs(tau * s.dq).sum()) * dt  # Eq. (7)
-            fell = s.base_position[2] < FALL_HEIGHT or np.max(np.abs(s.base_rpy[:2])) > FALL_TILT
+            walker.step()
+            s, fell = walker.state, walker.fallen()
             if k % every == 0 or fell:
-                img = Image.fromarray(robot.render(width, height, distance=1.0, yaw_deg=60.0, pitch_deg=-15.0))
+                energy = walker.energy()  # Eq. (7) so far
+                img = Image.fromarray(walker.robot.render(width, height, distance=1.0, yaw_deg=60.0,
+                                                          pitch_deg=-15.0))
                 text = (f"{label or ctrl.trajectory.name}  v_cmd = {ctrl.speed:.1f} m/s  H = "
                         f"{cfg.gait.lift_height:.3f} m\nt = {k * dt:5.2f} s  x = {s.base_position[0] - start[0]:5.2f} m"
                         f"  E = {energy:6.1f} J (Eq. 7)" + ("  FELL" if fell else ""))

@@ -8,7 +8,8 @@ from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
 
-from cyberdog.config.robot import GaitConfig, WalkConfig
+from cyberdog.config.legacy import fold_legacy_env_fields
+from cyberdog.config.robot import GaitConfig, HardwareConfig, WalkConfig
 
 
 REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E
@@ -58,49 +59,23 @@ STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns spee
 STAGE2_REWARD = RewardConfig()  # stage 2: Eq. (11) with the energy term, E = −0.2
 
 
-@dataclass(frozen=True)
-class EstimatorConfig:
-    """Simulated IMU and the body-velocity Kalman filter (beyond the paper, which reads true states).
-
-    Sensor numbers are assumptions [G] typical of a MEMS IMU such as the Bosch BMI088 sampled at 1 kHz
-    (accelerometer noise density ≈ 160 µg/√Hz, gyroscope ≈ 0.014 °/s/√Hz, times √(500 Hz bandwidth)), with
-    the turn-on bias left after a standstill calibration. `noise=False` gives ideal sensors.
-    """
-
-    noise: bool = False  # add white noise and bias to the simulated IMU (False: ideal sensors)
-    accelerometer_noise_std: float = 0.05  # m/s², white noise per sample [G: ≈ 0.035 for a BMI088]
-    gyroscope_noise_std: float = 0.005  # rad/s, white noise per sample [G: ≈ 0.0055 for a BMI088]
-    accelerometer_bias_std: float = 0.05  # m/s², constant bias drawn at each reset [G: after calibration]
-    accelerometer_bias_walk: float = 0.001  # m/s² per √s, bias random walk [G]
-    gyroscope_bias_std: float = 0.002  # rad/s, constant bias drawn at each reset [G: after calibration]
-    gyroscope_bias_walk: float = 1e-4  # rad/s per √s, bias random walk [G]
-    leg_velocity_noise_std: float = 0.1  # m/s, leg-odometry velocity error (slip, contact timing): filter R [G]
-    process_noise_std: float = 0.5  # m/s², acceleration error per predict (noise, bias, attitude): filter Q [G]
-    initial_velocity_std: float = 0.1  # m/s, filter's initial uncertainty after reset [G]
-
-    def __post_init__(self) -> None:
-        _non_negative(self, "accelerometer_noise_std", "gyroscope_noise_std", "accelerometer_bias_std",
-                      "accelerometer_bias_walk", "gyroscope_bias_std", "gyroscope_bias_walk")
-        _positive(self, "leg_velocity_noise_std", "process_noise_std", "initial_velocity_std")
-
-
 # ---------------------------------------------------------------------------------------------------------
 # The learning environment (paper Section 3, Tables 3-4)
 # ---------------------------------------------------------------------------------------------------------
 
 ACTION_MODES = ("torque", "residual", "foot")
-OBSERVATION_SOURCES = ("true", "estimated")
 
 
 @dataclass(frozen=True)
 class EnvConfig:
     """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
 
+    fold_legacy_fields = staticmethod(fold_legacy_env_fields)  # earlier fields → `hardware` (config/legacy.py)
+
     # robot, actuator, sim, gait, PID, controller, energy; the lift height is 0.10 m (not the paper's 0.15 m)
     # so that the trot stays inside Table 4's ±45° joint range around the standing pose
     walk: WalkConfig = field(default_factory=lambda: WalkConfig(gait=GaitConfig(lift_height=0.10)))
     reward: RewardConfig = field(default_factory=RewardConfig)  # Eq. (11) weights (stage 2 by default)
-    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)
     episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
     # "torque": the paper's, the action is the joint torque; "residual": torque added to the trot controller's;
@@ -117,15 +92,12 @@ class EnvConfig:
     joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
     target_speed: float = 1.0  # m/s, commanded forward speed v_x (fixed unless a range is given)
     target_speed_range: Tuple[float, ...] = ()  # (low, high) m/s: sample the command per episode; () = fixed
-    observation_source: str = "true"  # "true" simulator state, or "estimated" body velocity (Kalman filter)
-    joint_noise: bool = False  # add encoder noise to observed joint angles and velocities
-    joint_angle_noise_std: float = 0.002  # rad [G]
-    joint_velocity_noise_std: float = 0.05  # rad/s [G]
-    latency: float = 0.0  # s, actuation latency (torque reaches the joint this much later); 0 = off
-    mass_scale_range: Tuple[float, ...] = ()  # (low, high): scale every link mass per episode; () = off
+    # the robot's hardware effects (joint friction, actuation latency, encoder and IMU noise, Kalman speed
+    # feedback, mass draw): the same model as the prototype walks'. In the env the mass is drawn per episode
+    # from the env's seed and the sensors are seeded per episode too (`HardwareConfig.seed` is not used)
+    hardware: HardwareConfig = field(default_factory=HardwareConfig)
     fall_height: float = 0.15  # m, body centre below this = fallen
     fall_tilt_deg: float = 45.0  # |roll| or |pitch| above this = fallen
-    estimator_dt: float = 0.005  # s, Kalman filter period (IMU averaged over it), multiple of physics_dt
 
     @property
     def decimation(self) -> int:
@@ -138,24 +110,21 @@ class EnvConfig:
 
     def __post_init__(self) -> None:
         _positive(self, "control_dt", "episode_time", "action_scale", "foot_offset_scale", "joint_range_deg",
-                  "fall_height", "fall_tilt_deg", "estimator_dt")
-        _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping", "latency",
-                      "joint_angle_noise_std", "joint_velocity_noise_std")
+                  "fall_height", "fall_tilt_deg")
+        _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping")
         dt = self.walk.sim.physics_dt
         _check(abs(self.control_dt / dt - round(self.control_dt / dt)) < 1e-6 and self.control_dt >= dt,
                "EnvConfig.control_dt", f"a whole multiple of physics_dt ({dt} s)", self.control_dt)
-        _check(abs(self.estimator_dt / dt - round(self.estimator_dt / dt)) < 1e-6 and self.estimator_dt >= dt,
-               "EnvConfig.estimator_dt", f"a whole multiple of physics_dt ({dt} s)", self.estimator_dt)
+        hw_dt = self.hardware.estimator_dt
+        _check(abs(hw_dt / dt - round(hw_dt / dt)) < 1e-6 and hw_dt >= dt,
+               "EnvConfig.hardware.estimator_dt", f"a whole multiple of physics_dt ({dt} s)", hw_dt)
+        _check(abs(self.hardware.latency_s / dt - round(self.hardware.latency_s / dt)) < 1e-6,
+               "EnvConfig.hardware.latency_s", f"a whole multiple of physics_dt ({dt} s)", self.hardware.latency_s)
         _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
                self.action_mode)
-        _check(self.observation_source in OBSERVATION_SOURCES, "EnvConfig.observation_source",
-               f"one of {OBSERVATION_SOURCES}", self.observation_source)
         r = self.target_speed_range
         _check(len(r) == 0 or (len(r) == 2 and 0 <= r[0] <= r[1]), "EnvConfig.target_speed_range",
                "() or (low, high) with 0 <= low <= high (m/s)", r)
-        m = self.mass_scale_range
-        _check(len(m) == 0 or (len(m) == 2 and 0 < m[0] <= m[1]), "EnvConfig.mass_scale_range",
-               "() or (low, high) with 0 < low <= high", m)
         _check(self.foot_offset_scale_z is None or (math.isfinite(self.foot_offset_scale_z)
                                                      and self.foot_offset_scale_z > 0),
                "EnvConfig.foot_offset_scale_z", "None or a finite number > 0 (m)", self.foot_offset_scale_z)
@@ -312,6 +281,10 @@ class TrainConfig:
     #                           cores at 1 update per step, bench/train_throughput.py; the policy that collects
     #                           lags one batch of updates; reruns with a seed are identical too, but differ
     #                           from "sync"). See cyberdog/rl/collect.py
+    num_envs: int = 1  # envs that collect, each in a process of its own (TorchRL ParallelEnv, stepped in lock
+    #                    step; 1: one env in the collecting process, as before): more env steps/s with more
+    #                    cores. frames_per_batch must be a multiple of it; a seed repeats a run for a fixed
+    #                    num_envs only. See cyberdog/rl/collect.py
 
     def __post_init__(self) -> None:
         _check(isinstance(self.seed, int) and 0 <= self.seed < 2 ** 32, "TrainConfig.seed",
@@ -327,6 +300,11 @@ class TrainConfig:
                "energy is the model's)", models[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
+        _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",
+               self.num_envs)
+        _check(self.frames_per_batch % self.num_envs == 0, "TrainConfig.frames_per_batch",
+               f"a multiple of num_envs ({self.num_envs}): each env takes frames_per_batch / num_envs steps "
+               "per batch", self.frames_per_batch)
         for n in ("init_random_frames", "learning_starts", "num_threads"):
             _check(getattr(self, n) >= 0, f"TrainConfig.{n}", ">= 0", getattr(self, n))
         _check(self.updates_per_frame > 0 and math.isfinite(self.updates_per_frame),

@@ -1,6 +1,7 @@
 """Settings of one scripted walk: robot, actuator, simulator, gait, PID, trot controller, energy and battery."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Tuple
 
@@ -186,12 +187,40 @@ class WalkConfig:
 
 
 @dataclass(frozen=True)
-class HardwareConfig:
-    """A "hardware-like" robot for the prototype experiment in simulation (paper Section 4.2), beyond the paper.
+class EstimatorConfig:
+    """Simulated IMU and the body-velocity Kalman filter (beyond the paper, which reads true states).
 
+    Sensor numbers are assumptions [G] typical of a MEMS IMU such as the Bosch BMI088 sampled at 1 kHz
+    (accelerometer noise density ≈ 160 µg/√Hz, gyroscope ≈ 0.014 °/s/√Hz, times √(500 Hz bandwidth)), with
+    the turn-on bias left after a standstill calibration. `noise=False` gives ideal sensors.
+    """
+
+    noise: bool = False  # add white noise and bias to the simulated IMU (False: ideal sensors)
+    accelerometer_noise_std: float = 0.05  # m/s², white noise per sample [G: ≈ 0.035 for a BMI088]
+    gyroscope_noise_std: float = 0.005  # rad/s, white noise per sample [G: ≈ 0.0055 for a BMI088]
+    accelerometer_bias_std: float = 0.05  # m/s², constant bias drawn at each reset [G: after calibration]
+    accelerometer_bias_walk: float = 0.001  # m/s² per √s, bias random walk [G]
+    gyroscope_bias_std: float = 0.002  # rad/s, constant bias drawn at each reset [G: after calibration]
+    gyroscope_bias_walk: float = 1e-4  # rad/s per √s, bias random walk [G]
+    leg_velocity_noise_std: float = 0.1  # m/s, leg-odometry velocity error (slip, contact timing): filter R [G]
+    process_noise_std: float = 0.5  # m/s², acceleration error per predict (noise, bias, attitude): filter Q [G]
+    initial_velocity_std: float = 0.1  # m/s, filter's initial uncertainty after reset [G]
+
+    def __post_init__(self) -> None:
+        _non_negative(self, "accelerometer_noise_std", "gyroscope_noise_std", "accelerometer_bias_std",
+                      "accelerometer_bias_walk", "gyroscope_bias_std", "gyroscope_bias_walk")
+        _positive(self, "leg_velocity_noise_std", "process_noise_std", "initial_velocity_std")
+
+
+@dataclass(frozen=True)
+class HardwareConfig:
+    """The one hardware model: what separates the simulated robot from the real one, beyond the paper.
+
+    Used by the prototype experiment in simulation (paper Section 4.2, `cyberdog.analysis.walk.walk(...,
+    hardware=...)`) and by the learning environment (`EnvConfig.hardware`, so that training can randomise
+    over it); applied at the physics rate by `cyberdog.sim.hardware` inside `cyberdog.loop.walker.Walker`.
     The defaults are all off: `HardwareConfig()` is the ideal simulated robot of Section 4.1 (true states,
-    no friction, no delay, nominal mass). `HARDWARE_LIKE` below turns every effect on. What each does in a
-    scripted walk (`cyberdog.analysis.walk.walk(..., hardware=...)`):
+    no friction, no delay, nominal mass). `HARDWARE_LIKE` below turns every effect on. What each does:
 
     - `friction`: the joints feel viscous + dry friction (ActuatorConfig.viscous_damping 0.01 N·m·s/rad,
       dry_friction 0.246 N·m [X]) in the physics; the motors must overcome it (the paper's suspected cause of
@@ -215,10 +244,17 @@ class HardwareConfig:
     joint_angle_noise_std: float = 0.0  # rad, encoder noise on the controller's q [G: 0.002]
     joint_velocity_noise_std: float = 0.0  # rad/s, noise on the controller's q̇ [G: 0.05]
     estimated_velocity: bool = False  # speed feedback from the IMU + leg-odometry Kalman filter, not the truth
-    imu_noise: bool = False  # simulated IMU noise and bias (EstimatorConfig defaults), with estimated_velocity
+    imu_noise: bool = False  # simulated IMU noise and bias (`estimator`'s values), with estimated_velocity
     estimator_dt: float = 0.005  # s, Kalman filter period, a whole multiple of physics_dt (as EnvConfig's)
     mass_uncertainty: float = 0.0  # ± fraction; mass scale drawn from U(1 − u, 1 + u) [G: 0.05]
-    seed: int = 0  # seeds the mass draw and the sensor noise
+    seed: int = 0  # seeds the mass draw and the sensor noise (scripted walks; the env seeds per episode)
+    # the IMU's noise and bias values and the Kalman filter's tuning; `imu_noise` switches the noise on
+    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
+
+    @property
+    def estimator_config(self) -> EstimatorConfig:
+        """The estimator's settings with the IMU noise switched by `imu_noise`."""
+        return dataclasses.replace(self.estimator, noise=self.imu_noise)
 
     @property
     def ideal(self) -> bool:
@@ -234,6 +270,8 @@ class HardwareConfig:
                self.mass_uncertainty)
         _check(isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0,
                "HardwareConfig.seed", "an integer >= 0", self.seed)
+        _check(not self.estimator.noise, "HardwareConfig.estimator.noise",
+               "False (switch the IMU noise with HardwareConfig.imu_noise)", self.estimator.noise)
         _check(not self.imu_noise or self.estimated_velocity, "HardwareConfig.imu_noise",
                "False unless estimated_velocity is True (the IMU only feeds the estimator)", self.imu_noise)
 

@@ -2,19 +2,18 @@
 from __future__ import annotations
 
 import dataclasses
-from collections import deque
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from cyberdog import config as C
-from cyberdog.control.trot import BodyFeedback, TrotController
-from cyberdog.core import energy as en
-from cyberdog.core import kinematics as kin
+from cyberdog.config.legacy import LEGACY_ENV_FIELDS, fold_legacy_env_fields
+from cyberdog.control.joint_stop import JointStop
+from cyberdog.control.trot import TrotController
 from cyberdog.core import rewards
-from cyberdog.core.estimator import SimulatedIMU, VelocityEstimator, leg_odometry_velocity
-from cyberdog.sim.robot import Robot
+from cyberdog.loop.walker import Walker
+from cyberdog.sim.hardware import draw_mass_scale
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
 
@@ -60,7 +59,8 @@ class CyberDogEnv(gym.Env):
 
     **Timing.** Physics at 1 kHz (`walk.sim.physics_dt`); the agent acts every Ts = 25 ms (`control_dt`,
     25 physics steps); an episode lasts Tf = 10 s = 400 steps (registered `max_episode_steps=400`, Table 4).
-    The torque, or the trot controller's PID that produces it, is applied at every physics step.
+    The torque, or the trot controller's PID that produces it, is applied at every physics step, by the
+    project's one simulation loop (`cyberdog.loop.walker.Walker`, the same as the scripted walks').
 
     **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
     `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
@@ -123,7 +123,15 @@ class CyberDogEnv(gym.Env):
     `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array", or "human": a PyBullet window;
     on a machine without a display it runs without one, with a warning), and any
     top-level `EnvConfig` field, e.g. `action_mode="torque"`, `target_speed=1.2`,
-    `observation_source="estimated"`.
+    `hardware=C.HARDWARE_LIKE`.
+
+    **Hardware model** (`hardware`, a `HardwareConfig`, all off by default): joint friction, actuation
+    latency, encoder noise, Kalman speed feedback (simulated IMU + leg odometry) and a mass draw, the same model
+    the prototype walks use. The robot's software sees what its sensors read: with `estimated_velocity` the
+    trot controller, the observation and the reward's v_x use the Kalman estimate; encoder noise reaches the
+    controller and the observation. The mass is drawn per episode. The earlier options `observation_source`,
+    `joint_noise`, `latency`, `mass_scale_range`, `estimator`, `estimator_dt` still work and map onto it
+    (`cyberdog.config.legacy`).
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 40}
@@ -138,6 +146,9 @@ class CyberDogEnv(gym.Env):
                                      f"got {reward!r}")
                 reward = REWARD_PRESETS[reward]
             overrides["reward"] = reward
+        if any(k in overrides for k in LEGACY_ENV_FIELDS):  # earlier options (latency=..., ...) still work
+            overrides = fold_legacy_env_fields({"hardware": cfg.hardware, **overrides})
+            overrides["hardware"] = C.from_dict(C.HardwareConfig, overrides["hardware"])
         unknown = sorted(set(overrides) - {f.name for f in dataclasses.fields(C.EnvConfig)})
         if unknown:
             raise ValueError(f"unknown CyberDog-v0 option(s) {unknown}")
@@ -148,23 +159,19 @@ class CyberDogEnv(gym.Env):
         walk = cfg.walk
         self.dt = walk.sim.physics_dt
         self.decimation = cfg.decimation
-        self.robot = Robot(walk.robot, walk.actuator, walk.sim, gui=(render_mode == "human"))
-        self.controller = TrotController(walk)
-        self.base_masses = None
-        # virtual end stops: ±joint_range around the standing pose, inside the URDF limits
-        q_stand = kin.standing_joint_angles(walk.robot).ravel()
-        lo, hi = kin.joint_limits(walk.robot)
-        r = np.deg2rad(cfg.joint_range_deg)
-        self.q_stand = q_stand
-        self.q_low, self.q_high = np.maximum(q_stand - r, lo), np.minimum(q_stand + r, hi)
-        self.fall_tilt = np.deg2rad(cfg.fall_tilt_deg)
-        self.latency_steps = int(round(cfg.latency / self.dt))
+        # the one simulation loop: robot + trot controller + hardware model; the controller is off in the
+        # paper's torque mode; virtual end stops at ±joint_range around the standing pose (Table 4)
+        self.walker = Walker(walk, TrotController(walk), hardware=None if cfg.hardware.ideal else cfg.hardware,
+                             joint_stop=JointStop(walk.robot, np.deg2rad(cfg.joint_range_deg),
+                                                  cfg.joint_stop_stiffness, cfg.joint_stop_damping),
+                             drive=cfg.action_mode != "torque", gui=(render_mode == "human"),
+                             fall_height=cfg.fall_height, fall_tilt=np.deg2rad(cfg.fall_tilt_deg))
+        self.robot, self.controller = self.walker.robot, self.walker.controller
         layout = observation_layout(cfg)
         low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
         high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in layout])
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (12,), dtype=np.float32)
-        self.estimator_every = int(round(cfg.estimator_dt / self.dt))
         z_scale = cfg.foot_offset_scale if cfg.foot_offset_scale_z is None else cfg.foot_offset_scale_z
         self._foot_offset_scale = np.array([cfg.foot_offset_scale, cfg.foot_offset_scale, z_scale])  # m, x y z
         self._state = None
@@ -182,26 +189,26 @@ class CyberDogEnv(gym.Env):
             self.target_speed = float(self.np_random.uniform(*cfg.target_speed_range))
         else:
             self.target_speed = cfg.target_speed
-        if cfg.mass_scale_range:
-            self.robot.set_mass_scale(float(self.np_random.uniform(*cfg.mass_scale_range)))
-        self.controller.set_speed(self.target_speed)
-        self.controller.reset()
-        self.robot.reset()
+        hw = cfg.hardware  # per episode: a mass draw and sensor noise seeded from the env's generator
+        mass_scale = draw_mass_scale(hw, self.np_random) if hw.mass_uncertainty > 0 else None
         sensor_rng = np.random.default_rng(self.np_random.integers(2 ** 63))
-        self.imu = SimulatedIMU(cfg.estimator, sensor_rng, cfg.estimator_dt, cfg.walk.sim.gravity)
-        self.estimator = VelocityEstimator(cfg.estimator, cfg.estimator_dt, cfg.walk.sim.gravity)
-        self.noise_rng = sensor_rng
-        self.t = 0.0
-        self.steps = 0
-        self.torque_queue = deque([np.zeros(12)] * self.latency_steps)
+        self.controller.set_speed(self.target_speed)
+        self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng)
         self.last_torque = np.zeros(12)
         self._foot_offset = np.zeros((4, 3))  # m, the foot-target offsets of the last action (action_mode="foot")
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
-        self._state = self.robot.read_state()
-        self.start_position = self._state.base_position.copy()
-        self._prev_world_velocity = self._state.base_linear_velocity_world.copy()
-        self._velocity_estimate_world = self._state.base_linear_velocity_world.copy()
         return self._observation(), {"target_speed": self.target_speed}
+
+    @property
+    def t(self) -> float:
+        """s since the reset."""
+        return self.walker.time
+
+    def _forward_speed_used(self, s) -> float:
+        """m/s, the forward speed the robot's software knows: the Kalman estimate on hardware that estimates
+        it, else the simulator's truth."""
+        v = self.walker.velocity_estimate_world
+        return float(s.base_linear_velocity_world[0] if v is None else v[0])
 
     def step(self, action):
         if self._state is None:
@@ -213,7 +220,7 @@ class CyberDogEnv(gym.Env):
             raise ValueError(f"action must be finite, got {a.tolist()}")
         mode = self.cfg.action_mode
         self._last_action = np.clip(a, -1.0, 1.0)
-        controller, dt = self.controller, self.dt
+        w, controller, dt = self.walker, self.controller, self.dt
         foot = mode == "foot"
         if foot:  # the action moves the foot targets; the controller's torque is applied as it is
             # first-order hold: the offset ramps from the last action's to this one's over the agent step, so
@@ -222,52 +229,25 @@ class CyberDogEnv(gym.Env):
             start = self._foot_offset
             self._foot_offset = np.clip(a, -1.0, 1.0).reshape(4, 3) * self._foot_offset_scale
             rate = (self._foot_offset - start) / self.cfg.control_dt  # m/s
-            tau_action = 0.0
+            tau_action = None
         else:
             tau_action = np.clip(a, -1.0, 1.0) * self.cfg.action_scale
-        residual = mode != "torque"  # the trot controller runs (residual and foot modes)
-        estimated = self.cfg.observation_source == "estimated"
-        step_energy = 0.0
-        electrical = self.cfg.reward.energy_model == "electrical"
-        if electrical:  # the step's torques and speeds, for one vectorised electrical-power call after the loop
-            taus, omegas = np.empty((self.decimation, 12)), np.empty((self.decimation, 12))
-        s = self._state
+        k0 = w.steps
         for k in range(self.decimation):  # 1 kHz: keep this loop lean (see bench/env_throughput.py)
-            tau = tau_action
             if foot:
                 controller.set_foot_offsets(start + rate * ((k + 1) * dt), rate)
-            if residual:
-                v_known = self._velocity_estimate_world[0] if estimated else None
-                tau = tau + controller.torque(self.t, s.q, s.dq,
-                                              BodyFeedback.from_state(s, self.start_position, v_known))
-            stop = self._joint_stop_torque(s.q, s.dq)
-            if stop is not None:
-                tau = tau + stop
-            if self.latency_steps:
-                self.torque_queue.append(tau)
-                tau = self.torque_queue.popleft()
-            # self.robot.step / read_state, looked up per call: rl.rollout wraps them on the instance
-            applied = self.robot.step(tau)
-            step_energy += float(np.abs(applied * s.dq).sum()) * dt  # Eq. (7), rectangle rule
-            if electrical:
-                taus[k], omegas[k] = applied, s.dq
-            self.t += dt
-            s = self.robot.read_state()
-            self.steps += 1
-            if self.steps % self.estimator_every == 0:
-                self._update_estimator(s)
-        self._state, self.last_torque = s, applied
-        step_electrical = None
-        if electrical:
-            walk = self.cfg.walk
-            step_electrical = float(en.electrical_power(taus, omegas, walk.actuator, walk.energy).sum()) * dt
+            applied = w.step(tau_action)
+        s = self._state = w.state
+        self.last_torque = applied
+        step_energy = w.energy(since=k0)  # Eq. (7)
+        step_electrical = w.electrical_energy(since=k0) if self.cfg.reward.energy_model == "electrical" else None
         return self._finish_step(s, step_energy, step_electrical)
 
     def _finish_step(self, s, step_energy: float, step_electrical: float | None = None):
         cfg = self.cfg
         v_true = float(s.base_linear_velocity_world[0])
-        v_used = float(self._velocity_estimate_world[0]) if cfg.observation_source == "estimated" else v_true
-        y = float(s.base_position[1] - self.start_position[1])
+        v_used = self._forward_speed_used(s)
+        y = float(s.base_position[1] - self.walker.start[1])
         v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
         terms = rewards.reward_terms(v_x=v_used, v_target=v_cmd, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
@@ -276,59 +256,28 @@ class CyberDogEnv(gym.Env):
         weighted = rewards.weighted_terms(terms, cfg.reward)
         reward = float(sum(weighted.values()))
         finite = np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.base_position))
-        fallen = s.base_position[2] < cfg.fall_height or np.max(np.abs(s.base_rpy[:2])) > self.fall_tilt
+        fallen = self.walker.fallen(s)
         terminated = bool(fallen or not finite)
         info = {"reward_terms": terms, "reward_weighted": weighted, "step_energy_J": step_energy,
                 "step_electrical_energy_J": step_electrical,
                 "forward_speed": v_true, "forward_speed_used": v_used, "target_speed": self.target_speed,
-                "velocity_estimate": self._velocity_estimate_world.copy(), "fallen": bool(fallen),
+                "velocity_estimate": self.walker.velocity_estimate_world, "fallen": bool(fallen),
                 "time": self.t}
         if self.render_mode == "human":
             self.render()
         return self._observation(), reward, terminated, False, info
 
     # ----------------------------------------------------------------------------------------------------
-    def _joint_stop_torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray | None:
-        """Spring-damper beyond ±joint_range of the standing pose (Table 4's joint control range), N·m (12,);
-        None while every joint is inside its range (almost always: two comparisons instead of the torque)."""
-        if (self.q_low <= q).all() and (q <= self.q_high).all():
-            return None
-        over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
-        if not over.any():
-            return None
-        return -self.cfg.joint_stop_stiffness * over - self.cfg.joint_stop_damping * dq * (over != 0)
-
-    def _update_estimator(self, s) -> None:
-        """Kalman filter step at `estimator_dt`: simulated IMU + leg odometry of the stance feet."""
-        dt = self.cfg.estimator_dt
-        R = s.rotation_matrix
-        v_world = s.base_linear_velocity_world
-        accel_world = (v_world - self._prev_world_velocity) / dt
-        self._prev_world_velocity = v_world.copy()
-        imu = self.imu.measure(accel_world, s.base_angular_velocity_world, R, frame="world")
-        contacts = self.robot.foot_contacts()
-        q, dq = self._noisy_joints(s.q, s.dq)
-        leg_v = leg_odometry_velocity(q, dq, contacts, imu.gyroscope, self.cfg.walk.robot)
-        self._velocity_estimate_world = self.estimator.update(imu, leg_v, R)
-
-    def _noisy_joints(self, q: np.ndarray, dq: np.ndarray):
-        if not self.cfg.joint_noise:
-            return q, dq
-        c = self.cfg
-        return (q + self.noise_rng.normal(0, c.joint_angle_noise_std, 12),
-                dq + self.noise_rng.normal(0, c.joint_velocity_noise_std, 12))
-
     def _observation(self) -> np.ndarray:
         s = self._state
-        q, dq = self._noisy_joints(s.q, s.dq)
-        if self.cfg.observation_source == "estimated":
-            v_body = s.rotation_matrix.T @ self._velocity_estimate_world
-        else:
-            v_body = s.base_linear_velocity_body
-        phase = 2 * np.pi * self.controller.scheduler.leg_phase_list(self.t)[0]  # = leg_phases(t)[0]
+        q, dq = self.walker.sensed_joints(s)
+        v_world = self.walker.velocity_estimate_world
+        v_body = s.base_linear_velocity_body if v_world is None else s.rotation_matrix.T @ v_world
+        t = self.t
+        phase = 2 * np.pi * self.controller.scheduler.leg_phase_list(t)[0]  # = leg_phases(t)[0]
         obs = np.concatenate([
-            [s.base_position[2], s.base_position[1] - self.start_position[1]], s.base_rpy, v_body,
-            s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(self.t)],
+            [s.base_position[2], s.base_position[1] - self.walker.start[1]], s.base_rpy, v_body,
+            s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(t)],
             [np.sin(phase), np.cos(phase)]]
             + ([self._last_action] if self.cfg.observe_last_action else [])).astype(np.float32)
         obs = np.nan_to_num(obs, nan=0.0)
@@ -340,6 +289,6 @@ class CyberDogEnv(gym.Env):
         return None
 
     def close(self):
-        if getattr(self, "robot", None) is not None:
-            self.robot.close()
-            self.robot = None
+        if getattr(self, "walker", None) is not None:
+            self.walker.close()
+            self.walker = self.robot = None

@@ -8,7 +8,7 @@ integrated by Eq. (7) exactly as in the scripted walks.
 
     actor = load_actor("results/policy_speeds/stage2_actor.pt")
     r = rollout(actor, speed=1.0, duration=10.0)
-    r.mean_speed, r.energy_per_metre, r.fell
+    r.mean_speed, r.energy_per_metre, r.fell  # a WalkResult, as a scripted walk's
 """
 from __future__ import annotations
 
@@ -20,8 +20,8 @@ import numpy as np
 import torch
 
 from cyberdog import config as C
-from cyberdog.core import energy as en
 from cyberdog.envs.cyberdog_env import CyberDogEnv, observation_typical_magnitude
+from cyberdog.loop.result import WalkResult, walk_result
 from cyberdog.rl.checkpoint import CheckpointError, check_shapes
 from cyberdog.rl.networks import TanhActor
 
@@ -64,95 +64,11 @@ def load_actor(path: str | Path) -> LoadedActor:
     return LoadedActor(module, cfg, meta)
 
 
-@dataclass
-class Rollout:
-    """One deterministic episode; traces at the physics rate (dt = `physics_dt`)."""
-
-    speed_command: float  # m/s
-    duration: float  # s walked (shorter than asked if the robot fell)
-    fell: bool
-    mean_speed: float  # m/s, forward, over the second half of the rollout (the last 5 s of 10 s)
-    distance: float  # m, forward displacement of the body
-    lateral_drift: float  # m, |y| at the end
-    energy: float  # J, Eq. (7) over the whole rollout
-    score: float  # sum of the env's rewards (the reward the env was built with)
-    physics_dt: float  # s
-    traces: dict  # t, q, dq, tau (applied motor torque), contacts (4 feet), base_position; (n, ...) arrays;
-    # foot_targets, foot_offsets (n, 4, 3) m: the trot controller's commanded foot targets and the policy's
-    # shift in them (leg frame; action_mode "foot"; zeros without a shift, nan targets in torque mode)
-
-    @property
-    def energy_per_metre(self) -> float:
-        """J/m over the whole rollout; nan without forward travel."""
-        return self.energy / self.distance if self.distance > 0 else float("nan")
-
-    @property
-    def speed_ok(self) -> bool:
-        """Mean speed within ±5 % of the command."""
-        return abs(self.mean_speed - self.speed_command) <= 0.05 * self.speed_command
-
-    def summary(self) -> dict:
-        return {"speed_command_mps": self.speed_command, "mean_speed_mps": self.mean_speed,
-                "fell": self.fell, "duration_s": self.duration, "distance_m": self.distance,
-                "lateral_drift_m": self.lateral_drift, "energy_J": self.energy,
-                "energy_per_m_J": self.energy_per_metre, "score": self.score}
-
-
-_NO_TARGET = [(float("nan"),) * 3] * 4
-_NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
-
-
-class _PhysicsRecorder:
-    """Wraps the env's robot so that each physics step's state and applied torque are kept.
-
-    The env reads the state after every physics step (`read_state`) and applies torques with `step`; both
-    are intercepted on the instance only, so the env's own code path is the one being measured.
-    """
-
-    def __init__(self, robot, controller):
-        self.robot, self.controller = robot, controller
-        self._step, self._read = robot.step, robot.read_state
-        self.q, self.dq, self.tau, self.contacts, self.base = [], [], [], [], []
-        self.foot_targets, self.foot_offsets = [], []  # what the trot controller commanded (leg frame, m)
-        self._last_state = None
-        robot.step = self.step
-        robot.read_state = self.read_state
-
-    def read_state(self):
-        self._last_state = self._read()
-        return self._last_state
-
-    def step(self, tau):
-        applied = self._step(tau)
-        s = self._last_state  # the state the torque acted on (Eq. 7 uses ω at the start of the step)
-        self.q.append(s.q.copy())
-        self.dq.append(s.dq.copy())
-        self.tau.append(np.array(applied, dtype=float))
-        self.base.append(s.base_position.copy())
-        self.contacts.append(np.asarray(self.robot.foot_contacts(), dtype=bool))
-        c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
-        self.foot_targets.append(c.last_foot_targets or _NO_TARGET)
-        self.foot_offsets.append(c.last_foot_offsets or _NO_OFFSET)
-        return applied
-
-    def clear(self) -> None:
-        for trace in (self.q, self.dq, self.tau, self.contacts, self.base, self.foot_targets, self.foot_offsets):
-            trace.clear()
-
-    def traces(self, dt: float) -> dict:
-        n = len(self.tau)
-        stack = (lambda xs, w: np.array(xs, dtype=float).reshape(n, w))
-        return {"t": np.arange(n) * dt, "q": stack(self.q, 12), "dq": stack(self.dq, 12),
-                "tau": stack(self.tau, 12), "base_position": stack(self.base, 3),
-                "contacts": np.array(self.contacts, dtype=bool).reshape(n, 4),
-                "foot_targets": np.array(self.foot_targets, dtype=float).reshape(n, 4, 3),
-                "foot_offsets": np.array(self.foot_offsets, dtype=float).reshape(n, 4, 3)}
-
-
 def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed: int = 0,
-            env_config: C.EnvConfig | None = None, reward: str | C.RewardConfig = "stage2") -> Rollout:
+            env_config: C.EnvConfig | None = None, reward: str | C.RewardConfig = "stage2") -> WalkResult:
     """Run the actor deterministically for `duration` s at `speed` m/s in the env it was trained in
-    (or `env_config`), recording every physics step. Stops early if the robot falls."""
+    (or `env_config`), recording every physics step. Stops early if the robot falls. The result is the
+    same record as a scripted walk's, with the episode's score."""
     if not (np.isfinite(speed) and speed >= 0):
         raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
     if not duration > 0:
@@ -161,10 +77,10 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=())
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
+        # the env's simulation loop keeps every physics step: state, applied torque, contacts, and the trot
+        # controller's commanded foot targets and the policy's shift of them; and samples foot slip
+        env.walker.record = env.walker.gait_metrics = True
         obs, _ = env.reset(seed=seed, options={"target_speed": float(speed)})
-        rec = _PhysicsRecorder(env.robot, env.controller)
-        start = env.robot.read_state().base_position.copy()
-        rec.clear()
         n_steps = int(round(duration / cfg.control_dt))
         score, fell = 0.0, False
         for _ in range(n_steps):
@@ -173,15 +89,6 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
             if terminated:
                 fell = True
                 break
-        dt = cfg.walk.sim.physics_dt
-        traces = rec.traces(dt)
-        end = env.robot.read_state().base_position
+        return walk_result(env.walker, float(speed), fell, score=score)
     finally:
         env.close()
-    n = len(traces["t"])
-    vx = np.gradient(traces["base_position"][:, 0], dt) if n > 1 else np.zeros(n)
-    return Rollout(speed_command=float(speed), duration=n * dt, fell=fell,
-                   mean_speed=float(np.mean(vx[n // 2:])) if n else 0.0,
-                   distance=float(end[0] - start[0]), lateral_drift=float(abs(end[1] - start[1])),
-                   energy=float(en.joint_energy(traces["tau"], traces["dq"], dt).sum()), score=score,
-                   physics_dt=dt, traces=traces)

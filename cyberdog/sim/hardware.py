@@ -1,16 +1,17 @@
-"""The "hardware-like" robot of the prototype experiment (paper Section 4.2) in simulation, beyond the paper.
+"""The one hardware model: what separates the simulated robot from the real one (beyond the paper).
 
-`HardwareConfig` (cyberdog.config) names the effects; this module applies them around a scripted walk:
+`HardwareConfig` (cyberdog.config) names the effects; this module applies them at the physics rate, for the
+learning environment and for the scripted walks alike (`cyberdog.loop.walker.Walker` owns one):
 
 - `hardware_walk_config`: the walk config the simulator must be built with (joint friction on or off);
-- `draw_mass_scale`: the seeded mass-scale draw in [1 − u, 1 + u];
+- `draw_mass_scale`: the mass-scale draw in [1 − u, 1 + u];
 - `TorqueDelay`: actuation latency as a FIFO of whole physics steps;
-- `HardwareSensing`: what the controller reads on a real robot: noisy joint encoders and the Kalman body
-  velocity from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`, used the
-  same way as in `cyberdog.envs.cyberdog_env`).
+- `HardwareSensing`: what the robot's software reads: noisy joint encoders and the Kalman body velocity
+  from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`).
 
-Randomness: one `numpy.random.SeedSequence(hw.seed)` spawns independent streams for the mass draw and the
-sensors, so the mass draw does not depend on which sensors are on (same seed, same robot).
+Randomness: a scripted walk seeds everything from `HardwareConfig.seed`: one `numpy.random.SeedSequence`
+spawns independent streams for the mass draw and the sensors, so that the mass draw does not depend on which
+sensors are on (same seed, same robot). The env seeds both per episode from its own generator instead.
 """
 from __future__ import annotations
 
@@ -19,23 +20,26 @@ from collections import deque
 
 import numpy as np
 
-from cyberdog.config import EstimatorConfig, HardwareConfig, WalkConfig
-from cyberdog.control.trot import BodyFeedback
+from cyberdog.config import HardwareConfig, WalkConfig
 from cyberdog.core.estimator import SimulatedIMU, VelocityEstimator, leg_odometry_velocity
 
 MASS_STREAM, SENSOR_STREAM = 0, 1  # indices of the child seed sequences of HardwareConfig.seed
 
 
-def _streams(hw: HardwareConfig) -> list[np.random.SeedSequence]:
-    return np.random.SeedSequence(hw.seed).spawn(2)
+def seeded_streams(hw: HardwareConfig) -> tuple[np.random.Generator, np.random.Generator]:
+    """(mass generator, sensor generator) of a scripted walk, from `hw.seed`."""
+    mass, sensor = np.random.SeedSequence(hw.seed).spawn(2)
+    return np.random.default_rng(mass), np.random.default_rng(sensor)
 
 
-def draw_mass_scale(hw: HardwareConfig) -> float:
-    """Mass (and inertia) scale of every link: a draw from U(1 − u, 1 + u), u = mass_uncertainty; 1 if u = 0."""
+def draw_mass_scale(hw: HardwareConfig, rng: np.random.Generator | None = None) -> float:
+    """Mass (and inertia) scale of every link: a draw from U(1 − u, 1 + u), u = mass_uncertainty; 1 if u = 0.
+    rng: the generator to draw from (default: the mass stream of `hw.seed`)."""
     u = hw.mass_uncertainty
     if u == 0:
         return 1.0
-    return float(np.random.default_rng(_streams(hw)[MASS_STREAM]).uniform(1.0 - u, 1.0 + u))
+    rng = rng if rng is not None else seeded_streams(hw)[MASS_STREAM]
+    return float(rng.uniform(1.0 - u, 1.0 + u))
 
 
 def hardware_walk_config(cfg: WalkConfig, hw: HardwareConfig | None) -> WalkConfig:
@@ -79,24 +83,24 @@ class TorqueDelay:
 
 
 class HardwareSensing:
-    """What the trot controller measures on the hardware-like robot, once per physics step.
+    """What the robot's software measures, once per physics step.
 
-    `read(k, state, robot, start)` → (q, dq, BodyFeedback): encoder readings with white noise, and the body
-    feedback with the Kalman-estimated forward and sideways speed when `estimated_velocity` (yaw and lateral
-    offset stay true: on the robot they come from the IMU attitude filter and the operator's steering). The
-    filter runs every `estimator_dt` (predict with the IMU, correct with leg odometry of the feet in contact).
+    `read(k, state, contacts)` → (q, dq, v_world): encoder readings with white noise, and the Kalman estimate
+    of the body velocity (world frame) when `estimated_velocity`, else None (the simulator's truth is used).
+    The filter runs every `estimator_dt` (predict with the IMU, correct with leg odometry of the feet in
+    contact); `contacts` is called only then.
     """
 
-    def __init__(self, hw: HardwareConfig, cfg: WalkConfig) -> None:
-        self.hw, self.cfg = hw, cfg
+    def __init__(self, hw: HardwareConfig, cfg: WalkConfig, rng: np.random.Generator) -> None:
+        self.hw, self.cfg, self.rng = hw, cfg, rng
         dt = cfg.sim.physics_dt
         self.estimator_every = whole_steps(hw.estimator_dt, dt, "HardwareConfig.estimator_dt")
         if self.estimator_every < 1:
             raise ValueError(f"HardwareConfig.estimator_dt must be >= physics_dt ({dt} s), got {hw.estimator_dt!r}")
-        self.estimator_cfg = EstimatorConfig(noise=hw.imu_noise)
-        self.rng = np.random.default_rng(_streams(hw)[SENSOR_STREAM])
-        self.imu = SimulatedIMU(self.estimator_cfg, self.rng, hw.estimator_dt, cfg.sim.gravity)
-        self.estimator = VelocityEstimator(self.estimator_cfg, hw.estimator_dt, cfg.sim.gravity)
+        est = hw.estimator_config
+        self.imu = SimulatedIMU(est, rng, hw.estimator_dt, cfg.sim.gravity)
+        self.estimator = VelocityEstimator(est, hw.estimator_dt, cfg.sim.gravity)
+        self.noisy = hw.joint_angle_noise_std > 0 or hw.joint_velocity_noise_std > 0
         self._prev_velocity_world = np.zeros(3)
 
     def reset(self, state) -> None:
@@ -110,7 +114,8 @@ class HardwareSensing:
         """(3,) current Kalman estimate of the body velocity, world frame, m/s."""
         return self.estimator.velocity
 
-    def _noisy(self, q: np.ndarray, dq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def joints(self, q: np.ndarray, dq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Encoder readings of the true (q, dq): white noise of the configured std (none when 0)."""
         hw = self.hw
         if hw.joint_angle_noise_std > 0:
             q = q + self.rng.normal(0.0, hw.joint_angle_noise_std, q.shape)
@@ -118,26 +123,24 @@ class HardwareSensing:
             dq = dq + self.rng.normal(0.0, hw.joint_velocity_noise_std, dq.shape)
         return q, dq
 
-    def _update_estimator(self, state, robot) -> None:
+    def _update_estimator(self, state, contacts) -> None:
         dt = self.hw.estimator_dt
         R = state.rotation_matrix
         v_world = state.base_linear_velocity_world
         accel_world = (v_world - self._prev_velocity_world) / dt  # mean acceleration over the filter period
         self._prev_velocity_world = v_world.copy()
         imu = self.imu.measure(accel_world, state.base_angular_velocity_world, R, frame="world")
-        q, dq = self._noisy(state.q, state.dq)  # the encoders feed leg odometry too
-        leg_v = leg_odometry_velocity(q, dq, robot.foot_contacts(), imu.gyroscope, self.cfg.robot)
+        q, dq = self.joints(state.q, state.dq)  # the encoders feed leg odometry too
+        leg_v = leg_odometry_velocity(q, dq, contacts(), imu.gyroscope, self.cfg.robot)
         self.estimator.update(imu, leg_v, R)
 
-    def read(self, k: int, state, robot, start: np.ndarray) -> tuple[np.ndarray, np.ndarray, BodyFeedback]:
-        """Sensor readings at physics step k (state read after step k − 1)."""
+    def read(self, k: int, state, contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Sensor readings at physics step k (state read after step k − 1); `contacts()` → (4,) bool."""
         if self.hw.estimated_velocity and k > 0 and k % self.estimator_every == 0:
-            self._update_estimator(state, robot)
-        q, dq = self._noisy(state.q, state.dq)
-        if not self.hw.estimated_velocity:
-            return q, dq, BodyFeedback.from_state(state, start)
-        v_world = self.estimator.velocity
-        v_body = state.rotation_matrix.T @ v_world
-        body = BodyFeedback(yaw=float(state.base_rpy[2]), lateral_offset=float(state.base_position[1] - start[1]),
-                            forward_speed=float(v_world[0]), lateral_speed=float(v_body[1]))
-        return q, dq, body
+            self._update_estimator(state, contacts)
+        q, dq = self.joints(state.q, state.dq)
+        return q, dq, (self.estimator.velocity if self.hw.estimated_velocity else None)
+
+
+__all__ = ["HardwareSensing", "TorqueDelay", "draw_mass_scale", "hardware_walk_config", "seeded_streams",
+           "whole_steps"]

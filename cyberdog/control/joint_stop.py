@@ -1,0 +1,28 @@
+"""Table 4's joint control range (±45° around the standing pose) as a virtual end stop."""
+from __future__ import annotations
+
+import numpy as np
+
+from cyberdog.config import RobotConfig
+from cyberdog.core import kinematics as kin
+
+
+class JointStop:
+    """Spring-damper torque that pushes a joint back inside ±`range_rad` of the standing pose (and inside the
+    URDF limits): τ = −k·overshoot − c·q̇ for each joint beyond its range, nothing inside it."""
+
+    def __init__(self, robot: RobotConfig, range_rad: float, stiffness: float, damping: float) -> None:
+        q_stand = kin.standing_joint_angles(robot).ravel()
+        lo, hi = kin.joint_limits(robot)
+        self.q_low, self.q_high = np.maximum(q_stand - range_rad, lo), np.minimum(q_stand + range_rad, hi)
+        self.stiffness, self.damping = float(stiffness), float(damping)
+
+    def torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray | None:
+        """N·m (12,); None while every joint is inside its range (almost always: two comparisons instead of
+        the torque)."""
+        if (self.q_low <= q).all() and (q <= self.q_high).all():
+            return None
+        over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
+        if not over.any():
+            return None
+        return -self.stiffness * over - self.damping * dq * (over != 0)

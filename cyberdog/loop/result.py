@@ -1,0 +1,113 @@
+"""`WalkResult`: the one record of a walk, scripted or a policy's rollout, and how it is computed."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cyberdog.config import HardwareConfig
+from cyberdog.config.paper import speed_within_band
+from cyberdog.core import energy as en
+
+
+@dataclass
+class WalkResult:
+    """Metrics of one walk (SI units) and, if recorded, its traces at the physics rate."""
+
+    speed_command: float  # m/s
+    duration: float  # s walked (shorter than asked if the robot fell)
+    fell: bool
+    mean_speed: float  # m/s, forward, over the last half of the walk (last 5 s of 10 s)
+    lateral_drift: float  # m, |y| at the end
+    height_min: float  # m, body centre
+    height_max: float  # m
+    max_roll: float  # rad, |roll|
+    max_pitch: float  # rad, |pitch|
+    distance: float  # m, forward displacement
+    energy: float  # J, Eq. (7) Σ∫|τ·ω|dt over the walk
+    energy_per_joint: np.ndarray  # (12,) J
+    electrical_energy: float  # J, with copper loss, friction loss and driver efficiency
+    positive_work: float  # J, Σ∫max(τ·ω, 0)dt: the work the motors put in (Eq. 7 also counts braking)
+    foot_slip_per_cycle: float  # m, mean distance a foot slides on the ground per gait cycle
+    cost_of_transport: float  # E / (m g d); nan when the robot made no forward progress
+    peak_torque: float  # N·m, max |τ| over joints and time
+    peak_joint_speed: float  # rad/s
+    non_foot_contacts: list  # link names other than feet that touched the ground
+    traces: dict = field(default_factory=dict)  # t, tau, dq, q, power, base_position, contacts
+    target_distance: float | None = None  # m, the walk's distance goal (None: a timed walk)
+    mass_scale: float = 1.0  # link mass scale the robot walked with (hardware-like: a ±u draw)
+    hardware: HardwareConfig | None = None  # the hardware-like effects, None = the ideal robot
+    score: float | None = None  # sum of the env's rewards, for a policy rollout (None for a scripted walk)
+
+    @property
+    def reached(self) -> bool:
+        """The distance goal was reached without falling (a timed walk: it did not fall)."""
+        return not self.fell and (self.target_distance is None or self.distance >= self.target_distance)
+
+    @property
+    def energy_per_100m(self) -> float:
+        """J per 100 m of forward travel."""
+        return en.energy_per_100m(self.energy, self.distance) if self.distance > 0 else float("nan")
+
+    @property
+    def energy_per_metre(self) -> float:
+        """J/m of forward travel; nan without forward travel."""
+        return self.energy / self.distance if self.distance > 0 else float("nan")
+
+    @property
+    def physics_dt(self) -> float:
+        """s between trace samples."""
+        t = self.traces.get("t")
+        return float(t[1] - t[0]) if t is not None and len(t) > 1 else float("nan")
+
+    @property
+    def speed_ok(self) -> bool:
+        """Mean speed within the acceptance band (±5 %) of the command."""
+        return speed_within_band(self.mean_speed, self.speed_command)
+
+    def summary(self) -> dict:
+        return {
+            "speed_command_mps": self.speed_command, "mean_speed_mps": self.mean_speed,
+            "lateral_drift_m": self.lateral_drift, "height_min_m": self.height_min,
+            "height_max_m": self.height_max, "max_roll_rad": self.max_roll, "max_pitch_rad": self.max_pitch,
+            "fell": self.fell, "duration_s": self.duration, "distance_m": self.distance,
+            "energy_J": self.energy, "energy_per_100m_kJ": self.energy_per_100m / 1e3,
+            "electrical_energy_J": self.electrical_energy, "positive_work_J": self.positive_work,
+            "foot_slip_mm_per_cycle": 1e3 * self.foot_slip_per_cycle, "cost_of_transport": self.cost_of_transport,
+            "peak_torque_Nm": self.peak_torque, "peak_joint_speed_radps": self.peak_joint_speed,
+            "non_foot_contacts": ",".join(self.non_foot_contacts), "speed_ok": self.speed_ok,
+        } | ({} if self.score is None else {"score": self.score, "energy_per_m_J": self.energy_per_metre})
+
+
+def walk_result(walker, speed_command: float, fell: bool, target_distance: float | None = None,
+                score: float | None = None) -> WalkResult:
+    """The metrics of everything `walker` (a `cyberdog.loop.walker.Walker`) stepped since its reset."""
+    cfg, dt = walker.cfg, walker.dt
+    tr = walker.traces()
+    tau, dq = tr["tau"], tr["dq"]
+    vx, rpy, z = walker.vx.view(), walker.rpy.view(), walker.z.view()
+    n = len(tau)
+    start, end = walker.start, walker.state.base_position
+    e_joint = en.joint_energy(tau, dq, dt)
+    travelled = float(end[0] - start[0])  # m, forward
+    mass = cfg.robot.total_mass * walker.robot.mass_scale  # kg, what the robot weighed in this walk
+    cycles = n * dt / cfg.gait.period
+    slip = float("nan")
+    if walker.gait_metrics and cycles > 0 and walker.slip_xy:
+        slip = float(en.foot_slip(np.reshape(walker.slip_xy, (-1, 4, 2)),
+                                  np.reshape(walker.slip_contacts, (-1, 4))).mean() / cycles)
+    return WalkResult(
+        speed_command=float(speed_command), duration=n * dt, fell=bool(fell),
+        mean_speed=float(np.mean(vx[n // 2:])) if n else 0.0,
+        lateral_drift=float(abs(end[1] - start[1])),
+        height_min=float(z.min()) if n else float("nan"), height_max=float(z.max()) if n else float("nan"),
+        max_roll=float(np.max(np.abs(rpy[:, 0]))) if n else float("nan"),
+        max_pitch=float(np.max(np.abs(rpy[:, 1]))) if n else float("nan"),
+        distance=travelled, energy=float(e_joint.sum()), energy_per_joint=e_joint,
+        electrical_energy=walker.electrical_energy(), positive_work=en.positive_work(tau, dq, dt),
+        foot_slip_per_cycle=slip,
+        cost_of_transport=(en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, travelled)
+                           if travelled > 0 else float("nan")),  # undefined without forward travel
+        peak_torque=float(np.max(np.abs(tau))) if n else 0.0, peak_joint_speed=float(np.max(np.abs(dq))) if n else 0.0,
+        non_foot_contacts=sorted(walker.non_foot_contacts), target_distance=target_distance,
+        mass_scale=walker.robot.mass_scale, hardware=walker.hardware, score=score, traces=tr)

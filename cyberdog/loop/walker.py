@@ -1,0 +1,237 @@
+"""`Walker`: robot + trot controller + hardware model, advanced one physics step at a time.
+
+Every loop of the project that steps the simulated CyberDog runs through `Walker.step`: the learning
+environment (`CyberDog-v0`, 25 steps per agent step), the scripted walks of the trajectory comparison and the
+prototype (`cyberdog.analysis.walk`), the videos and the policy rollouts. One step:
+
+1. the robot's software reads its sensors (the hardware model: encoder noise, Kalman speed; the truth on the
+   ideal robot) and the trot controller computes its torque (trajectory + IK + PID), unless the controller is
+   off (the paper's torque-mode env); an extra torque (a policy's) is added;
+2. the virtual end stop of Table 4's joint range adds its torque, if one is given;
+3. the command waits out the actuation latency, goes through the actuator model and one `stepSimulation`;
+4. the applied torque and the joint speed at the start of the step are kept, for Eq. (7)
+   (E = Σ∫|τ·ω|dt, rectangle rule at the physics dt) and the electrical energy, and with `record` the state,
+   contacts and the controller's foot targets; with `gait_metrics` the non-foot ground contacts and the feet's
+   positions for foot slip are sampled.
+
+Time is `steps · dt` since the reset.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
+from cyberdog.control.joint_stop import JointStop
+from cyberdog.control.trot import BodyFeedback, TrotController
+from cyberdog.core import energy as en
+from cyberdog.sim.hardware import (HardwareSensing, TorqueDelay, draw_mass_scale, hardware_walk_config,
+                                   seeded_streams, whole_steps)
+from cyberdog.sim.robot import Robot
+
+# "fallen" means the same everywhere (EnvConfig's defaults; the env passes its own)
+FALL_HEIGHT = EnvConfig.fall_height  # m, body centre below this
+FALL_TILT = np.deg2rad(EnvConfig.fall_tilt_deg)  # rad, |roll| or |pitch| above this
+CONTACT_CHECK_EVERY = 10  # physics steps between checks of which links touch the ground
+SLIP_SAMPLE_EVERY = 5  # physics steps between samples of the feet's positions and contacts (foot slip)
+
+_NO_TARGET = [(float("nan"),) * 3] * 4
+_NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
+
+
+class _Rows:
+    """A growing (n, *shape) float array, appended one row per physics step."""
+
+    def __init__(self, shape: tuple, dtype=float, capacity: int = 1024) -> None:
+        self.data = np.zeros((capacity, *shape), dtype=dtype)
+        self.n = 0
+
+    def append(self, row) -> None:
+        if self.n == len(self.data):
+            self.data = np.concatenate([self.data, np.zeros_like(self.data)])
+        self.data[self.n] = row
+        self.n += 1
+
+    def view(self, start: int = 0) -> np.ndarray:
+        return self.data[start:self.n]
+
+
+class Walker:
+    """The CyberDog under the trot controller at the physics rate (see the module docstring).
+
+    cfg: the walk (robot, actuator, sim, gait, PID, controller, energy).
+    controller: the trot controller (default: `TrotController(cfg)`); `drive=False` leaves it off (torque mode).
+    hardware: the hardware model (None: the ideal robot). With friction on, a given `robot` must have been
+        built with `hardware_walk_config(cfg, hardware).actuator`.
+    joint_stop: the virtual end stop of the env's joint range (None: only the URDF limits).
+    record: keep the state, contacts and foot targets of every step (`traces`); gait_metrics: sample non-foot
+        contacts and foot slip.
+    fall_height, fall_tilt: m, rad: what `fallen` means.
+    """
+
+    def __init__(self, cfg: WalkConfig, controller: TrotController | None = None, robot: Robot | None = None,
+                 hardware: HardwareConfig | None = None, joint_stop: JointStop | None = None, drive: bool = True,
+                 record: bool = False, gait_metrics: bool = False, gui: bool = False,
+                 fall_height: float = FALL_HEIGHT, fall_tilt: float = FALL_TILT) -> None:
+        if hardware is not None and not isinstance(hardware, HardwareConfig):
+            raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
+        self.cfg = cfg = hardware_walk_config(cfg, hardware)
+        if robot is not None and robot.actuator_config != cfg.actuator:
+            raise ValueError("robot was built with another ActuatorConfig than the walk needs (friction="
+                             f"{cfg.actuator.friction}); build it from hardware_walk_config(cfg, hardware)")
+        self.own_robot = robot is None
+        self.robot = robot or Robot(cfg.robot, cfg.actuator, cfg.sim, gui=gui)
+        self.controller = controller or TrotController(cfg)
+        self.hardware = hardware
+        self.joint_stop, self.drive = joint_stop, drive
+        self.record, self.gait_metrics = record, gait_metrics
+        self.fall_height, self.fall_tilt = fall_height, fall_tilt
+        self.dt = cfg.sim.physics_dt
+        self.delay = TorqueDelay(whole_steps(hardware.latency_s, self.dt, "HardwareConfig.latency_s")
+                                 if hardware is not None else 0)
+        self.sensing: HardwareSensing | None = None
+        self.foot_link_names = set(self.robot.foot_link_names)
+        self.reset()
+
+    # ------------------------------------------------------------------------------------------------------
+    def reset(self, mass_scale: float | None = None, sensor_rng: np.random.Generator | None = None):
+        """Robot at rest in its standing pose, controller and hardware model reset, traces cleared.
+
+        mass_scale: the link-mass scale to walk with; None = the hardware's seeded draw (1 on the ideal
+            robot). sensor_rng: the sensors' generator; None = the stream seeded by `HardwareConfig.seed`.
+        Returns the state (a RobotState)."""
+        hw = self.hardware
+        if hw is not None:
+            mass_rng, seeded_sensor_rng = seeded_streams(hw)
+            if mass_scale is None:
+                mass_scale = draw_mass_scale(hw, mass_rng)
+            sensing = not hw.ideal or hw.imu_noise
+            self.sensing = (HardwareSensing(hw, self.cfg, sensor_rng if sensor_rng is not None
+                                            else seeded_sensor_rng) if sensing else None)
+        if mass_scale is not None:
+            self.robot.set_mass_scale(mass_scale)
+        self.robot.reset()
+        self.controller.reset()
+        self.delay.reset()
+        self.state = self.robot.read_state()
+        if self.sensing is not None:
+            self.sensing.reset(self.state)
+        self.start = self.state.base_position.copy()
+        self.steps = 0
+        self.tau, self.dq = _Rows((12,)), _Rows((12,))  # applied motor torque, joint speed at the step start
+        self.vx, self.rpy, self.z = _Rows(()), _Rows((3,)), _Rows(())  # body state at the step start
+        self._traces: dict[str, _Rows] = {}
+        self.non_foot_contacts: set[str] = set()
+        self.slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_EVERY steps
+        self.slip_contacts: list[np.ndarray] = []
+        return self.state
+
+    @property
+    def time(self) -> float:
+        """s since the reset."""
+        return self.steps * self.dt
+
+    # ------------------------------------------------------------------------------------------------------
+    def body_feedback(self, state, v_world: np.ndarray | None) -> BodyFeedback:
+        """What the controller knows of the body: the truth, or the forward and sideways speed of the
+        Kalman estimate `v_world` (yaw and lateral offset stay true: on the robot they come from the IMU's
+        attitude filter and the operator's steering)."""
+        if v_world is None:
+            return BodyFeedback.from_state(state, self.start)
+        v_body = state.rotation_matrix.T @ v_world
+        return BodyFeedback(yaw=float(state.base_rpy[2]), lateral_offset=float(state.base_position[1] - self.start[1]),
+                            forward_speed=float(v_world[0]), lateral_speed=float(v_body[1]))
+
+    def sensed_joints(self, state=None) -> tuple[np.ndarray, np.ndarray]:
+        """(q, dq) as the robot's encoders read them now (a fresh noise draw on the hardware-like robot)."""
+        s = self.state if state is None else state
+        return (s.q, s.dq) if self.sensing is None or not self.sensing.noisy else self.sensing.joints(s.q, s.dq)
+
+    @property
+    def velocity_estimate_world(self) -> np.ndarray | None:
+        """(3,) m/s, the Kalman estimate of the body velocity; None unless the hardware estimates it."""
+        if self.sensing is None or not self.hardware.estimated_velocity:
+            return None
+        return self.sensing.velocity_estimate_world
+
+    def step(self, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
+        """One physics step; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
+        torque applied (12,)."""
+        s, k = self.state, self.steps
+        if self.drive:
+            if self.sensing is None:
+                tau = self.controller.torque(k * self.dt, s.q, s.dq, BodyFeedback.from_state(s, self.start))
+            else:
+                q, dq, v_world = self.sensing.read(k, s, self.robot.foot_contacts)
+                tau = self.controller.torque(k * self.dt, q, dq, self.body_feedback(s, v_world))
+            if extra_torque is not None:
+                tau = extra_torque + tau
+        else:
+            tau = extra_torque
+        if self.joint_stop is not None:
+            stop = self.joint_stop.torque(s.q, s.dq)
+            if stop is not None:
+                tau = tau + stop
+        applied = self.robot.step(self.delay.push(tau))
+        self.tau.append(applied)
+        self.dq.append(s.dq)
+        self.vx.append(s.base_linear_velocity_world[0])
+        self.rpy.append(s.base_rpy)
+        self.z.append(s.base_position[2])
+        if self.record:
+            self._record(s)
+        if self.gait_metrics:
+            if k % CONTACT_CHECK_EVERY == 0:
+                self.non_foot_contacts |= self.robot.ground_contact_links() - self.foot_link_names
+            if k % SLIP_SAMPLE_EVERY == 0:
+                self.slip_xy.append(self.robot.foot_positions_world()[:, :2])
+                self.slip_contacts.append(self.robot.foot_contacts())
+        self.steps = k + 1
+        self.state = self.robot.read_state()
+        return applied
+
+    def _record(self, s) -> None:
+        traces = self._traces
+        if not traces:
+            traces.update(q=_Rows((12,)), base_position=_Rows((3,)), contacts=_Rows((4,), bool),
+                          foot_targets=_Rows((4, 3)), foot_offsets=_Rows((4, 3)), t=_Rows(()))
+        traces["t"].append(self.steps * self.dt)
+        traces["q"].append(s.q)
+        traces["base_position"].append(s.base_position)
+        traces["contacts"].append(self.robot.foot_contacts())  # after the step
+        c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
+        traces["foot_targets"].append(c.last_foot_targets if self.drive and c.last_foot_targets else _NO_TARGET)
+        traces["foot_offsets"].append(c.last_foot_offsets if self.drive and c.last_foot_offsets else _NO_OFFSET)
+
+    # ------------------------------------------------------------------------------------------------------
+    def fallen(self, state=None) -> bool:
+        """The body is below `fall_height` or tilted beyond `fall_tilt` in roll or pitch."""
+        s = self.state if state is None else state
+        return bool(s.base_position[2] < self.fall_height or np.max(np.abs(s.base_rpy[:2])) > self.fall_tilt)
+
+    def energy(self, since: int = 0) -> float:
+        """J, Eq. (7) Σ∫|τ·ω|dt over the physics steps from `since` to now."""
+        return float(en.joint_energy(self.tau.view(since), self.dq.view(since), self.dt).sum())
+
+    def electrical_energy(self, since: int = 0) -> float:
+        """J drawn from the battery over the physics steps from `since` (copper loss, friction, driver)."""
+        c = self.cfg
+        return float(np.sum(en.electrical_power(self.tau.view(since), self.dq.view(since), c.actuator,
+                                                c.energy))) * self.dt
+
+    def traces(self) -> dict:
+        """Every step's t, tau, dq, power Σ|τ·ω| (and with `record`: q, base_position, contacts,
+        foot_targets, foot_offsets), arrays with the step as the first axis."""
+        tau, dq = self.tau.view(), self.dq.view()
+        out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": np.abs(tau * dq)}
+        out.update({name: rows.view() for name, rows in self._traces.items() if name != "t"})
+        return out
+
+    def close(self) -> None:
+        if self.own_robot:
+            self.robot.close()
+
+    def __enter__(self) -> "Walker":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
