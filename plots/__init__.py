@@ -31,15 +31,16 @@ FIGURES = ("4", "6", "7", "10", "13", "learning_curves")
 
 
 def draw_all(results_dir: str | Path, out_dir: str | Path, metrics=None, only=None, dpi: int = DPI,
-             pdf: bool = True, log=print) -> list[Path]:
+             pdf: bool = True, learned=None, log=print) -> list[Path]:
     """Draw every figure that `results_dir` (a folder written by `evaluate.py`) has the inputs for into
     `out_dir`; returns the files written.
 
     metrics: training logs for Figure 6 ({label: metrics.csv} or a list of paths); default: the folder's own
-    metrics.csv if it is a training run folder. only: figure names to draw (of FIGURES; default all).
+    metrics.csv if it is a training run folder. only: figure names to draw (of FIGURES, "figure" prefix
+    optional; default all). learned: files or folders of learned paths for Figure 7 instead of the folder's.
     """
-    results = load_results(results_dir)
-    wanted = set(FIGURES if only is None else (str(f) for f in only))
+    results = load_results(results_dir, learned)
+    wanted = set(FIGURES if only is None else (str(f).removeprefix("figure") for f in only))
     unknown = wanted - set(FIGURES)
     if unknown:
         raise ValueError(f"unknown figure(s) {sorted(unknown)}; choose from {', '.join(FIGURES)}")

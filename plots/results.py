@@ -88,18 +88,30 @@ def _label_key(label: str) -> tuple:
     return (0, int(digits), "") if digits.isdigit() else (1, 0, label)
 
 
-def load_results(folder: str | Path) -> SavedResults:
-    """Everything the figures can use from `folder` (a folder written by `evaluate.py`)."""
+def expand_learned(paths) -> list[Path]:
+    """Learned path files named by the user: files as given, folders as their learned path files."""
+    out = []
+    for p in map(Path, paths):
+        if not p.exists():
+            raise FileNotFoundError(f"learned trajectory {p} does not exist")
+        out += learned_files(p) if p.is_dir() else [p]
+    return out
+
+
+def load_results(folder: str | Path, learned=None) -> SavedResults:
+    """Everything the figures can use from `folder` (a folder written by `evaluate.py`); `learned`: files or
+    folders of learned paths for Figure 7 instead of the folder's own learned/."""
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"results folder {folder} does not exist")
+    files = expand_learned(learned) if learned else learned_files(folder / "learned")
     walks, power = _json(folder / "walks.json"), load_power(folder)
     if walks is None or power is None:  # Figure 10 needs both
         walks = power = None
     return SavedResults(folder=folder, gait=load_gait(folder), rows=_json(folder / "comparison.json"),
                         walks=walks, power=power, prototype_rows=_json(folder / "prototype.json"),
-                        learned=load_learned(learned_files(folder / "learned")))
+                        learned=load_learned(files))
 
 
-__all__ = ["FIGURE7_SPEED", "SavedResults", "learned_files", "load_gait", "load_learned", "load_power",
+__all__ = ["FIGURE7_SPEED", "SavedResults", "expand_learned", "learned_files", "load_gait", "load_learned", "load_power",
            "load_results"]
