@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from cyberdog.config import ActuatorConfig, EnergyConfig
-from cyberdog.core.energy import (EnergyMeter, battery_capacity_J, battery_percent_used, copper_loss,
+from cyberdog.core.energy import (battery_capacity_J, battery_percent_used, copper_loss,
                                   cost_of_transport, electrical_energy, electrical_joint_power,
                                   electrical_power, energy_per_100m, joint_energy, mechanical_power,
                                   per_joint_type, per_leg, power_consumption, range_at_full_charge,
@@ -30,21 +30,6 @@ def _sinusoids():
 def test_joint_energy_matches_closed_form():
     tau, omega, exact = _sinusoids()
     np.testing.assert_allclose(joint_energy(tau, omega, DT), exact, rtol=1e-3)
-
-
-def test_meter_matches_batch_and_keeps_power_trace():
-    tau, omega, exact = _sinusoids()
-    meter = EnergyMeter(DT, record_power=True)
-    for k in range(len(tau)):
-        meter.update(tau[k], omega[k])
-    np.testing.assert_allclose(meter.joint_energy_J, exact, rtol=1e-3)
-    np.testing.assert_allclose(meter.joint_energy_J, joint_energy(tau, omega, DT), rtol=1e-12)
-    assert meter.time_s == pytest.approx(DURATION)
-    np.testing.assert_allclose(meter.power_trace, np.abs(tau * omega).sum(axis=1))
-    np.testing.assert_allclose(meter.power_times, np.arange(len(tau)) * DT)
-    assert meter.total_energy_J == pytest.approx(meter.power_trace.sum() * DT)
-    meter.reset()
-    assert meter.total_energy_J == 0 and len(meter.power_trace) == 0
 
 
 def test_breakdowns_sum_to_total():
@@ -110,10 +95,6 @@ def test_efficiency_regeneration_and_idle_power():
     assert electrical_power(tau, omega, act, cfg) == pytest.approx(6 * 6.0 / eta + 30.0)
     samples = np.tile(tau, (500, 1)), np.tile(omega, (500, 1))
     assert electrical_energy(*samples, DT, act, cfg) == pytest.approx(0.5 * (36.0 / eta + 30.0))
-    meter = EnergyMeter(DT, actuator=act, energy=cfg)
-    for k in range(500):
-        meter.update(samples[0][k], samples[1][k])
-    assert meter.electrical_energy_J == pytest.approx(electrical_energy(*samples, DT, act, cfg))
 
 
 def test_electrical_exceeds_mechanical_without_regeneration():
@@ -148,7 +129,3 @@ def test_bad_inputs_raise():
         mechanical_power(np.zeros(12), np.zeros(11))
     with pytest.raises(ValueError, match="dt"):
         joint_energy(np.zeros((3, 12)), np.zeros((3, 12)), 0.0)
-    with pytest.raises(ValueError, match="both"):
-        EnergyMeter(DT, actuator=ActuatorConfig())
-    with pytest.raises(ValueError, match="one step"):
-        EnergyMeter(DT).update(np.zeros((2, 12)), np.zeros((2, 12)))

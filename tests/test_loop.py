@@ -1,0 +1,90 @@
+"""The one simulation loop (`cyberdog.loop.Walker`): every caller steps the same physics, and the energy it
+reports is the Eq. (7) integral of the torques and speeds it applied."""
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cyberdog import config as C
+from cyberdog.analysis.walk import walk
+from cyberdog.core import energy as en
+from cyberdog.envs.cyberdog_env import CyberDogEnv
+from cyberdog.loop.walker import Walker
+
+PACKAGE = Path(__file__).resolve().parents[1] / "cyberdog"
+
+
+def test_env_with_zero_foot_offsets_walks_exactly_the_scripted_walk():
+    """The env (foot mode, zero action) and `walk()` are the same loop: same energy and travel, to rounding."""
+    env = CyberDogEnv(action_mode="foot", target_speed=1.0)
+    try:
+        env.reset(seed=0)
+        energy = sum(env.step(np.zeros(12))[4]["step_energy_J"] for _ in range(40))  # 1 s
+        x = env.walker.state.base_position[0] - env.walker.start[0]
+        walk_cfg = env.cfg.walk
+    finally:
+        env.close()
+    r = walk(walk_cfg, duration=1.0)
+    assert r.energy > 10.0  # the robot did walk
+    assert energy == pytest.approx(r.energy, rel=1e-9)
+    assert x == pytest.approx(r.distance, rel=1e-9)
+
+
+def test_walker_energy_is_eq7_of_its_own_torques_and_speeds():
+    cfg = C.WalkConfig()
+    with Walker(cfg, record=True) as w:
+        for _ in range(300):
+            w.step()
+        tr = w.traces()
+        tau, dq = tr["tau"], tr["dq"]
+        assert tau.shape == dq.shape == (300, 12) and tr["q"].shape == (300, 12)
+        by_hand = float(np.sum(np.abs(tau * dq))) * cfg.sim.physics_dt
+        assert w.energy() == pytest.approx(by_hand, rel=1e-12)
+        assert w.energy(since=100) == pytest.approx(float(np.sum(np.abs(tau[100:] * dq[100:])))
+                                                    * cfg.sim.physics_dt, rel=1e-12)
+        assert w.electrical_energy() == pytest.approx(
+            en.electrical_energy(tau, dq, cfg.sim.physics_dt, cfg.actuator, cfg.energy), rel=1e-12)
+        # the torque of step k acted on the speed read before it: dq[k + 1] is the state after step k
+        assert not np.array_equal(dq[1:], dq[:-1])
+        w.reset()
+        assert w.steps == 0 and len(w.traces()["tau"]) == 0
+
+
+def test_walker_reset_restores_the_same_walk():
+    cfg = C.WalkConfig()
+    with Walker(cfg) as w:
+        for _ in range(200):
+            w.step()
+        first = w.energy()
+        w.reset()
+        for _ in range(200):
+            w.step()
+        assert w.energy() == first
+
+
+def _calls(tree: ast.AST, attribute: str) -> list[str]:
+    return [ast.unparse(n.func) for n in ast.walk(tree)
+            if isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute) and n.func.attr == attribute]
+
+
+def test_one_place_steps_the_robot_under_the_controller():
+    """Only the walker calls `Robot.step` and the trot controller's `torque`, and nothing replaces a
+    method of the robot at run time."""
+    steppers, torquers, patches = set(), set(), []
+    for path in PACKAGE.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        rel = str(path.relative_to(PACKAGE))
+        if any("robot" in c.lower() for c in _calls(tree, "step")):
+            steppers.add(rel)
+        if any(c.endswith(("controller.torque", "ctrl.torque")) for c in _calls(tree, "torque")):
+            torquers.add(rel)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Assign):
+                for target in node.targets:
+                    if (isinstance(target, ast.Attribute) and target.attr in ("step", "read_state")
+                            and "robot" in ast.unparse(target.value).lower()):
+                        patches.append(f"{rel}: {ast.unparse(target)}")
+    assert steppers == {"loop/walker.py"}
+    assert torquers == {"loop/walker.py"}
+    assert patches == []
