@@ -5,13 +5,13 @@ import dataclasses
 import time
 
 from cyberdog.config import WalkConfig
+from cyberdog.config.paper import PAPER_SPEEDS, PAPER_WALK_DURATION
 from cyberdog.analysis.walk import walk
 
-PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, paper Table 5
 BASELINES = ("cycloid", "straight")  # the paper's composite cycloid ("pendulum") and straight line
 
 
-def baseline_rows(cfg: WalkConfig, speeds=PAPER_SPEEDS, trajectories=BASELINES, duration: float = 10.0,
+def baseline_rows(cfg: WalkConfig, speeds=PAPER_SPEEDS, trajectories=BASELINES, duration: float = PAPER_WALK_DURATION,
                   log=print) -> list[dict]:
     """Walk `duration` s with each trajectory at each speed; one summary row per walk."""
     rows = []

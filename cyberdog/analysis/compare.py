@@ -30,23 +30,22 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import multiprocessing as mp
-import os
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from cyberdog.analysis.parallel import map_in_processes
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.analysis.walk import walk
 from cyberdog.config import WalkConfig
+from cyberdog.config.paper import PAPER_SPEEDS, PAPER_WALK_DURATION
 from cyberdog.core import energy as en
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.trajectories import SampledTrajectory
 
 LearnedPath = SampledTrajectory | CommandedPath
 
-PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, Table 5
 BASELINES = ("cycloid", "straight")
 SETS = ("paper", "same_lift")
 LIFT_DECIMALS = 4  # lift heights equal to 0.1 mm share their baseline walks
@@ -101,7 +100,7 @@ def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: fl
     return dataclasses.replace(base, gait=gait)
 
 
-def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duration: float = 10.0,
+def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duration: float = PAPER_WALK_DURATION,
                     same_lift: bool = True) -> list[WalkJob]:
     """Every walk of the comparison, each baseline walk once per speed and distinct lift height."""
     jobs: list[WalkJob] = []
@@ -154,20 +153,12 @@ def run_walk_job(job: WalkJob) -> dict:
     }
 
 
-def _indexed(job: WalkJob) -> dict:
-    return run_walk_job(job)
-
-
 def run_jobs(jobs: list[WalkJob], workers: int | None = None, log=print) -> list[dict]:
-    """Run the walks (in `workers` spawned processes; 1 = in this process); rows in job order."""
-    workers = min(len(jobs), os.cpu_count() or 1) if workers is None else int(workers)
-    if workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers!r}")
-    rows: list[dict | None] = [None] * len(jobs)
+    """Run the walks (in `workers` spawned processes; None: one per walk, at most the CPUs; 1 = in this
+    process); rows in job order."""
     t0 = time.perf_counter()
 
-    def progress(row: dict, done: int) -> None:
-        rows[row["walk_id"]] = row
+    def progress(i: int, row: dict, done: int) -> None:
         elapsed = time.perf_counter() - t0
         eta = elapsed / done * (len(jobs) - done)
         seed = f" [{row['seed']}]" if row["seed"] else ""
@@ -176,14 +167,12 @@ def run_jobs(jobs: list[WalkJob], workers: int | None = None, log=print) -> list
             f"E={row['energy_J']:7.1f} J  {row['status']}  ({row['wall_s']:.0f} s; elapsed {elapsed:.0f} s, "
             f"ETA {eta:.0f} s)")
 
-    if workers == 1 or len(jobs) == 1:
-        for done, job in enumerate(jobs, 1):
-            progress(run_walk_job(job), done)
-    else:
-        with mp.get_context("spawn").Pool(workers) as pool:
-            for done, row in enumerate(pool.imap_unordered(_indexed, jobs), 1):
-                progress(row, done)
-    return rows
+    return map_in_processes(run_walk_job, jobs, workers, on_result=progress, describe=_describe_job)
+
+
+def _describe_job(job: WalkJob) -> str:
+    return (f"walk {job.walk_id}: {job.trajectory}{f' [{job.seed}]' if job.seed else ''} at {job.speed:g} m/s, "
+            f"H = {job.lift_height:.3f} m, {job.duration:g} s")
 
 
 # ---------------------------------------------------------------------------------------------------------

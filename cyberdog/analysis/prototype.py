@@ -26,22 +26,20 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import multiprocessing as mp
-import os
 import pickle
 import time
 from pathlib import Path
 
+from cyberdog.analysis.parallel import map_in_processes
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
+from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS
 from cyberdog.core import energy as en
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import FootTrajectory, SampledTrajectory
 
-PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s, Section 4.2
-PAPER_DISTANCE_M = 100.0  # m, Section 4.2
 PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
 PAPER_SIM_TO_REAL_GAP_PP = 3.0  # percentage points: 12 % (simulation) vs 9 % (prototype) energy reduction
 MODES = ("ideal", "hardware")
@@ -164,14 +162,9 @@ def run_prototype(trajectories: dict | None = None,
         return _Job(name, traj, v, mode, cfg, hardware, float(distance_m))
 
     jobs = [job(name, traj, v, mode) for name, traj in trajectories.items() for v in speeds for mode in modes]
-    workers = min(len(jobs), os.cpu_count() or 1) if workers is None else int(workers)
-    if workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers!r}")
-    rows: list[dict | None] = [None] * len(jobs)
     t0 = time.perf_counter()
 
     def progress(i: int, row: dict, done: int) -> None:
-        rows[i] = row
         elapsed = time.perf_counter() - t0
         eta = elapsed / done * (len(jobs) - done)
         log(f"[{done}/{len(jobs)}] {row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} "
@@ -179,21 +172,9 @@ def run_prototype(trajectories: dict | None = None,
             f"E_el={row['electrical_energy_J'] / 1e3:6.2f} kJ  battery {row['battery_used_pct']:.2f} %  "
             f"fell={row['fell']}  ({row['wall_s']:.0f} s; elapsed {elapsed:.0f} s, ETA {eta:.0f} s)")
 
-    if workers == 1:
-        for i, job in enumerate(jobs):
-            progress(i, _run_job(job), i + 1)
-    else:
-        # spawn: a fresh interpreter per worker, each with its own PyBullet DIRECT client (no forked state)
-        with mp.get_context("spawn").Pool(workers) as pool:
-            results = pool.imap_unordered(_indexed_job, list(enumerate(jobs)))
-            for done, (i, row) in enumerate(results, 1):
-                progress(i, row, done)
+    rows = map_in_processes(_run_job, jobs, workers, on_result=progress,
+                            describe=lambda j: f"{j.trajectory_name} at {j.speed:g} m/s, {j.mode}, {j.distance_m:g} m")
     return add_gaps(rows)
-
-
-def _indexed_job(item: tuple[int, _Job]) -> tuple[int, dict]:
-    i, job = item
-    return i, _run_job(job)
 
 
 def _per_m(row: dict, key: str) -> float:

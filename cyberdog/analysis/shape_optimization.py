@@ -54,14 +54,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import multiprocessing as mp
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from cyberdog.analysis.parallel import ProcessMap
 from cyberdog.config import GaitConfig, WalkConfig
+from cyberdog.config.paper import PAPER_SPEEDS, SPEED_BAND
 from cyberdog.core.trajectories import SampledTrajectory
 
 PARAM_NAMES = ("x_law", "x_skew", "z_peak", "z_fullness_log2", "stance_law")
@@ -74,10 +75,8 @@ PARAM_BOUNDS = {  # (low, high), all dimensionless
 }
 DEFAULT_POINTS = 400  # samples per gait cycle: 1 ms apart at the 0.4 s cycle (the physics step)
 MIN_POINTS = 40
-SPEED_TOLERANCE = 0.05  # share of the command the mean speed may miss (the project's acceptance band)
 FALL_PENALTY_J = 1.0e4  # J, objective of a fallen walk (about 10× a valid walk's window energy) …
 SPEED_MISS_PENALTY_J = 100.0  # J per % of speed miss beyond the 5 % band (a valid walk's window: ~300–900 J)
-PAPER_SPEEDS = (1.0, 1.2, 1.4)  # m/s
 
 
 def _timing_law(s: np.ndarray) -> np.ndarray:
@@ -253,8 +252,8 @@ def walk_cost(job: ShapeWalk) -> dict:
     miss_pct = 100.0 * abs(r.mean_speed - job.speed) / job.speed
     if r.fell or not math.isfinite(energy_J):
         cost, status = FALL_PENALTY_J * (2.0 - r.duration / job.duration), f"fell at {r.duration:.2f} s"
-    elif miss_pct > 100.0 * SPEED_TOLERANCE:
-        cost = energy_J + SPEED_MISS_PENALTY_J * (miss_pct - 100.0 * SPEED_TOLERANCE)
+    elif miss_pct > 100.0 * SPEED_BAND:
+        cost = energy_J + SPEED_MISS_PENALTY_J * (miss_pct - 100.0 * SPEED_BAND)
         status = f"speed miss ({r.mean_speed:.3f} m/s)"
     else:
         cost, status = energy_J, "ok"
@@ -289,16 +288,18 @@ class Evaluation:
 
 
 class ShapeObjective:
-    """Callable objective over unit coordinates (see `to_unit`): runs the walks (in `pool` if given),
-    records every evaluation in `history`, caches repeated points (Nelder–Mead revisits clipped corners)."""
+    """Callable objective over unit coordinates (see `to_unit`): runs the walks (in `pool`, a `ProcessMap`, if
+    given; else in this process), records every evaluation in `history`, caches repeated points (Nelder–Mead
+    revisits clipped corners)."""
 
     def __init__(self, lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SPEEDS, duration: float = 6.0,
-                 measure_from: float = 2.0, base: WalkConfig | None = None, pool=None,
+                 measure_from: float = 2.0, base: WalkConfig | None = None, pool: ProcessMap | None = None,
                  log: Callable[[str], None] | None = print, max_evals: int | None = None) -> None:
         _check_objective_args(lift_height, speeds, duration, measure_from)
         self.lift_height, self.speeds = float(lift_height), tuple(float(v) for v in speeds)
         self.duration, self.measure_from = float(duration), float(measure_from)
-        self.base, self.pool, self.log, self.max_evals = base or WalkConfig(), pool, log, max_evals
+        self.base, self.log, self.max_evals = base or WalkConfig(), log, max_evals
+        self.pool = pool if pool is not None else ProcessMap(1)
         self.history: list[Evaluation] = []
         self._cache: dict[tuple, float] = {}
         self._t0 = time.perf_counter()
@@ -307,7 +308,7 @@ class ShapeObjective:
         jobs = [ShapeWalk(params, v, self.lift_height, self.duration, self.measure_from, self.base)
                 for v in self.speeds]
         t0 = time.perf_counter()
-        walks = self.pool.map(walk_cost, jobs) if self.pool is not None else [walk_cost(j) for j in jobs]
+        walks = self.pool(walk_cost, jobs, describe=lambda j: f"{j.speed:g} m/s with {j.params}")
         ev = Evaluation(len(self.history), params, float(np.mean([w["cost_J"] for w in walks])), walks,
                         time.perf_counter() - t0)
         self.history.append(ev)
@@ -381,8 +382,7 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
         v = x0.copy()
         v[i] += initial_step if x0[i] + initial_step <= 1.0 else -initial_step
         simplex.append(v)
-    pool = mp.get_context("spawn").Pool(workers) if workers > 1 else None
-    try:
+    with ProcessMap(workers) as pool:  # the workers live through every evaluation (they start once)
         objective = ShapeObjective(lift_height, speeds, duration, measure_from, base, pool, log, max_evals)
         try:
             res = minimize(objective, x0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * len(x0),
@@ -391,10 +391,6 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
             message = str(res.message)
         except EvaluationBudgetSpent:
             message = f"stopped at the budget of {max_evals} evaluations"
-    finally:
-        if pool is not None:
-            pool.close()
-            pool.join()
     history = objective.history
     best = min(history, key=lambda e: e.objective_J)
     return OptimizationResult(best, history[0], history, time.perf_counter() - t0, message)

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import math
 
-from cyberdog.analysis.compare import BASELINES, LIFT_DECIMALS, PAPER_SPEEDS, SETS, _same
+from cyberdog.analysis.compare import BASELINES, LIFT_DECIMALS, SETS, _same
 from cyberdog.analysis.stats import mean_ci
+from cyberdog.config.paper import PAPER_SPEEDS
 
 # the paper's Table 5, kJ over the 10 s walk, for reference beside ours
 PAPER_TABLE5_KJ = {

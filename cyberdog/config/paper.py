@@ -16,8 +16,9 @@ SPEED_BAND = 0.05
 
 
 def speed_within_band(mean_speed: float, command: float, band: float = SPEED_BAND) -> bool:
-    """|v̄ − v_cmd| ≤ band · v_cmd: the walk kept the commanded speed."""
-    return abs(mean_speed - command) <= band * command
+    """|v̄ − v_cmd| ≤ band · v_cmd: the walk kept the commanded speed. A Python bool even for numpy inputs (it
+    goes into JSON and CSV rows)."""
+    return bool(abs(mean_speed - command) <= band * command)
 
 
 __all__ = ["PAPER_DISTANCE_M", "PAPER_LIFT_HEIGHT", "PAPER_SPEEDS", "PAPER_WALK_DURATION", "SPEED_BAND",
