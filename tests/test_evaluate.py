@@ -195,3 +195,73 @@ def test_summary_pairs_each_learned_walk_with_the_baselines_at_its_own_lift():
     assert paper["D_t_electrical_pct_mean"] == pytest.approx(paper["D_t_pct_mean"])  # electrical = 3.5 × E here
     md = t5.summary_markdown(list(summary.values()), "same_lift")
     assert "2 of 2" in md and "D_t on the electrical energy" in md
+
+
+# ---- the command line: each sub-command has its own options and help ----------------------------------------
+OWN_OPTIONS = {  # an option each sub-command takes, and one it must refuse
+    "all": ("--no-prototype", "--trajectories"), "baselines": ("--trajectories", "--policies"),
+    "extract": ("--rollout-duration", "--learned"), "compare": ("--no-same-lift", "--prototype-distance"),
+    "prototype": ("--prototype-distance", "--duration"), "figures": ("--from", "--speeds"),
+    "video": ("--video-speed", "--workers"),
+}
+
+
+def sub_command_help(sub, capsys) -> str:
+    with pytest.raises(SystemExit) as exit_:
+        evaluate.main([sub, "--help"])
+    assert exit_.value.code == 0
+    return capsys.readouterr().out
+
+
+def test_each_sub_command_helps_with_its_own_options_only(capsys):
+    texts = {sub: sub_command_help(sub, capsys) for sub in OWN_OPTIONS}
+    assert len(set(texts.values())) == len(OWN_OPTIONS)  # seven different help texts
+    for sub, (own, other) in OWN_OPTIONS.items():
+        assert texts[sub].startswith(f"usage: evaluate.py {sub} ")
+        assert own in texts[sub] and other not in texts[sub], sub
+    top = sub_command_help("--help", capsys)  # the top-level help lists every sub-command
+    assert top.startswith("usage: evaluate.py [-h] SUB-COMMAND") and all(f"    {sub} " in top for sub in OWN_OPTIONS)
+
+
+@pytest.mark.parametrize("sub", sorted(OWN_OPTIONS))
+def test_an_option_of_another_sub_command_is_refused_in_one_line(sub, capsys):
+    own, other = OWN_OPTIONS[sub]
+    with pytest.raises(SystemExit) as exit_:
+        evaluate.main([sub, other, "1"])
+    assert exit_.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last.startswith(f"evaluate.py {sub}: error: unrecognized arguments: {other}")
+    assert "is an option of:" in last and sub not in last.split("is an option of:")[1].split(", ")
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["compare", "--speeds", "-1"], ["--speeds", "> 0", "'-1'"]),
+    (["baselines", "--duration", "abc"], ["--duration", "'abc'"]),
+    (["all", "--workers", "0"], ["--workers", ">= 1"]),
+    (["extract", "--speed-tolerance", "1.5"], ["--speed-tolerance", "(0, 1)"]),
+    (["--video-format", "avi"], ["evaluate.py all: error", "--video-format"]),  # no sub-command: all
+])
+def test_bad_values_end_with_a_line_naming_the_option(argv, words, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        evaluate.main(argv)
+    assert exit_.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert all(w in last for w in words), last
+
+
+def test_baselines_accept_a_standing_speed_that_the_others_refuse():
+    from cyberdog.evaluation.cli import parse_args
+
+    assert parse_args(["baselines", "--speeds", "0"]).speeds == [0.0]
+    with pytest.raises(SystemExit):
+        parse_args(["compare", "--speeds", "0"])
+
+
+def test_the_command_line_copies_of_library_constants_match_the_library():
+    from cyberdog.analysis import extract
+    from cyberdog.analysis.baselines import BASELINES
+    from cyberdog.config.paper import SPEED_BAND
+    from cyberdog.evaluation import cli
+
+    assert cli.BASELINE_CHOICES == tuple(BASELINES) and cli.CYCLE_CHOICES == tuple(extract.CYCLE_CHOICES)
+    assert SPEED_BAND == extract.SPEED_TOLERANCE  # the default --speed-tolerance
