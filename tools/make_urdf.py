@@ -1,6 +1,7 @@
 """Write `urdf/cyberdog.urdf`, the first-generation Xiaomi CyberDog built from primitive shapes.
 
-Usage:  python tools/make_urdf.py            (writes urdf/cyberdog.urdf beside this folder)
+Usage:  python tools/make_urdf.py            (writes cyberdog/urdf/cyberdog.urdf, the package's copy that
+                                              the top-level urdf/cyberdog.urdf links to)
         python tools/make_urdf.py --check    (exit 1 if the checked-in file differs from what is generated)
 
 Every number below is copied from the project's parameter file `shared/robot/cyberdog1_parameters.yaml`
@@ -181,7 +182,7 @@ def urdf_text() -> str:
 
 
 def main(argv: list[str]) -> int:
-    target = Path(__file__).resolve().parent.parent / "urdf" / "cyberdog.urdf"
+    target = Path(__file__).resolve().parent.parent / "cyberdog" / "urdf" / "cyberdog.urdf"  # package data
     text = urdf_text()
     if "--check" in argv:
         if not target.exists() or target.read_text() != text:
