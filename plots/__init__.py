@@ -11,19 +11,14 @@ One module per figure; none runs physics or imports the simulator or torch (`tes
     results          reading a results folder written by `evaluate.py`
     shipped          the README's copies of Figures 7, 10 and 13 and the small inputs they are drawn from
 
-`draw_all(results_dir, out_dir)` draws every figure the folder has inputs for; `python -m plots` does the same
-from the command line (`python -m plots --help`).
+`draw_all(results_dir, out_dir)` draws every figure the folder has inputs for; each module's `figureN(...)`
+draws one and its `draw(...)` returns the matplotlib Figure; `python -m plots` is the command line.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from plots.figure4 import figure4
-from plots.figure6 import figure6
-from plots.figure7 import figure7
-from plots.figure10 import figure10
-from plots.figure13 import figure13
-from plots.learning_curves import CSV_NAME, learning_curves
+from plots import figure4, figure6, figure7, figure10, figure13, learning_curves  # the modules
 from plots.results import load_results
 from plots.style import DPI
 
@@ -49,33 +44,33 @@ def draw_all(results_dir: str | Path, out_dir: str | Path, metrics=None, only=No
     g, save = results.gait, {"dpi": dpi, "pdf": pdf}
     skipped, paths = [], []
     if "4" in wanted:
-        paths += figure4(out_dir, 0.2, g.lift_height, g.straight_shape, g.swing_time, g.stance_time, **save)
+        paths += figure4.figure4(out_dir, 0.2, g.lift_height, g.straight_shape, g.swing_time, g.stance_time, **save)
     if "6" in wanted:
         if metrics:
-            paths += figure6(metrics, out_dir, **save)
+            paths += figure6.figure6(metrics, out_dir, **save)
         else:
             skipped.append("6 (no training log: pass metrics.csv)")
     if "7" in wanted:
         if results.learned:
-            paths += figure7(results.learned, out_dir, g.straight_shape, g.lift_height, g.swing_time,
+            paths += figure7.figure7(results.learned, out_dir, g.straight_shape, g.lift_height, g.swing_time,
                              g.stance_time, **save)
         else:
             skipped.append("7 (no learned/*.json)")
     if "10" in wanted:
         if results.walks:
-            paths += figure10(results.walks, results.power, out_dir, g.lift_height, **save)
+            paths += figure10.figure10(results.walks, results.power, out_dir, g.lift_height, **save)
         else:
             skipped.append("10 (no walks.json + power_traces.npz)")
     if "13" in wanted:
         if results.rows:
-            paths += figure13(results.rows, out_dir, results.prototype_rows, **save)
+            paths += figure13.figure13(results.rows, out_dir, results.prototype_rows, **save)
         else:
             skipped.append("13 (no comparison.json)")
-    if "learning_curves" in wanted and (results.folder / CSV_NAME).is_file():
-        paths += learning_curves(results.folder, out_dir, **save)
+    if "learning_curves" in wanted and (results.folder / learning_curves.CSV_NAME).is_file():
+        paths += learning_curves.learning_curves(results.folder, out_dir, **save)
     if skipped and log:
         log(f"figures skipped (no input in {results.folder}): {'; '.join(skipped)}")
     return paths
 
 
-__all__ = ["FIGURES", "draw_all", "figure10", "figure13", "figure4", "figure6", "figure7", "learning_curves"]
+__all__ = ["FIGURES", "draw_all"]

@@ -1,0 +1,219 @@
+"""The figures: drawn from saved results only, never importing the simulator or torch; the README's PNGs are
+redrawn by their documented command from the shipped inputs; the figure faults that were fixed stay fixed."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+import plots
+from cyberdog import config as C
+from cyberdog.config.paper import SPEED_BAND, speed_within_band
+from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.core.foot_offsets import FootOffsetPath
+from cyberdog.metrics_csv import read_rows, read_stages
+from plots import figure6, figure10, figure13
+from plots.learning_curves import NUMBER_COLUMNS, read_curves
+from plots.shipped import README_FIGURES, SHIPPED_INPUTS, SHIPPED_PNG, export_inputs
+from plots.style import COLORS, FADED_ALPHA
+
+ROOT = Path(__file__).resolve().parents[1]
+FORBIDDEN = ("torch", "torchrl", "pybullet", "pybullet_data", "cyberdog.sim", "cyberdog.rl", "cyberdog.envs",
+             "cyberdog.analysis.compare", "cyberdog.analysis.walk")
+README_COMMAND = "python -m plots --from results/figures_input --out plots/png --readme"  # as in the README
+
+
+# ---- a small results folder, shaped like what evaluate.py writes ----------------------------------------------
+def commanded(speed: float, seed: int, dz: float) -> CommandedPath:
+    table = np.zeros((4, 40, 3))
+    table[:, :20, 2] = dz * np.sin(np.pi * np.arange(20) / 20)  # a lower swing: own lift H + dz
+    return CommandedPath(speed, C.GaitConfig(lift_height=0.10), FootOffsetPath(table, 0.4), {"seed": seed})
+
+
+def fake_results(folder: Path, seed: int = 0) -> Path:
+    """Two speeds; learned (two seeds), cycloid and straight walks of 2.3 s at 1 kHz with random power."""
+    rng = np.random.default_rng(seed)
+    folder.mkdir(parents=True)
+    C.save(C.WalkConfig(), folder / "config.yaml")
+    walks, power = [], {}
+    for v in (1.0, 1.2):
+        for key, s, lift in (("learned", "seed0", 0.09), ("learned", "seed1", 0.092), ("cycloid", None, 0.15),
+                             ("straight", None, 0.15), ("cycloid", None, 0.09)):
+            i = len(walks)
+            power[i] = rng.uniform(0, 300, 2300)  # W; 2.3 s: the last whole cycles end at 2.0 s
+            walks.append({"walk_id": i, "trajectory": key, "label": key, "seed": s, "lift_height_m": lift,
+                          "speed_command_mps": v, "period_s": 0.4, "physics_dt_s": 0.001, "fell": False,
+                          "speed_ok": True, "valid": True, "duration_s": 2.3,
+                          "energy_kJ": float(power[i].sum()) * 1e-6, "set": "paper" if lift > 0.1 or s else
+                          "same_lift"})
+    (folder / "walks.json").write_text(json.dumps(walks))
+    (folder / "comparison.json").write_text(json.dumps(walks))
+    np.savez_compressed(folder / "power_traces.npz", **{f"walk_{i}": p for i, p in power.items()})
+    proto = [{"trajectory": t, "speed_mps": v, "robot": r, "fell": False, "reached": True,
+              "mean_speed_mps": v * rng.uniform(0.9, 1.1), "distance_m": 20.0, "battery_used_pct": rng.uniform(1, 2)}
+             for t in ("learned", "cycloid", "straight") for v in (1.0, 1.2) for r in ("ideal", "hardware")]
+    (folder / "prototype.json").write_text(json.dumps(proto))
+    for s in (0, 1):
+        for v in (1.0, 1.2):
+            commanded(v, s, -0.005 * (s + 1)).save(folder / "learned" / f"seed{s}_{v:g}mps.json")
+    return folder
+
+
+def pixels(path: Path) -> np.ndarray:
+    return imread(path)[..., :3]  # RGB in [0, 1]
+
+
+# ---- layers ------------------------------------------------------------------------------------------------------
+def test_plots_import_and_draw_without_the_simulator_or_torch(tmp_path):
+    """Import every plots module and draw every figure from the shipped inputs in a fresh interpreter, then
+    look at what was imported."""
+    code = f"""
+import importlib, json, pkgutil, sys
+import plots
+for m in pkgutil.iter_modules(plots.__path__):
+    importlib.import_module("plots." + m.name)
+paths = plots.draw_all({str(SHIPPED_INPUTS)!r}, {str(tmp_path)!r}, metrics=[{str(ROOT / "results/policy_speeds/metrics.csv")!r}])
+print(json.dumps({{"paths": [str(p) for p in paths], "modules": sorted(sys.modules)}}))
+"""
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    loaded = [m for m in out["modules"] if any(m == f or m.startswith(f + ".") for f in FORBIDDEN)]
+    assert loaded == []
+    drawn = {Path(p).name for p in out["paths"]}
+    for stem in ("figure4_baseline_trajectories", "figure6_reward_curves", "figure7_learned_trajectory",
+                 "figure10_power", "figure13_energy_vs_speed"):
+        assert {f"{stem}.png", f"{stem}.pdf"} <= drawn
+
+
+# ---- the README's figures ---------------------------------------------------------------------------------------
+def test_readme_figures_regenerate_from_the_shipped_inputs(tmp_path):
+    args = README_COMMAND.split()[1:]
+    args[args.index("plots/png")] = str(tmp_path)
+    proc = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    shipped = sorted(SHIPPED_PNG.glob("*.png"))
+    assert len(shipped) == len(README_FIGURES)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [p.name for p in shipped]  # PNG only
+    for path in shipped:
+        assert path.stat().st_size < 150_000, path.name  # small enough to commit
+        new, old = pixels(tmp_path / path.name), pixels(path)
+        assert new.shape == old.shape, path.name
+        # the same figure: anti-aliasing may differ between matplotlib builds, a changed figure does not pass
+        # (drawing Figure 10's learned trace under the others changes 2.7 % of its pixels, mean 0.009)
+        diff = np.abs(new - old)
+        assert diff.mean() < 0.002 and (diff.max(axis=-1) > 0.1).mean() < 0.005, path.name
+
+
+def test_exported_inputs_draw_the_same_figures_as_the_full_folder(tmp_path):
+    full = fake_results(tmp_path / "full")
+    export_inputs(full, tmp_path / "small")
+    a = plots.draw_all(full, tmp_path / "a", only=README_FIGURES, pdf=False)
+    b = plots.draw_all(tmp_path / "small", tmp_path / "b", only=README_FIGURES, pdf=False)
+    assert [p.name for p in a] == [p.name for p in b] and len(a) == 3
+    for pa, pb in zip(a, b):
+        assert np.array_equal(pixels(pa), pixels(pb)), pa.name
+    with np.load(tmp_path / "small" / "power_traces.npz") as z:
+        assert all(len(z[k]) == 800 for k in z.files)  # two 0.4 s cycles at 1 kHz, nothing more
+    with pytest.raises(ValueError, match="drawn from"):
+        export_inputs(full, full)
+
+
+# ---- figure faults ----------------------------------------------------------------------------------------------
+def test_figure10_draws_the_learned_trace_on_top(tmp_path):
+    full = fake_results(tmp_path / "r")
+    walks = json.loads((full / "walks.json").read_text())
+    with np.load(full / "power_traces.npz") as z:
+        power = {int(k.split("_")[1]): z[k] for k in z.files}
+    fig = figure10.draw(walks, power)
+    for ax in fig.axes:
+        traces = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]  # not the cycle boundary line
+        assert len(traces) == 3
+        top = max(traces, key=lambda ln: ln.get_zorder())
+        assert top is traces[-1] and top.get_color() == COLORS["learned"]
+
+
+def test_figure13_fades_every_prototype_walk_off_the_speed_band_and_says_it_scales(tmp_path):
+    rows = json.loads((fake_results(tmp_path / "r") / "comparison.json").read_text())
+    proto = [{"trajectory": "straight", "speed_mps": 1.0, "robot": r, "fell": False, "reached": True,
+              "mean_speed_mps": v, "distance_m": 20.0, "battery_used_pct": 1.0}
+             for r, v in (("ideal", 1.0), ("hardware", 1.0 - 2 * SPEED_BAND))]  # the second walked too slowly
+    fig = figure13.draw(rows, proto)
+    bars = [p for p in fig.axes[1].patches if p.get_height() > 0]
+    assert len(bars) == 2
+    for bar, row in zip(bars, proto):
+        counts = speed_within_band(row["mean_speed_mps"], row["speed_mps"])
+        assert (bar.get_alpha() or 1.0) == (1.0 if counts else FADED_ALPHA)
+    assert not all(figure13.prototype_counts(r) for r in proto)
+    assert "20 m walks" in fig.axes[1].get_title() and "100 m" in fig.axes[1].get_title()
+
+
+def test_figure6_names_its_run_and_labels_the_raw_scores(tmp_path):
+    run = tmp_path / "policy_of_this_test"
+    run.mkdir()
+    lines = ["stage,stage_episode,score"] + [f"{s},{e},{np.sin(e)}" for s in (1, 2) for e in range(1, 40)]
+    (run / "metrics.csv").write_text("\n".join(lines) + "\n")
+    fig = figure6.draw([run / "metrics.csv"])
+    assert run.name in fig.get_suptitle()
+    for ax in fig.axes:
+        raw = [ln for ln in ax.get_lines() if ln.get_alpha() == 0.25]
+        legend = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert raw and raw[0].get_label() in legend
+
+
+# ---- metrics.csv ------------------------------------------------------------------------------------------------
+def test_metrics_reader_reads_what_the_logger_writes_and_drops_a_cut_last_line(tmp_path):
+    from cyberdog.rl.logger import COLUMNS, EpisodeLogger
+
+    log = EpisodeLogger(tmp_path, tensorboard=False)
+    written = [{"stage": s, "episode": i, "stage_episode": i, "env_steps": 400 * i, "length": 400,
+                "score": float(i) * s, "actor_loss": float("nan")} for s in (1, 2) for i in range(1, 6)]
+    for row in written:
+        log.log(row)
+    log.close()
+    with open(tmp_path / "metrics.csv", "a") as f:
+        f.write("2,99,99,4")  # a write cut short: no newline
+    stages = read_stages(tmp_path / "metrics.csv")
+    assert sorted(stages) == [1, 2] and set(stages[1]) == set(COLUMNS)
+    for s in (1, 2):
+        mine = [r for r in written if r["stage"] == s]
+        assert np.array_equal(stages[s]["score"], [r["score"] for r in mine])
+        assert np.isnan(stages[s]["actor_loss"]).all() and np.isnan(stages[s]["energy_J"]).all()  # nan and ""
+    assert len(read_rows(tmp_path / "metrics.csv")) == len(written)
+
+
+def test_metrics_reader_skips_damaged_lines_and_missing_files(tmp_path):
+    path = tmp_path / "metrics.csv"
+    path.write_text("stage,score\n1,3.5\nx,2\n1,4.5,extra\n2\n2,7\n")
+    stages = read_stages(path)
+    assert {s: list(c["score"]) for s, c in stages.items()} == {1: [3.5], 2: [7.0]}
+    assert read_stages(tmp_path / "none.csv") == {} and read_rows(tmp_path / "none.csv") == []
+
+
+def test_learning_curves_read_back_what_the_csv_holds(tmp_path):
+    rng = np.random.default_rng(1)
+    data = {1: rng.normal(size=(5, len(NUMBER_COLUMNS))), 2: rng.normal(size=(3, len(NUMBER_COLUMNS)))}
+    lines = ["stage," + ",".join(NUMBER_COLUMNS)]
+    lines += [f"{s}," + ",".join(repr(float(x)) for x in row) for s, rows in data.items() for row in rows]
+    (tmp_path / "learning_curves.csv").write_text("\n".join(lines) + "\n")
+    curves = read_curves(tmp_path / "learning_curves.csv")
+    for s, rows in data.items():
+        for j, col in enumerate(NUMBER_COLUMNS):
+            assert np.array_equal(curves[s][col], rows[:, j])
+    paths = plots.draw_all(tmp_path, tmp_path / "out", only=["learning_curves"], pdf=False)
+    assert [p.name for p in paths] == ["learning_curves.png"]
+
+
+# ---- the command line ---------------------------------------------------------------------------------------------
+def test_command_line_refuses_bad_input(tmp_path, capsys):
+    from plots.__main__ import main
+
+    with pytest.raises(SystemExit):
+        main(["--from", str(tmp_path / "missing"), "--out", str(tmp_path / "o")])
+    assert main(["--from", str(tmp_path), "--out", str(tmp_path / "o"), "--metrics", str(tmp_path / "m.csv")]) == 2
+    assert "m.csv does not exist" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["--from", str(tmp_path), "--out", str(tmp_path / "o"), "--only", "5"])
