@@ -32,6 +32,7 @@ import numpy as np
 from cyberdog.analysis.parallel import map_in_processes
 from cyberdog.analysis.report import markdown_table
 from cyberdog.analysis.stats import mean_ci, mean_ci_band
+from cyberdog.metrics_csv import read_stages
 from cyberdog.sweeps.folder import is_sweep_dir, load_sweep, seed_dir
 from cyberdog.sweeps.process import SweepError
 
@@ -61,19 +62,12 @@ def seed_runs(sweep_dir) -> list[tuple[str, Path]]:
 
 def stage_curves(run_dir) -> dict[int, dict[str, np.ndarray]]:
     """Per stage: env steps since the stage began (at each episode end), episode score, window-mean score."""
-    path = Path(run_dir) / "metrics.csv"
-    if not path.is_file():
-        return {}
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
     out = {}
-    for stage in sorted({int(r["stage"]) for r in rows}):
-        rs = [r for r in rows if int(r["stage"]) == stage]
+    for stage, log in read_stages(Path(run_dir) / "metrics.csv").items():  # complete rows only
         # the stage's first episode starts with the stage (fresh env), so its start is env_steps - length
-        start = int(rs[0]["env_steps"]) - int(rs[0]["length"])
-        out[stage] = {"env_steps": np.array([int(r["env_steps"]) - start for r in rs], dtype=float),
-                      "score": np.array([float(r["score"]) for r in rs]),
-                      "window_score": np.array([float(r["window_mean_score"]) for r in rs])}
+        start = log["env_steps"][0] - log["length"][0]
+        out[stage] = {"env_steps": log["env_steps"] - start, "score": log["score"],
+                      "window_score": log["window_mean_score"]}
     return out
 
 
