@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cyberdog.config import LEG_NAMES, GaitConfig, RobotConfig
+from cyberdog.config.paper import SPEED_BAND, speed_within_band
 from cyberdog.core import energy as en
 from cyberdog.core import kinematics as kin
 from cyberdog.core.commanded_path import CommandedPath
@@ -52,7 +53,7 @@ from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler
 from cyberdog.core.trajectories import SampledTrajectory
 
-SPEED_TOLERANCE = 0.05  # ± share of the command (the acceptance band of every walk)
+SPEED_TOLERANCE = SPEED_BAND  # ± share of the command (the acceptance band of every walk); the CLIs' default
 CYCLE_CHOICES = ("mean", "cheapest")  # how extract_commanded builds the path from the in-band cycles
 
 
@@ -184,7 +185,7 @@ def find_cycles(traces: dict, dt: float, speed_command: float, leg: int = 0, spe
         cycles.append(Cycle(
             index=i, start=int(a), end=int(b), lift_off=int(a + lift[0] + 1) if len(lift) else -1,
             t_start=float(a * dt), duration=float(duration), energy=float(power[a:b].sum() * dt), speed=speed,
-            speed_ok=bool(abs(speed - speed_command) <= speed_tolerance * speed_command),
+            speed_ok=speed_within_band(speed, speed_command, speed_tolerance),
             valid=not reasons, reason="; ".join(reasons)))
     return cycles
 
@@ -316,7 +317,7 @@ def clock_cycles(traces: dict, dt: float, speed_command: float, period: float, s
         settled = a * dt >= settle_time - 1e-9
         cycles.append(Cycle(index=k, start=a, end=b, lift_off=a, t_start=a * dt, duration=per * dt,
                             energy=float(power[a:b].sum() * dt), speed=speed,
-                            speed_ok=bool(abs(speed - speed_command) <= speed_tolerance * speed_command),
+                            speed_ok=speed_within_band(speed, speed_command, speed_tolerance),
                             valid=settled, reason="" if settled else f"before settle time {settle_time:g} s"))
     return cycles
 
