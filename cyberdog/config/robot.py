@@ -15,7 +15,7 @@ JOINT_NAMES = ("abad", "hip", "knee")  # per leg; joint index = 3 * leg + joint
 class RobotConfig:
     """Geometry and mass of the first-generation CyberDog (parameter file, tags [X])."""
 
-    urdf: str = "urdf/cyberdog.urdf"  # relative to the repository root, or absolute
+    urdf: str = "urdf/cyberdog.urdf"  # absolute, or relative: the package's shipped file, else the repository root
     abad_offset_x: float = 0.23035  # m, body centre → abad joint, forward (±x per leg)
     abad_offset_y: float = 0.05  # m, body centre → abad joint, sideways (±y per leg)
     l1: float = 0.105076  # m, abad → hip joint along y (the paper's l1)
