@@ -1,7 +1,7 @@
 """Reading a training run's `metrics.csv` (one row per finished episode, written by `cyberdog.rl.logger`).
 
 The one reader of that file for everything that draws or aggregates training curves (`plots/`,
-`cyberdog.analysis.aggregate`). It lives at the package's top level, beside the other file-format helpers,
+`cyberdog.sweeps.aggregate`). It lives at the package's top level, beside the other file-format helpers,
 rather than next to the writer in `cyberdog/rl/`, because importing `cyberdog.rl` imports torch and the
 readers must not: plotting and aggregation run on machines and in processes that never train.
 

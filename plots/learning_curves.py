@@ -1,7 +1,7 @@
 """Learning curves of a seed sweep: episode score against env steps of each stage, mean and 95 % CI across
 seeds, with the trainer's moving-window score.
 
-Drawn from the sweep folder's `learning_curves.csv`, which `cyberdog.analysis.aggregate` writes (every seed
+Drawn from the sweep folder's `learning_curves.csv`, which `cyberdog.sweeps.aggregate` writes (every seed
 interpolated onto one step grid per stage); Figure 6 (`plots.figure6`) shows single runs by episode instead.
 """
 from __future__ import annotations
