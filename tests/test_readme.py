@@ -1,16 +1,78 @@
-"""The README's two commands are the project's contract with a new user; CI must run the second one."""
+"""The README is the project's contract with a new user: its two set-up commands (CI runs the second), and every
+command it suggests next works as written after them. Cheap commands are run (their output folders moved into
+a temporary folder); commands that train or walk for minutes are parsed by their own command line, with the
+reason they are not run listed in EXPENSIVE; the TensorBoard server is checked to be installed."""
+from __future__ import annotations
+
+import importlib.util
 import re
+import shlex
+import subprocess
+import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+VENV_PYTHON = ".venv/bin/python"
+OUTPUT_OPTIONS = ("--run-dir", "--out")  # what a run writes to: moved into tmp_path
+
+# the start of each README command that is not run here, and why (each is parsed instead)
+EXPENSIVE = {
+    "train.py --config configs/quick_speeds.yaml --seed 0": "one seed of the shipped preset: 26-39 min",
+    "train.py --config configs/quick_speeds.yaml --seeds 0-4": "the shipped five-seed sweep: about 80 min",
+    "evaluate.py extract --sweep runs/speeds": "needs the sweep above; rolls out 5 policies at 3 speeds",
+    "evaluate.py compare --learned runs/extract/learned": "needs the extraction above; walks for minutes",
+    "evaluate.py prototype --prototype-distance 100": "18 walks of 100 m: about 5x command 1's prototype part",
+}
+SERVER = {".venv/bin/tensorboard --logdir runs": "a server that runs until stopped: checked to be installed"}
+RUN = ("train.py --config configs/tiny.yaml", "-m plots --from results/figures_input", "train.py --help",
+       "evaluate.py --help")
+
+
+def bash_blocks() -> list[str]:
+    return re.findall(r"```bash\n(.*?)```", README, flags=re.S)
 
 
 def readme_commands():
-    blocks = re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
-    commands = [line for b in blocks[:2] for line in b.splitlines() if line and not line.startswith("#")]
-    return commands
+    """The two set-up commands (the first two bash blocks)."""
+    return [line for b in bash_blocks()[:2] for line in b.splitlines() if line and not line.startswith("#")]
 
 
+def next_commands() -> list[str]:
+    """Every command of the later bash blocks, without its trailing comment."""
+    lines = [ln.split("  #")[0].strip() for b in bash_blocks()[2:] for ln in b.splitlines()]
+    return [ln for ln in lines if ln and not ln.startswith("#")]
+
+
+def python_args(command: str) -> list[str]:
+    """The arguments after the environment's Python, output folders as written."""
+    assert command.startswith(VENV_PYTHON + " "), f"use the environment's Python: {command}"
+    return shlex.split(command)[1:]
+
+
+def redirected(args: list[str], tmp_path: Path) -> list[str]:
+    return [str(tmp_path / a) if i and args[i - 1] in OUTPUT_OPTIONS else a for i, a in enumerate(args)]
+
+
+def kind(command: str) -> str:
+    rest = command.removeprefix(VENV_PYTHON + " ")
+    kinds = ([k for k in EXPENSIVE if rest.startswith(k)] and ["parse"]) + \
+            ([k for k in SERVER if command.startswith(k)] and ["server"]) + \
+            ([k for k in RUN if rest.startswith(k)] and ["run"])
+    assert len(kinds) == 1, f"README command not classified (or twice) in tests/test_readme.py: {command}"
+    return kinds[0]
+
+
+def load_script(name: str):
+    spec = importlib.util.spec_from_file_location(f"readme_{name}", ROOT / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+# ---- the two set-up commands ------------------------------------------------------------------------------------
 def test_readme_opens_with_two_commands_pinning_torch_first():
     commands = readme_commands()
     assert len(commands) == 2
@@ -23,3 +85,74 @@ def test_ci_runs_exactly_the_readme_test_command():
     ci_lines = [ln for ln in (ROOT / ".ci" / "run").read_text().splitlines()
                 if ln and not ln.startswith("#") and not ln.startswith(("set ", "cd "))]
     assert ci_lines == [readme_commands()[1]]
+
+
+# ---- the README itself ------------------------------------------------------------------------------------------
+def test_readme_is_short_and_its_links_and_images_exist():
+    assert len(README.splitlines()) <= 200
+    targets = re.findall(r"\]\(([^)#]+)\)", README)
+    local = [t for t in targets if not t.startswith("http")]
+    assert any(t.endswith(".png") for t in local) and any(t.startswith("docs/") for t in local)
+    assert [t for t in local if not (ROOT / t).exists()] == []
+
+
+def test_every_next_command_is_classified_and_uses_the_environment():
+    commands = next_commands()
+    assert len(commands) >= len(RUN) + len(EXPENSIVE)
+    kinds = [kind(c) for c in commands]
+    assert kinds.count("run") == len(RUN) and kinds.count("parse") == len(EXPENSIVE)
+
+
+# ---- running them ----------------------------------------------------------------------------------------------
+def commands_of(k: str) -> list[str]:
+    return [c for c in next_commands() if kind(c) == k]
+
+
+@pytest.mark.parametrize("command", [c for c in commands_of("run") if "configs/tiny.yaml" not in c])
+def test_cheap_next_commands_run_as_written(command, tmp_path):
+    args = redirected(python_args(command), tmp_path)
+    proc = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    if "--help" in args:
+        assert "usage:" in proc.stdout
+    else:  # the README's figures, into tmp_path instead of plots/png
+        out = Path(args[args.index("--out") + 1])
+        assert sorted(p.name for p in out.glob("*.png")) == sorted(p.name for p in (ROOT / "plots/png").glob("*.png"))
+
+
+@pytest.mark.slow  # about 30 s: most of it importing torch and TorchRL
+def test_the_tiny_training_run_trains_both_stages(tmp_path):
+    from cyberdog.metrics_csv import read_stages
+
+    (command,) = [c for c in commands_of("run") if "configs/tiny.yaml" in c]
+    args = redirected(python_args(command), tmp_path)
+    proc = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    run_dir = Path(args[args.index("--run-dir") + 1])
+    assert sorted(read_stages(run_dir / "metrics.csv")) == [1, 2]
+    assert (run_dir / "stage2_final_actor.pt").is_file()
+
+
+@pytest.mark.parametrize("command", commands_of("parse"))
+def test_expensive_next_commands_parse(command):
+    """Not run (see EXPENSIVE for why): their options must be ones the command line takes, their configs load."""
+    from cyberdog import config as C
+
+    args = python_args(command)
+    if args[0] == "train.py":
+        parsed = load_script("train").parse_args(args[1:])
+        C.load(C.ExperimentConfig, ROOT / parsed.config)
+    else:
+        from cyberdog.evaluation.cli import parse_args
+
+        assert parse_args(args[1:]).command == args[1]
+
+
+@pytest.mark.parametrize("command", commands_of("server"))
+def test_servers_are_installed(command):
+    assert (Path(sys.executable).parent / Path(shlex.split(command)[0]).name).is_file()
+
+
+def test_the_environment_page_example_runs():
+    code = re.search(r"```python\n(.*?)```", (ROOT / "docs" / "environment.md").read_text(), flags=re.S)[1]
+    exec(compile(code, "docs/environment.md", "exec"), {})
