@@ -98,9 +98,8 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds)
-    rows, walks, power = run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift,
-                                     args.workers, run.out)
-    run_figures(run.out, only=("figure10", "figure13"))
+    run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out)
+    run_figures(run.out, only=("figure10", "figure13"))  # drawn from the files just written
     return run.finish()
 
 
@@ -122,13 +121,11 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds)
-    rows, walks, power = run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift,
-                                     args.workers, run.out)
-    proto = None
+    run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out)
     if not args.no_prototype:
-        proto = run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes,
-                                   args.workers, run.out)
-    run_figures(run.out, metrics=metrics)
+        run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
+                           run.out)
+    run_figures(run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)
     return run.finish()
