@@ -17,6 +17,7 @@ import ctypes
 import os
 import sys
 import tempfile
+import threading
 
 # the exact prefixes PyBullet prints on success; anything else passes through
 PYBULLET_NOISE = ("pybullet build time:", "argv[0]=")
@@ -25,6 +26,9 @@ try:
     _LIBC = ctypes.CDLL(None)  # the C library this process already uses: to flush its stdio buffers
 except OSError:  # no C library handle (unusual platforms): fall back to Python-level flushing only
     _LIBC = None
+# descriptors 1 and 2 belong to the whole process: two threads connecting at once would each restore the
+# other's temporary file, so the blocks take turns
+_LOCK = threading.Lock()
 
 
 def _flush_all() -> None:
@@ -45,6 +49,11 @@ def _keep(text: str, noise: tuple[str, ...]) -> str:
 @contextlib.contextmanager
 def quiet_pybullet(noise: tuple[str, ...] = PYBULLET_NOISE):
     """Within the block, C-level lines starting with one of `noise` are dropped; all others are kept."""
+    with _LOCK:
+        yield from _quiet(noise)
+
+
+def _quiet(noise: tuple[str, ...]):
     _flush_all()
     saved, captured = {}, {}
     try:
