@@ -285,7 +285,7 @@ def rollout_provenance(rollout, env_config, provenance: dict | None = None) -> d
 def extract_from_rollout(rollout, env_config, leg: str = "LF", speed_tolerance: float = SPEED_TOLERANCE,
                          settle_time: float = 1.0, n_points: int = 100, provenance: dict | None = None
                          ) -> Extraction:
-    """`extract_trajectory` on a policy rollout (`cyberdog.rl.rollout.rollout`, a WalkResult) run in the env `env_config` (an EnvConfig)."""
+    """`extract_trajectory` on a policy rollout (a WalkResult of `cyberdog.rl.rollout.rollout`) in `env_config`."""
     prov = rollout_provenance(rollout, env_config, provenance)
     return extract_trajectory(rollout.traces, rollout.physics_dt, rollout.speed_command, env_config.walk.robot,
                               env_config.walk.gait, leg, speed_tolerance, settle_time, n_points, provenance=prov)
@@ -368,7 +368,7 @@ def extract_commanded(traces: dict, dt: float, speed_command: float, gait: GaitC
 
 def commanded_from_rollout(rollout, env_config, cycle: str = "mean", speed_tolerance: float = SPEED_TOLERANCE,
                            settle_time: float = 2.0, provenance: dict | None = None) -> CommandedExtraction:
-    """`extract_commanded` on a policy rollout (`cyberdog.rl.rollout.rollout`, a WalkResult) run in the env `env_config` (an EnvConfig)."""
+    """`extract_commanded` on a policy rollout (a WalkResult of `cyberdog.rl.rollout.rollout`) in `env_config`."""
     if env_config.action_mode != "foot":
         raise ExtractionError(f"a policy of action_mode {env_config.action_mode!r} commands no foot path; "
                               "use the measured-path extraction")
