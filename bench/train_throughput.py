@@ -6,7 +6,8 @@ this process, on the same machine, with the same number of torch threads:
 
   ours   the real training path, `cyberdog.rl.Trainer` (TorchRL TD3Loss, replay buffer, collector, logging),
          with updates_per_frame=1, batch 256, actor and critics of 3x128, no initial random actions,
-         frames_per_batch 200; once per collection mode asked for (--collection sync async)
+         frames_per_batch 200; once per collection mode asked for (--collection sync async) and per number of
+         env processes (train.num_envs: 1 and each of --num-envs, default 2; "ours sync x2" is sync with two)
   SB3    `stable_baselines3.TD3("MlpPolicy")` with net_arch [128, 128, 128], batch_size 256, train_freq 1,
          gradient_steps 1, Gaussian exploration noise 0.1
 
@@ -21,9 +22,13 @@ On a machine shared with other work the wall-clock rates say as much about the n
 so CPU time is counted too: CPU ms per env step of each process (ours async: the trainer and the collector
 process), and from it the rate the pipeline would reach on two otherwise idle cores ("2-core est."): one
 process, 1 / its CPU time per step; ours async, 1 / the larger of the two processes' CPU times per step.
+With several env processes there is no such estimate (the process that waits for them, TorchRL's
+`ParallelEnv`, polls busily, so its CPU time is not its work): measure those on an idle machine with at least
+num_envs + 1 cores (+ 2 for async). The last table gives env steps/s against num_envs per collection mode.
 
     pip install -e .[bench]            # stable-baselines3
     python bench/train_throughput.py [--steps 2000] [--repeats 3] [--threads 1] [--collection sync async]
+                                     [--num-envs 2 4 8]
 
 Numbers are noisy on a shared machine: each repetition runs every variant once, in turn, and the best and the
 median over the repetitions are printed.
@@ -52,27 +57,36 @@ from cyberdog.rl.trainer import ACTION_SIZE, OBSERVATION_SIZE, Trainer
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def experiment(args, collection: str, steps: int) -> C.ExperimentConfig:
+def frames_per_batch(args, num_envs: int = 1) -> int:
+    """--frames-per-batch, rounded up to a multiple of num_envs (each env takes the same number of steps)."""
+    return -(-args.frames_per_batch // num_envs) * num_envs
+
+
+def experiment(args, collection: str, steps: int, num_envs: int = 1) -> C.ExperimentConfig:
     """configs/quick_residual.yaml's environment; default agent with 3x128 nets; one update per env step, batch
-    256 and a stage-1 budget of `steps`. (Only the env section of the preset is read: the timing does not depend on
-    the other agent settings, and the script keeps working when the preset gains fields.)"""
+    256 and a stage-1 budget of `steps`, collected by `num_envs` envs. (Only the env section of the preset is
+    read: the timing does not depend on the other agent settings, and the script keeps working when the preset
+    gains fields.)"""
     with open(ROOT / "configs/quick_residual.yaml") as f:
         env = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
     sets = ["train.batch_size=256", "train.updates_per_frame=1", "train.init_random_frames=0",
             f"train.learning_starts={args.learning_starts}", f"train.stage1.max_env_steps={steps}",
             "train.stage1.stop_score=.inf", "train.stage1.save_score=.inf", "train.checkpoint_every=1000000000",
             f"train.num_threads={args.threads}", "agent.hidden_sizes=[128, 128, 128]",
-            f"train.frames_per_batch={args.frames_per_batch}", "train.buffer_size=100000"]
+            f"train.frames_per_batch={frames_per_batch(args, num_envs)}", "train.buffer_size=100000"]
     if collection != "sync":  # (so that the script also runs against code without the option)
         sets.append(f"train.collection={collection}")
+    if num_envs != 1:  # (the same)
+        sets.append(f"train.num_envs={num_envs}")
     if args.torchrl_update:
         sets.append("agent.fast_update=false")
     return C.override(C.ExperimentConfig(env=env), sets)
 
 
-def warmup_steps(args) -> int:
+def warmup_steps(args, num_envs: int = 1) -> int:
     """Env steps before the first update in our pipeline: learning_starts, rounded up to whole batches."""
-    return max(1, math.ceil(args.learning_starts / args.frames_per_batch)) * args.frames_per_batch
+    fpb = frames_per_batch(args, num_envs)
+    return max(1, math.ceil(args.learning_starts / fpb)) * fpb
 
 
 # ---- ours ----------------------------------------------------------------------------------------------
@@ -86,15 +100,15 @@ class RecordingCollector(getattr(trainer_module, "ProcessCollector", object)):
         return batch
 
 
-def run_ours(args, collection: str) -> dict:
+def run_ours(args, collection: str, num_envs: int = 1) -> dict:
     """Stage 1 of the real trainer; timed from the end of the first round of updates to the end of the last."""
-    w = warmup_steps(args)
+    w = warmup_steps(args, num_envs)
     total = w + args.steps  # the window opens when the first round of updates (after w env steps) ends
     if hasattr(trainer_module, "ProcessCollector"):
         trainer_module.ProcessCollector = RecordingCollector  # (the trainer looks it up at each stage)
     WORKER_CPU.clear()
     with tempfile.TemporaryDirectory() as tmp:
-        trainer = Trainer(experiment(args, collection, total), tmp, stages=(1,), progress=False)
+        trainer = Trainer(experiment(args, collection, total, num_envs), tmp, stages=(1,), progress=False)
         marks: list[tuple[float, float, int, int, int]] = []  # (time, CPU, env steps, updates, batches) per round
         updates = trainer._updates
 
@@ -107,11 +121,17 @@ def run_ours(args, collection: str) -> dict:
 
         trainer._updates = timed_updates
         trainer.run()
+    if len(marks) < 2:
+        sys.exit(f"ours ({collection}, {num_envs} env(s)) made {len(marks)} round(s) of updates, too few to time: "
+                 f"give --steps more than one batch (--frames-per-batch), and --learning-starts at least the batch "
+                 f"size (256), which the replay buffer must hold before the first update")
     (t0, c0, s0, u0, b0), (t1, c1, s1, u1, b1) = marks[0], marks[-1]
     steps = s1 - s0
     out = {"steps_per_s": steps / (t1 - t0), "updates_per_s": (u1 - u0) / (t1 - t0), "steps": steps,
            "cpu_ms": 1e3 * (c1 - c0) / steps}
-    if collection == "async":  # the batches that arrived in the window, collected in the worker
+    if num_envs > 1:  # the waiting process polls busily: CPU time is not work (see the docstring)
+        out["est"] = math.nan
+    elif collection == "async":  # the batches that arrived in the window, collected in the worker
         out["worker_cpu_ms"] = 1e3 * sum(WORKER_CPU[b0:b1]) / steps
         out["est"] = 1e3 / max(out["cpu_ms"], out["worker_cpu_ms"])
     else:
@@ -226,6 +246,10 @@ def main() -> None:
     p.add_argument("--threads", type=int, default=1, help="torch threads of the updates, ours and SB3 (default 1)")
     p.add_argument("--collection", nargs="+", default=["sync", "async"], choices=C.COLLECTION_MODES
                    if hasattr(C, "COLLECTION_MODES") else ["sync"], help="our collection modes to run")
+    p.add_argument("--num-envs", nargs="+", type=int, default=[2], metavar="N",
+                   help="numbers of env processes (train.num_envs) to run ours with, besides 1, in each collection "
+                        "mode (default 2; e.g. --num-envs 2 4 8 for a scaling table); --frames-per-batch is rounded "
+                        "up to a multiple of each")
     p.add_argument("--bare-updates", type=int, default=300, help="updates per bare-update measurement")
     p.add_argument("--env-steps", type=int, default=400, help="steps of the env-only measurement (0: skip)")
     p.add_argument("--no-sb3", action="store_true", help="skip Stable-Baselines3")
@@ -233,6 +257,9 @@ def main() -> None:
     p.add_argument("--torchrl-update", action="store_true",
                    help="our updates through TorchRL's TD3Loss (agent.fast_update=false) instead of the direct losses")
     args = p.parse_args()
+    if any(n < 1 for n in args.num_envs):
+        p.error(f"--num-envs must be integers >= 1, got {args.num_envs}")
+    env_counts = sorted({1, *args.num_envs})
     if not args.no_sb3:
         import_sb3()
     torch.set_num_threads(args.threads)
@@ -267,7 +294,8 @@ def main() -> None:
                 wall, cpu = env_only(cfg, args.env_steps)
                 print(f"  env alone: {add('env alone', wall):.1f} steps/s ({1e3 / add('env alone per CPU s', cpu):.2f} "
                       f"CPU ms/step)", flush=True)
-            runs = [(f"ours {mode}", lambda mode=mode: run_ours(args, mode)) for mode in args.collection]
+            runs = [(ours_name(mode, n), lambda mode=mode, n=n: run_ours(args, mode, n))
+                    for n in env_counts for mode in args.collection]
             if not args.no_sb3:
                 runs.append(("SB3", lambda: run_sb3(args, cfg)))
             for name, run in runs:
@@ -275,14 +303,17 @@ def main() -> None:
                 cpu = f"{out['cpu_ms']:.2f}"
                 if "worker_cpu_ms" in out:
                     cpu += f" + collector {out['worker_cpu_ms']:.2f}"
-                print(f"  {name:<10s} {add(name + ' steps/s', out['steps_per_s']):7.1f} env steps/s, "
+                est = (f"2-core est. {add(name + ' 2-core est.', out['est']):.1f} steps/s"
+                       if math.isfinite(out["est"]) else "no CPU estimate (several env processes)")
+                print(f"  {name:<14s} {add(name + ' steps/s', out['steps_per_s']):7.1f} env steps/s, "
                       f"{add(name + ' updates/s', out['updates_per_s']):7.1f} updates/s over {out['steps']} steps; "
-                      f"CPU ms/step {cpu}; 2-core est. {add(name + ' 2-core est.', out['est']):.1f} steps/s",
-                      flush=True)
+                      f"CPU ms/step {cpu}; {est}", flush=True)
             if not args.no_sb3:
                 for mode in args.collection:
                     add(f"ratio {mode}", res[f"ours {mode} steps/s"][-1] / res["SB3 steps/s"][-1])
                     add(f"ratio {mode} 2-core est.", res[f"ours {mode} 2-core est."][-1] / res["SB3 2-core est."][-1])
+                    for n in env_counts[1:]:
+                        add(f"ratio {mode} x{n}", res[f"{ours_name(mode, n)} steps/s"][-1] / res["SB3 steps/s"][-1])
         bare_trainer.logger.close()
 
     print(f"\nover {args.repeats} repetitions (best, median):")
@@ -294,6 +325,27 @@ def main() -> None:
             print(f"ours ({mode}) / SB3 env steps/s: {statistics.median(res[f'ratio {mode}']):.2f} measured, "
                   f"{statistics.median(res[f'ratio {mode} 2-core est.']):.2f} on 2 idle cores (est. from CPU time); "
                   f"medians of per-repetition ratios (issue target >= 2)")
+        for n in env_counts[1:]:
+            if f"ratio {mode} x{n}" in res:
+                print(f"ours ({mode}, {n} env processes) / SB3 env steps/s: "
+                      f"{statistics.median(res[f'ratio {mode} x{n}']):.2f} measured")
+    if not args.bare_only:
+        scaling_table(res, args.collection, env_counts, args.no_sb3)
+
+
+def ours_name(mode: str, num_envs: int) -> str:
+    return f"ours {mode}" if num_envs == 1 else f"ours {mode} x{num_envs}"
+
+
+def scaling_table(res: dict, modes: list[str], env_counts: list[int], no_sb3: bool) -> None:
+    """Median env steps/s (and updates/s) of ours against train.num_envs, one column per collection mode."""
+    sb3 = "" if no_sb3 else f" (SB3: {statistics.median(res['SB3 steps/s']):.1f})"
+    print(f"\nenv steps/s against train.num_envs, medians at one update per env step{sb3}:")
+    print("  num_envs " + "".join(f"{mode + ' steps/s':>16s}{mode + ' updates/s':>18s}" for mode in modes))
+    for n in env_counts:
+        cells = "".join(f"{statistics.median(res[ours_name(m, n) + ' steps/s']):16.1f}"
+                        f"{statistics.median(res[ours_name(m, n) + ' updates/s']):18.1f}" for m in modes)
+        print(f"  {n:8d} {cells}")
 
 
 if __name__ == "__main__":

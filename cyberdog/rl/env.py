@@ -2,14 +2,17 @@
 
 The gymnasium env returns nested dicts in `info`; `FlatInfo` flattens the few numbers the trainer logs into
 scalars, and TorchRL's `default_info_dict_reader` copies them into the collected tensordicts under "next".
+`make_batched_env` runs several copies, one per process (`train.num_envs`).
 """
 from __future__ import annotations
+
+import functools
 
 import gymnasium as gym
 import numpy as np
 import torch
 from torchrl.data import Unbounded
-from torchrl.envs import GymWrapper, InitTracker, TransformedEnv
+from torchrl.envs import GymWrapper, InitTracker, ParallelEnv, TransformedEnv
 from torchrl.envs.gym_like import default_info_dict_reader
 
 from cyberdog.config import REWARD_TERM_NAMES, EnvConfig, RewardConfig
@@ -57,3 +60,28 @@ def make_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, device: 
         env.append_transform(InitTracker())
     env.set_seed(seed)
     return env
+
+
+def worker_seed(seed: int, index: int) -> int:
+    """Env seed of worker `index` of a batch of envs started with `seed`: numpy's `SeedSequence` of the pair,
+    so that the workers draw independent streams (seed + index would give run seed s's worker 1 the stream
+    of run seed s + 1's worker 0) and a fixed (seed, index) always gives the same one."""
+    return int(np.random.SeedSequence([int(seed), int(index)]).generate_state(1)[0])
+
+
+def make_batched_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, num_envs: int,
+                     track_init: bool = False) -> ParallelEnv:
+    """`num_envs` copies of `make_env`, each in its own process (TorchRL's `ParallelEnv`), worker i seeded
+    with `worker_seed(seed, i)`; batch size [num_envs].
+
+    The workers step in lock step (all of them, then the next step) and return their data through shared
+    memory, so what a batch holds depends on the seeds only, never on the timing. The processes are spawned
+    (a fresh interpreter each: no forked PyBullet or OpenMP state). `num_threads` is given so that TorchRL
+    leaves this process's torch threads as they are (by default it lowers them by one per worker).
+    """
+    if int(num_envs) != num_envs or num_envs < 2:
+        raise ValueError(f"make_batched_env needs num_envs >= 2 (one env is make_env), got {num_envs!r}")
+    make_one = functools.partial(make_env, env_cfg, reward, track_init=track_init)
+    return ParallelEnv(int(num_envs), make_one, create_env_kwargs=[{"seed": worker_seed(seed, i)}
+                                                                  for i in range(num_envs)],
+                       mp_start_method="spawn", num_threads=torch.get_num_threads())

@@ -1,7 +1,8 @@
 """Two-stage training loop (paper Section 3): collect with TorchRL's `Collector`, replay, update, log, save.
 
 Collection runs in this process, taking turns with the updates (`train.collection="sync"`, the default), or
-in a worker process one batch ahead, overlapping with them ("async", `cyberdog.rl.collect`).
+in a worker process one batch ahead, overlapping with them ("async", `cyberdog.rl.collect`); from one env, or
+from `train.num_envs` envs in processes of their own, each with its running episode (see `_bookkeep`).
 
 Stage 1 trains with the "stage1" reward (no energy term) until the mean score over `score_window`
 episodes reaches `stage1.stop_score` or its budget is spent; stage 2 continues the same agent (actor,
@@ -45,7 +46,7 @@ from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, remove_stale_temporaries,
                                     rng_state, save_atomic, save_checkpoint, set_rng_state)
 from cyberdog.rl.collect import ProcessCollector, make_collector
-from cyberdog.rl.env import make_env
+from cyberdog.rl.env import make_batched_env, make_env
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
                                 transitions)
@@ -94,8 +95,10 @@ class Trainer:
         tc = cfg.train
         if tc.num_threads:
             torch.set_num_threads(tc.num_threads)
-        elif tc.collection == "async" and torch.get_num_threads() > 1:
-            torch.set_num_threads(torch.get_num_threads() - 1)  # one core for the env process
+        elif (tc.collection == "async" or tc.num_envs > 1) and torch.get_num_threads() > 1:
+            # a core for each env process, and one for the async collector, which waits for its envs busily
+            busy = tc.num_envs + (tc.collection == "async" and tc.num_envs > 1)
+            torch.set_num_threads(max(1, torch.get_num_threads() - busy))
         if tc.deterministic:
             torch.use_deterministic_algorithms(True)
         self.device = resolve_device(tc.device)
@@ -270,16 +273,19 @@ class Trainer:
         self.agent.set_actor_lr(self.cfg.agent.actor_lr if sc.actor_lr is None else sc.actor_lr,
                                 fresh=sc.fresh_actor_optimizer and c["stage_env_steps"] == 0)
         random_frames = self._random_frames_left(stage)
-        if tc.collection == "async":  # env in a worker process, one batch ahead of the updates
+        threads = torch.get_num_threads()  # closing a ParallelEnv raises them by its worker count: restored below
+        if tc.collection == "async":  # env(s) in a worker process, one batch ahead of the updates
             collector = ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
-                                         self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames)
-        else:
-            collector = make_collector(make_env(self.cfg.env, reward, seed=seed, track_init=True),
-                                       self.agent.policy, tc.frames_per_batch, random_frames, self.device)
+                                         self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
+                                         tc.num_envs)
+        else:  # the policy runs here, on self.device, on the observations of all envs at once
+            env = (make_env(self.cfg.env, reward, seed=seed, track_init=True) if tc.num_envs == 1
+                   else make_batched_env(self.cfg.env, reward, seed, tc.num_envs, track_init=True))
+            collector = make_collector(env, self.agent.policy, tc.frames_per_batch, random_frames, self.device)
         budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
         bar = tqdm(total=budget, initial=min(c["stage_env_steps"], budget), unit="step", desc=f"stage {stage}",
                    disable=not self.progress, dynamic_ncols=True)
-        episode = self._new_episode()
+        episodes = [self._new_episode() for _ in range(tc.num_envs)]  # the running episode of each env
         t_env = t_upd = 0.0
         n_upd = 0
         try:
@@ -301,7 +307,7 @@ class Trainer:
                 t_upd += time.perf_counter() - t1
                 rates = {"env_steps_per_s": c["stage_env_steps"] / max(t_env, 1e-9),
                          "updates_per_s": n_upd / t_upd if t_upd > 0 else math.nan}
-                self._bookkeep(batch, episode, stage, sc, rates)
+                self._bookkeep(batch, episodes, stage, sc, rates)
                 bar.update(min(n, max(0, budget - bar.n)))
                 bar.set_postfix(ep=c["stage_episodes"], score=f"{np.mean(self.scores) if self.scores else 0:.2f}",
                                 upd_s=f"{rates['updates_per_s']:.0f}", refresh=False)
@@ -316,6 +322,7 @@ class Trainer:
         finally:
             bar.close()
             collector.shutdown()
+            torch.set_num_threads(threads)
 
     def _random_frames_left(self, stage: int) -> int:
         """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent)."""
@@ -346,23 +353,28 @@ class Trainer:
         return {"length": 0, "score": 0.0, "energy_J": 0.0, "speed_sum": 0.0,
                 **{f"reward_{n}": 0.0 for n in REWARD_TERM_NAMES}}
 
-    def _bookkeep(self, batch, ep: dict, stage: int, sc: C.StageConfig, rates: dict) -> None:
-        """Accumulate each step into the running episode; log, score and save at every episode end."""
+    def _bookkeep(self, batch, episodes: list[dict], stage: int, sc: C.StageConfig, rates: dict) -> None:
+        """Accumulate each step into its env's running episode; log, score and save at every episode end.
+
+        `batch` is [T] steps of one env or [N, T] of N envs (`episodes[i]` is env i's); the steps are taken
+        time-major (step t of every env, then t+1), which is also the order of the logged `env_steps`."""
+        n_envs = len(episodes)
         nxt = batch["next"]
-        cols = {k: nxt[k].reshape(-1).tolist() for k in ["reward", "energy_J", "forward_speed"]
+        cols = {k: nxt[k].reshape(n_envs, -1).tolist() for k in ["reward", "energy_J", "forward_speed"]
                 + [f"reward_{n}" for n in REWARD_TERM_NAMES]}
-        done = nxt["done"].reshape(-1).tolist()
-        first_step = self.c["env_steps"] - len(done)
-        for i, d in enumerate(done):
-            ep["length"] += 1
-            ep["score"] += cols["reward"][i]
-            ep["energy_J"] += cols["energy_J"][i]
-            ep["speed_sum"] += cols["forward_speed"][i]
-            for n in REWARD_TERM_NAMES:
-                ep[f"reward_{n}"] += cols[f"reward_{n}"][i]
-            if d:
-                self._episode_end(ep, stage, sc, rates, first_step + i + 1)
-                ep.update(self._new_episode())
+        done = nxt["done"].reshape(n_envs, -1).tolist()
+        first_step = self.c["env_steps"] - n_envs * len(done[0])
+        for t in range(len(done[0])):
+            for i, ep in enumerate(episodes):
+                ep["length"] += 1
+                ep["score"] += cols["reward"][i][t]
+                ep["energy_J"] += cols["energy_J"][i][t]
+                ep["speed_sum"] += cols["forward_speed"][i][t]
+                for n in REWARD_TERM_NAMES:
+                    ep[f"reward_{n}"] += cols[f"reward_{n}"][i][t]
+                if done[i][t]:
+                    self._episode_end(ep, stage, sc, rates, first_step + t * n_envs + i + 1)
+                    ep.update(self._new_episode())
 
     def _episode_end(self, ep: dict, stage: int, sc: C.StageConfig, rates: dict, env_steps: int) -> None:
         c = self.c
