@@ -45,8 +45,7 @@ from cyberdog.envs.cyberdog_env import observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, remove_stale_temporaries,
                                     rng_state, save_atomic, save_checkpoint, set_rng_state)
-from cyberdog.rl.collect import ProcessCollector, make_collector
-from cyberdog.rl.env import make_batched_env, make_env
+from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
                                 transitions)
@@ -279,9 +278,8 @@ class Trainer:
                                          self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
                                          tc.num_envs)
         else:  # the policy runs here, on self.device, on the observations of all envs at once
-            env = (make_env(self.cfg.env, reward, seed=seed, track_init=True) if tc.num_envs == 1
-                   else make_batched_env(self.cfg.env, reward, seed, tc.num_envs, track_init=True))
-            collector = make_collector(env, self.agent.policy, tc.frames_per_batch, random_frames, self.device)
+            collector = make_collector(make_env_for_collection(self.cfg.env, reward, seed, tc.num_envs),
+                                       self.agent.policy, tc.frames_per_batch, random_frames, self.device)
         budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
         bar = tqdm(total=budget, initial=min(c["stage_env_steps"], budget), unit="step", desc=f"stage {stage}",
                    disable=not self.progress, dynamic_ncols=True)
