@@ -193,8 +193,7 @@ class Walker:
         traces = self._traces
         if not traces:
             traces.update(q=_Rows((12,)), base_position=_Rows((3,)), contacts=_Rows((4,), bool),
-                          foot_targets=_Rows((4, 3)), foot_offsets=_Rows((4, 3)), t=_Rows(()))
-        traces["t"].append(self.steps * self.dt)
+                          foot_targets=_Rows((4, 3)), foot_offsets=_Rows((4, 3)))
         traces["q"].append(s.q)
         traces["base_position"].append(s.base_position)
         traces["contacts"].append(self.robot.foot_contacts())  # after the step
@@ -223,7 +222,7 @@ class Walker:
         foot_targets, foot_offsets), arrays with the step as the first axis."""
         tau, dq = self.tau.view(), self.dq.view()
         out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": np.abs(tau * dq)}
-        out.update({name: rows.view() for name, rows in self._traces.items() if name != "t"})
+        out.update({name: rows.view() for name, rows in self._traces.items()})
         return out
 
     def close(self) -> None:
