@@ -27,7 +27,7 @@ def last_cycles_window(n: int, dt: float, period: float, cycles: int = 2) -> sli
 def chosen_walks(walks: list[dict], lift_height: float | None = None) -> dict[float, dict[str, dict]]:
     """Per speed, per trajectory the walk Figure 10 shows: learned = the first seed's, the baselines at
     `lift_height` (default: the highest baseline lift, the paper set's)."""
-    base_lifts = [w["lift_height_m"] for w in walks if w["trajectory"] != "learned"]
+    base_lifts = [w["lift_height_m"] for w in walks if w["trajectory"] in ("cycloid", "straight")]
     lift = lift_height if lift_height is not None else (max(base_lifts) if base_lifts else None)
     seeds = list(dict.fromkeys(w["seed"] for w in walks if w["trajectory"] == "learned"))
     out: dict[float, dict[str, dict]] = {}

@@ -197,6 +197,48 @@ def test_summary_pairs_each_learned_walk_with_the_baselines_at_its_own_lift():
     assert "2 of 2" in md and "D_t on the electrical energy" in md
 
 
+def test_the_reference_shape_is_a_row_of_the_matched_table_but_not_a_baseline():
+    walks = [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),
+             walk_row(2, "cycloid", 1000.0, 0.09), walk_row(3, "straight", 1100.0, 0.09),
+             walk_row(4, "cycloid", 1000.0, 0.08), walk_row(5, "straight", 700.0, 0.08),
+             walk_row(6, "cycloid", 1600.0, 0.15), walk_row(7, "straight", 2000.0, 0.15)]
+    plain = cmp.comparison_rows(walks, paper_lift=0.15)
+    rows = cmp.comparison_rows(walks + [walk_row(8, cmp.REFERENCE, 600.0, 0.085)], paper_lift=0.15)
+    learned = [r for r in rows if r["trajectory"] == "learned"]
+    assert [r["D_t_pct"] for r in learned] == [r["D_t_pct"] for r in plain if r["trajectory"] == "learned"]
+    d_ref = {(r["set"], r["seed"]): r["D_ref_pct"] for r in learned}
+    assert d_ref[("same_lift", "s0")] == pytest.approx(-50.0) and d_ref[("same_lift", "s1")] == pytest.approx(
+        100 * (600 - 800) / 600)
+    assert math.isnan(d_ref[("paper", "s0")])  # the reference walks at the learned lift only
+    assert [r["set"] for r in rows if r["trajectory"] == cmp.REFERENCE] == ["same_lift"]
+    summary = {r["set"]: r for r in t5.summary_rows(rows)}
+    assert summary["same_lift"][f"{cmp.REFERENCE}_energy_kJ_mean"] == pytest.approx(0.6)
+    assert summary["same_lift"]["D_ref_pct_mean"] == pytest.approx((-50.0 + 100 * (600 - 800) / 600) / 2)
+    assert f"{cmp.REFERENCE}_energy_kJ_mean" not in summary["paper"]
+    md = t5.summary_markdown(list(summary.values()), "same_lift")
+    assert "searched shape (H = 0.085 m, reference)" in md and "learned against the searched shape" in md
+    # a reference walk that failed is shown, and no D_ref comes of it
+    failed = cmp.comparison_rows(walks + [walk_row(8, cmp.REFERENCE, 600.0, 0.085, valid=False)], paper_lift=0.15)
+    assert all(math.isnan(r["D_ref_pct"]) for r in failed if r["trajectory"] == "learned")
+    assert any(r["trajectory"] == cmp.REFERENCE for r in failed)
+
+
+def test_the_reference_shape_walks_once_per_speed_at_its_own_lift():
+    phase = np.arange(100) / 100
+    pos, _ = CompositeCycloid().position_velocity(phase, 0.2, 0.095, 0.2, 0.2)
+    ref = SampledTrajectory.from_points(phase, pos[:, 0], pos[:, 1], 0.2, 0.095, {})
+    learned = {"seed0": {1.0: commanded(1.0, -0.01, 0), 1.2: commanded(1.2, -0.02, 0)}}
+    jobs = cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.2), reference=ref)
+    mine = [j for j in jobs if j.trajectory == cmp.REFERENCE]
+    assert [(j.speed, j.lift_height, j.cfg.gait.lift_height) for j in mine] == [(1.0, 0.095, 0.095),
+                                                                                (1.2, 0.095, 0.095)]
+    assert all(j.path is ref for j in mine)
+    assert not [j for j in cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0,), same_lift=False,
+                                                reference=ref) if j.trajectory == cmp.REFERENCE]
+    with pytest.raises(TypeError, match="SampledTrajectory"):
+        cmp.comparison_jobs(C.WalkConfig(), learned, reference=learned["seed0"][1.0])
+
+
 # ---- the command line: each sub-command has its own options and help ----------------------------------------
 OWN_OPTIONS = {  # an option each sub-command takes, and one it must refuse
     "all": ("--no-prototype", "--trajectories"), "baselines": ("--trajectories", "--policies"),

@@ -18,6 +18,12 @@ loop) or a `SampledTrajectory` (a single x–z path, e.g. the measured one, repl
 rescaling S). `learned` maps a label (the policy's seed) to one trajectory, or to {speed: trajectory}.
 Its "own H" is a CommandedPath's `own_lift_height` (mean over the legs) or a SampledTrajectory's peak z.
 
+A reference row (optional, `reference`): the best hand-designed shape that the project's direct search finds
+at the learned paths' lift height (`tools/optimize_trajectory.py`, a `SampledTrajectory`), walked once per
+speed at its own H in the "same_lift" set. It is not one of Eq. (12)'s baselines: the learned walks get
+D_ref, Eq. (12)'s formula with the reference as E_min (negative: the learned path costs more), so that the
+common trajectories are not the only yardstick.
+
 Every walk also reports what Eq. (7) does not see: the electrical energy (copper loss, friction, driver
 efficiency; `cyberdog.core.energy`), the positive mechanical work, and the foot slip per cycle; the learned
 walks get D_t on the electrical energy too.
@@ -47,11 +53,13 @@ from cyberdog.core.trajectories import SampledTrajectory
 LearnedPath = SampledTrajectory | CommandedPath
 
 BASELINES = ("cycloid", "straight")
+REFERENCE = "searched"  # the direct search's shape (trajectory name of its walks)
 SETS = ("paper", "same_lift")
 LIFT_DECIMALS = 4  # lift heights equal to 0.1 mm share their baseline walks
 COLUMNS = ["set", "trajectory", "seed", "lift_height_m", "speed_command_mps", "mean_speed_mps", "status",
            "energy_kJ", "energy_per_100m_kJ", "cost_of_transport", "electrical_energy_J", "positive_work_J",
-           "foot_slip_mm_per_cycle", "D_t_pct", "D_t_per_100m_pct", "D_t_electrical_pct", "E_min_trajectory"]
+           "foot_slip_mm_per_cycle", "D_t_pct", "D_t_per_100m_pct", "D_t_electrical_pct", "E_min_trajectory",
+           "D_ref_pct", "D_ref_electrical_pct"]
 
 
 @dataclass(frozen=True)
@@ -59,13 +67,13 @@ class WalkJob:
     """One replay: a trajectory at one speed and lift height."""
 
     walk_id: int
-    trajectory: str  # "learned", "cycloid" or "straight"
+    trajectory: str  # "learned", "cycloid", "straight" or REFERENCE
     seed: str  # the learned trajectory's label ("" for the baselines)
     speed: float  # m/s
     lift_height: float  # m
     cfg: WalkConfig
     duration: float  # s
-    path: LearnedPath | None = None  # the learned path (None: the baseline named by cfg.gait)
+    path: LearnedPath | None = None  # the learned or reference path (None: the baseline named by cfg.gait)
 
 
 def learned_lift_height(traj: LearnedPath) -> float:
@@ -101,8 +109,11 @@ def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: fl
 
 
 def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duration: float = PAPER_WALK_DURATION,
-                    same_lift: bool = True) -> list[WalkJob]:
-    """Every walk of the comparison, each baseline walk once per speed and distinct lift height."""
+                    same_lift: bool = True, reference: SampledTrajectory | None = None) -> list[WalkJob]:
+    """Every walk of the comparison, each baseline walk once per speed and distinct lift height, and the
+    `reference` shape (if given, with `same_lift`) once per speed at its own lift height."""
+    if reference is not None and not isinstance(reference, SampledTrajectory):
+        raise TypeError(f"reference must be a SampledTrajectory or None, got {type(reference).__name__}")
     jobs: list[WalkJob] = []
     for v in speeds:
         here = {label: t for label, e in learned.items() if (t := learned_at(e, v)) is not None}
@@ -120,6 +131,10 @@ def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duratio
         for name in BASELINES:
             for h in lifts:
                 jobs.append(WalkJob(len(jobs), name, "", float(v), h, walk_config(cfg, name, v, h), duration))
+        if reference is not None and same_lift:
+            h = float(reference.lift_height)
+            jobs.append(WalkJob(len(jobs), REFERENCE, "", float(v), h, walk_config(cfg, REFERENCE, v, h), duration,
+                                reference))
     return jobs
 
 
@@ -137,7 +152,8 @@ def run_walk_job(job: WalkJob) -> dict:
         status = f"speed miss ({r.mean_speed:.3f} m/s)"
     else:
         status = "ok"
-    label = job.trajectory if job.trajectory != "straight" else f"straight ({job.cfg.gait.straight_shape})"
+    label = {"straight": f"straight ({job.cfg.gait.straight_shape})",
+             REFERENCE: "searched shape"}.get(job.trajectory, job.trajectory)
     return {
         "walk_id": job.walk_id, "trajectory": job.trajectory, "label": label, "seed": job.seed,
         "lift_height_m": job.lift_height, "speed_command_mps": job.speed, "period_s": job.cfg.gait.period,
@@ -193,7 +209,9 @@ def reduction(e_min: float, e_s: float) -> float:
 def comparison_rows(walks: list[dict], paper_lift: float) -> list[dict]:
     """The walks arranged in sets ("paper": baselines at `paper_lift`; "same_lift": at each learned
     trajectory's own H), with D_t (Eq. 12, %) on E and on energy per 100 m for every learned walk, against the
-    cheaper valid baseline of its set at its speed. The learned walk appears in both sets."""
+    cheaper valid baseline of its set at its speed. The learned walk appears in both sets. In "same_lift", the
+    reference walks (if any) are rows too, and each learned walk gets D_ref (Eq. 12's formula against the
+    valid reference walk at its speed, on E and on the electrical energy; nan without one)."""
     out = []
     learned = [w for w in walks if w["trajectory"] == "learned"]
     seeds = list(dict.fromkeys(w["seed"] for w in learned))
@@ -219,21 +237,27 @@ def comparison_rows(walks: list[dict], paper_lift: float) -> list[dict]:
                 cheap_el = min(valid, key=lambda w: w["electrical_energy_J"]) if valid else None
                 d_el = (reduction(cheap_el["electrical_energy_J"], lw["electrical_energy_J"])
                         if cheap_el and lw["valid"] else float("nan"))
+                ref = next((w for w in walks if w["trajectory"] == REFERENCE and w["speed_command_mps"] == v),
+                           None) if set_name == "same_lift" else None
+                both = bool(ref and ref["valid"] and lw["valid"])
+                d_ref = reduction(ref["energy_J"], lw["energy_J"]) if both else float("nan")
+                d_ref_el = reduction(ref["electrical_energy_J"], lw["electrical_energy_J"]) if both else float("nan")
                 out.append({**_public(lw), "set": set_name, "D_t_pct": d, "D_t_per_100m_pct": d100,
-                            "D_t_electrical_pct": d_el,
+                            "D_t_electrical_pct": d_el, "D_ref_pct": d_ref, "D_ref_electrical_pct": d_ref_el,
                             "E_min_trajectory": cheap["label"] if cheap else "",
                             "E_min_kJ": cheap["energy_kJ"] if cheap else float("nan")})
-                for w in base:
+                for w in base + ([ref] if ref else []):
                     if not any(o["set"] == set_name and o["walk_id"] == w["walk_id"] for o in out):
-                        out.append({**_public(w), "set": set_name, "D_t_pct": float("nan"),
-                                    "D_t_per_100m_pct": float("nan"), "D_t_electrical_pct": float("nan"),
-                                    "E_min_trajectory": "",
-                                    "E_min_kJ": float("nan")})
-    order = {"learned": 0, "cycloid": 1, "straight": 2}
+                        out.append({**_public(w), "set": set_name, **dict.fromkeys(NO_D, float("nan")),
+                                    "E_min_trajectory": ""})
+    order = {"learned": 0, "cycloid": 1, "straight": 2, REFERENCE: 3}
     out.sort(key=lambda r: (SETS.index(r["set"]),
                             round(r["lift_height_m"], LIFT_DECIMALS) if r["set"] == "same_lift" else 0,
                             order[r["trajectory"]], r["seed"], r["speed_command_mps"]))
     return out
+
+
+NO_D = ("D_t_pct", "D_t_per_100m_pct", "D_t_electrical_pct", "D_ref_pct", "D_ref_electrical_pct", "E_min_kJ")
 
 
 def _public(w: dict) -> dict:
@@ -274,6 +298,6 @@ def two_cycle_window(n: int, dt: float, period: float, cycles: int = 2) -> slice
     return slice(start, last)
 
 
-__all__ = ["BASELINES", "COLUMNS", "LearnedPath", "PAPER_SPEEDS", "SETS", "WalkJob", "comparison_jobs",
+__all__ = ["BASELINES", "COLUMNS", "REFERENCE", "LearnedPath", "PAPER_SPEEDS", "SETS", "WalkJob", "comparison_jobs",
            "comparison_rows", "learned_at", "learned_lift_height", "pinned_lift", "reduction", "run_jobs",
            "run_walk_job", "seed_means", "two_cycle_window", "walk_config"]

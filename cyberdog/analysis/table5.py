@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from cyberdog.analysis.compare import BASELINES, LIFT_DECIMALS, SETS, _same
+from cyberdog.analysis.compare import BASELINES, LIFT_DECIMALS, REFERENCE, SETS, _same
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.config.paper import PAPER_SPEEDS
 
@@ -162,12 +162,18 @@ def summary_rows(rows: list[dict]) -> list[dict]:
                     groups[name] = [b for b in group if b is not None]
                 else:  # the one walk at the paper's lift height
                     groups[name] = same[:1]
+            reference = [b for b in rows if b["set"] == set_name and b["trajectory"] == REFERENCE
+                         and b["speed_command_mps"] == v]
+            if reference:  # the direct search's shape: one walk per speed, at its own lift height
+                groups[REFERENCE] = reference[:1]
+                row[f"{REFERENCE}_lift_height_m"] = reference[0]["lift_height_m"]
+                row[f"{REFERENCE}_valid"] = reference[0]["valid"]
             for key, _, scale, _ in SUMMARY_QUANTITIES:
                 for name, group in groups.items():
                     m, ci = mean_ci([scale * b[key] for b in group])
                     row[f"{name}_{key}_mean"], row[f"{name}_{key}_ci95"] = m, ci
             row["lift_height_m_mean"], row["lift_height_m_ci95"] = mean_ci([r["lift_height_m"] for r in ok])
-            for key in ("D_t_pct", "D_t_electrical_pct"):
+            for key in ("D_t_pct", "D_t_electrical_pct") + (("D_ref_pct", "D_ref_electrical_pct") if reference else ()):
                 row[f"{key}_mean"], row[f"{key}_ci95"] = mean_ci([r[key] for r in ok])
             row["mean_speed_min_mps"] = min((r["mean_speed_mps"] for r in mine), default=float("nan"))
             row["mean_speed_max_mps"] = max((r["mean_speed_mps"] for r in mine), default=float("nan"))
@@ -195,13 +201,21 @@ def summary_markdown(summary: list[dict], set_name: str) -> str:
     line("learned walks valid (no fall, speed ±5 %)", [f"{r['n_valid']} of {r['n_seeds']}" for r in rows])
     line("lift height H of the learned path (m)",
          [_mci(r["lift_height_m_mean"], r["lift_height_m_ci95"], "{:.4f}") for r in rows])
+    has_reference = all(f"{REFERENCE}_lift_height_m" in r for r in rows)
     names = {"learned": "learned", "cycloid": "composite cycloid", "straight": "straight line"}
+    if has_reference:
+        names[REFERENCE] = f"searched shape (H = {rows[0][f'{REFERENCE}_lift_height_m']:.3f} m, reference)"
     for key, label, _, fmt in SUMMARY_QUANTITIES:
-        for name in ("learned",) + BASELINES:
+        for name in ("learned",) + BASELINES + ((REFERENCE,) if has_reference else ()):
             line(f"{label}, {names[name]}", [_mci(r[f"{name}_{key}_mean"], r[f"{name}_{key}_ci95"], fmt)
                                              for r in rows])
     line("**D_t, Eq. (12), on E (%)**", [f"**{_mci(r['D_t_pct_mean'], r['D_t_pct_ci95'], '{:.1f}')}**"
                                           for r in rows])
     line("D_t on the electrical energy (%)",
          [_mci(r["D_t_electrical_pct_mean"], r["D_t_electrical_pct_ci95"], "{:.1f}") for r in rows])
+    if has_reference:
+        line("learned against the searched shape, Eq. (12)'s formula, on E (%)",
+             [_mci(r["D_ref_pct_mean"], r["D_ref_pct_ci95"], "{:.1f}") for r in rows])
+        line("learned against the searched shape, on the electrical energy (%)",
+             [_mci(r["D_ref_electrical_pct_mean"], r["D_ref_electrical_pct_ci95"], "{:.1f}") for r in rows])
     return "\n".join(lines)

@@ -56,7 +56,8 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                 "replay the learned, cycloid and straight-line trajectories with the IK + PID trot for "
                 "--duration s at each speed; Table 5 (the headline: baselines at the learned path's own lift "
                 "height; and the paper's protocol: baselines at 0.15 m), D_t by Eq. (12) on Eq. (7) and on the "
-                "electrical energy, positive work and foot slip; Figures 10 and 13."),
+                "electrical energy, positive work and foot slip, and as a reference row the direct search's shape at "
+                "the same lift (--reference); Figures 10 and 13."),
     "prototype": ("Section 4.2 in simulation: battery use and range",
                   "walks of --prototype-distance m (default 20; the paper's 100) on the ideal and a "
                   "hardware-like robot: battery use (Eq. 13), range, sim-to-real gap. Writes prototype.* and "
@@ -241,6 +242,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub["all"].add_argument("--video", action="store_true", help="also write a video")
     sub["compare"].add_argument("--no-same-lift", action="store_true",
                                 help="skip the control set of baselines at the learned trajectory's lift height")
+    for name in ("all", "compare"):
+        g = sub[name].add_argument_group("reference row of the matched-lift table")
+        g.add_argument("--reference", type=Path, default=None, metavar="FILE",
+                       help="a shape saved by tools/optimize_trajectory.py, walked at each speed at its own lift "
+                            "height (default results/optimized_trajectory_H0.095.json)")
+        g.add_argument("--no-reference", action="store_true", help="no reference row")
     sub["baselines"].add_argument("--trajectories", nargs="+", default=list(BASELINE_CHOICES),
                                   choices=BASELINE_CHOICES, help="which common trajectories to walk")
     sub["figures"].add_argument("--from", dest="from_dir", type=Path, default=None, metavar="DIR",

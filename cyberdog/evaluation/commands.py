@@ -96,9 +96,11 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_compare, run_figures
 
     L.check_learned_inputs(args)
+    reference = L.reference_shape(args)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds)
-    run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out)
+    run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
+                reference=reference)
     run_figures(run.out, only=("figure10", "figure13"))  # drawn from the files just written
     return run.finish()
 
@@ -118,10 +120,12 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_compare, run_figures, run_prototype_part, run_video
 
     L.check_learned_inputs(args)
+    reference = L.reference_shape(args)
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds)
-    run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out)
+    run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
+                reference=reference)
     if not args.no_prototype:
         run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                            run.out)

@@ -20,6 +20,9 @@ from cyberdog.evaluation.cli import UsageError
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
 DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
+# the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
+# (tools/optimize_trajectory.py --lift-height 0.095, the same budget at every speed)
+DEFAULT_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.095.json"
 # preference order: the shipped name, then the actor at the end of stage 2 (fixed in advance), then the one of
 # its best-scoring episode (chosen on a noisy score)
 STAGE2_ACTORS = ("stage2_actor.pt", "stage2_final_actor.pt", "stage2_best_actor.pt")
@@ -200,6 +203,25 @@ def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> dic
     return learned
 
 
+def reference_shape(args, log=print) -> SampledTrajectory | None:
+    """The reference shape of the matched-lift table: --reference FILE, else the shipped one if it is there;
+    None with --no-reference or without --same-lift walks."""
+    if getattr(args, "no_reference", False) or getattr(args, "no_same_lift", False):
+        return None
+    path = getattr(args, "reference", None)
+    if path is None:
+        if not DEFAULT_REFERENCE.is_file():
+            log(f"no reference shape ({DEFAULT_REFERENCE} is missing): the matched-lift table has no reference row")
+            return None
+        path = DEFAULT_REFERENCE
+    if not Path(path).is_file():
+        raise UsageError(f"--reference {path} does not exist")
+    try:
+        return SampledTrajectory.load(path)
+    except (OSError, ValueError, KeyError, json.JSONDecodeError) as err:
+        raise UsageError(f"--reference {path}: not a saved foot trajectory ({err})") from None
+
+
 def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict[str, Path]:
     """Training logs for Figure 6 by label: --metrics, else the policies' metrics.csv, else the shipped one."""
     if metrics:
@@ -213,5 +235,6 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
     return dict(zip(unique_labels([m.parent.name for m in found]), found))
 
 
-__all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "STAGE2_ACTORS", "check_learned_inputs", "extract_policies",
-           "flat_learned", "learned_trajectories", "load_learned", "metrics_files", "policy_paths"]
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "extract_policies",
+           "flat_learned", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
+           "reference_shape"]

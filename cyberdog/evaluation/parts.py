@@ -19,15 +19,22 @@ FIGURES = ("figure4", "figure6", "figure7", "figure10", "figure13")
 
 
 def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration: float, same_lift: bool,
-                workers: int | None, out: Path, log=print) -> tuple[list, list, dict]:
-    """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power)."""
+                workers: int | None, out: Path, log=print, reference=None) -> tuple[list, list, dict]:
+    """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power).
+    reference: the direct search's shape (a SampledTrajectory) for the matched-lift table's reference row."""
     for label, entry in learned.items():
         for t in (entry.values() if isinstance(entry, dict) else [entry]):
             period = t.gait.period if isinstance(t, CommandedPath) else t.provenance.get("period_s")
             if period is not None and abs(period - cfg.gait.period) > 1e-9:
                 log(f"warning: {label} was recorded with a {period} s gait period; the baselines walk "
                     f"{cfg.gait.period} s")
-    jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift)
+    if reference is not None:
+        lifts = [cmp.learned_lift_height(t) for e in learned.values()
+                 for t in (e.values() if isinstance(e, dict) else [e])]
+        gap = abs(reference.lift_height - sum(lifts) / len(lifts))
+        log(f"reference row: the searched shape at H = {reference.lift_height:.3f} m"
+            + (f" (warning: {1e3 * gap:.1f} mm from the learned paths' mean lift height)" if gap > 2e-3 else ""))
+    jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift, reference=reference)
     log(f"comparison: {len(jobs)} walks of {duration:g} s")
     walks = cmp.run_jobs(jobs, workers, log)
     power = {w["walk_id"]: w.pop("power_W") for w in walks}
