@@ -99,35 +99,20 @@ def learning_curves(per_seed: list[dict], points: int = GRID_POINTS) -> dict[int
     return out
 
 
-def write_learning_curves(curves: dict, folder: Path, title: str = "") -> list[Path]:
-    from matplotlib.figure import Figure  # no pyplot: no GUI backend needed
+def write_learning_curves(curves: dict, folder: Path) -> list[Path]:
+    """learning_curves.csv (the bands on the step grid), then learning_curves.png drawn from it by `plots`."""
+    from plots.learning_curves import CSV_NAME, learning_curves as draw_learning_curves  # matplotlib: only here
 
     folder = Path(folder)
-    paths = [folder / "learning_curves.csv", folder / "learning_curves.png"]
+    path = folder / CSV_NAME
     cols = ["stage", "env_steps", "n_seeds", "score_mean", "score_ci95", "window_score_mean", "window_score_ci95"]
-    with open(paths[0], "w", newline="") as f:
+    with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(cols)
         for stage, c in curves.items():
             for i in range(len(c["env_steps"])):
                 w.writerow([stage] + [float(c[k][i]) if k != "n_seeds" else int(c[k][i]) for k in cols[1:]])
-    fig = Figure(figsize=(5.5 * max(1, len(curves)), 4.0), layout="constrained")
-    axes = fig.subplots(1, max(1, len(curves)), squeeze=False)[0]
-    for ax, (stage, c) in zip(axes, curves.items()):
-        x = c["env_steps"]
-        m, h = c["score_mean"], np.nan_to_num(c["score_ci95"])
-        ax.fill_between(x, m - h, m + h, alpha=0.25, color="C0", label="95 % CI across seeds")
-        ax.plot(x, m, color="C0", label="episode score, mean")
-        ax.plot(x, c["window_score_mean"], color="C1", ls="--", label="moving-window score, mean")
-        ax.set_title(f"stage {stage} ({int(c['n_seeds'][0])} seeds)")
-        ax.set_xlabel("env steps in the stage")
-        ax.set_ylabel("episode score")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    if title:
-        fig.suptitle(title)
-    fig.savefig(paths[1], dpi=120)
-    return paths
+    return [path, *draw_learning_curves(folder, pdf=False)]
 
 
 # ---- evaluation -------------------------------------------------------------------------------------------------
@@ -242,7 +227,7 @@ def aggregate_sweep(sweep_dir, eval_duration: float = 10.0, eval_speed: float = 
     (sweep_dir / "aggregate.md").write_text(md)
 
     curves = learning_curves(curves_per_seed)
-    write_learning_curves(curves, sweep_dir, title=f"{sweep_dir.name}: mean and 95 % CI over {len(entries)} seeds")
+    write_learning_curves(curves, sweep_dir)
     evaluation = {"format": EVAL_FORMAT, "version": EVAL_VERSION, "sweep_dir": str(sweep_dir.resolve()),
                   "evaluation": ({"speed_mps": eval_speed, "duration_s": eval_duration, "rollout_seed": 0,
                                   "reward": "stage2"} if eval_duration > 0 else None),
