@@ -1,0 +1,46 @@
+"""tools/offset_authority.py: a searched shape as foot offsets from the composite cycloid (no walking here)."""
+import dataclasses
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cyberdog.analysis import shape_optimization as so
+from cyberdog.config import WalkConfig
+from cyberdog.core.trajectories import CompositeCycloid
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("offset_authority", ROOT / "tools" / "offset_authority.py")
+tool = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(tool)
+
+
+def walk_cfg(speed=1.2, lift=0.095):
+    base = WalkConfig()
+    return dataclasses.replace(base, gait=dataclasses.replace(base.gait, speed=speed, lift_height=lift,
+                                                              trajectory="cycloid"))
+
+
+def test_cycloid_plus_the_offsets_is_the_shape_and_clipping_bounds_them():
+    cfg = walk_cfg()
+    shape = so.shape_trajectory(so.ShapeParams(x_law=1.0, x_skew=0.3, stance_law=0.3), cfg.gait)
+    delta = tool.shape_offsets(shape, cfg)
+    g = cfg.gait
+    phase = np.arange(len(delta)) / len(delta)
+    args = (g.step_length, g.lift_height, g.swing_time, g.stance_time)
+    cycloid, _ = CompositeCycloid().position_velocity(phase, *args)
+    target, _ = shape.position_velocity(phase, *args)
+    np.testing.assert_allclose(cycloid + delta, target, atol=1e-12)
+    assert np.abs(delta[:, 0]).max() > 0.03  # this shape needs more than the presets' ±3 cm along x
+    path = tool.offset_path(delta, g.period, 0.03)
+    assert path.offsets.shape == (4, len(delta), 3)
+    assert np.abs(path.offsets).max() == pytest.approx(0.03) and not path.offsets[:, :, 1].any()
+    np.testing.assert_array_equal(path.offsets[0], path.offsets[3])  # the same on every leg
+    free = tool.offset_path(delta, g.period, None)
+    np.testing.assert_allclose(free.offsets[2, :, [0, 2]].T, delta)
+
+
+def test_the_cycloid_itself_needs_no_offset():
+    cfg = walk_cfg(1.0, 0.10)
+    assert np.abs(tool.shape_offsets(so.shape_trajectory(so.CYCLOID_PARAMS, cfg.gait), cfg)).max() < 1e-9
