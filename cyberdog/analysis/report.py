@@ -14,22 +14,29 @@ def _fmt(v) -> str:
     return str(v)
 
 
+def all_columns(rows: list[dict]) -> list[str]:
+    """Every key of `rows`, in order of first appearance (rows of one table may carry different extras)."""
+    return list(dict.fromkeys(k for r in rows for k in r))
+
+
 def markdown_table(rows: list[dict], columns: list[str] | None = None) -> str:
-    """A Markdown table of `rows` (one dict per row), columns in the given or first row's order."""
+    """A Markdown table of `rows` (one dict per row), columns in the given order or every row's keys (empty
+    cells where a row lacks one)."""
     if not rows:
         return "(no rows)"
-    columns = columns or list(rows[0])
+    columns = columns or all_columns(rows)
     lines = ["| " + " | ".join(columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
     lines += ["| " + " | ".join(_fmt(r.get(c, "")) for c in columns) + " |" for r in rows]
     return "\n".join(lines)
 
 
 def write_rows(rows: list[dict], folder: Path, stem: str) -> None:
-    """Write rows as `<stem>.csv`, `<stem>.json` and `<stem>.md` in `folder`."""
+    """Write rows as `<stem>.csv`, `<stem>.json` and `<stem>.md` in `folder` (columns: every row's keys; empty
+    cells where a row lacks one)."""
     folder.mkdir(parents=True, exist_ok=True)
     if rows:
         with open(folder / f"{stem}.csv", "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w = csv.DictWriter(f, fieldnames=all_columns(rows), restval="")
             w.writeheader()
             w.writerows(rows)
     (folder / f"{stem}.json").write_text(json.dumps(rows, indent=2))
