@@ -205,7 +205,7 @@ def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> dic
 
 def reference_shape(args, log=print) -> SampledTrajectory | None:
     """The reference shape of the matched-lift table: --reference FILE, else the shipped one if it is there;
-    None with --no-reference or without --same-lift walks."""
+    None with --no-reference or --no-same-lift."""
     if getattr(args, "no_reference", False) or getattr(args, "no_same_lift", False):
         return None
     path = getattr(args, "reference", None)
@@ -235,6 +235,6 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
     return dict(zip(unique_labels([m.parent.name for m in found]), found))
 
 
-__all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "extract_policies",
-           "flat_learned", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
+           "extract_policies", "flat_learned", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
            "reference_shape"]
