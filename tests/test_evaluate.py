@@ -179,11 +179,16 @@ def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_li
     assert base_lifts == {(1.0, 0.15), (1.0, 0.09), (1.2, 0.15), (1.2, 0.08), (1.4, 0.15)}
 
 
+def two_seeds_at_their_own_lift() -> list[dict]:
+    """Two learned walks at 1.0 m/s (H = 0.09 and 0.08 m), the baselines at each of those lifts and at 0.15 m."""
+    return [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),
+            walk_row(2, "cycloid", 1000.0, 0.09), walk_row(3, "straight", 1100.0, 0.09),
+            walk_row(4, "cycloid", 1000.0, 0.08), walk_row(5, "straight", 700.0, 0.08),
+            walk_row(6, "cycloid", 1600.0, 0.15), walk_row(7, "straight", 2000.0, 0.15)]
+
+
 def test_summary_pairs_each_learned_walk_with_the_baselines_at_its_own_lift():
-    walks = [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),
-             walk_row(2, "cycloid", 1000.0, 0.09), walk_row(3, "straight", 1100.0, 0.09),
-             walk_row(4, "cycloid", 1000.0, 0.08), walk_row(5, "straight", 700.0, 0.08),
-             walk_row(6, "cycloid", 1600.0, 0.15), walk_row(7, "straight", 2000.0, 0.15)]
+    walks = two_seeds_at_their_own_lift()
     rows = cmp.comparison_rows(walks, paper_lift=0.15)
     summary = {r["set"]: r for r in t5.summary_rows(rows)}
     matched, paper = summary["same_lift"], summary["paper"]
@@ -198,10 +203,7 @@ def test_summary_pairs_each_learned_walk_with_the_baselines_at_its_own_lift():
 
 
 def test_the_reference_shape_is_a_row_of_the_matched_table_but_not_a_baseline():
-    walks = [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),
-             walk_row(2, "cycloid", 1000.0, 0.09), walk_row(3, "straight", 1100.0, 0.09),
-             walk_row(4, "cycloid", 1000.0, 0.08), walk_row(5, "straight", 700.0, 0.08),
-             walk_row(6, "cycloid", 1600.0, 0.15), walk_row(7, "straight", 2000.0, 0.15)]
+    walks = two_seeds_at_their_own_lift()
     plain = cmp.comparison_rows(walks, paper_lift=0.15)
     rows = cmp.comparison_rows(walks + [walk_row(8, cmp.REFERENCE, 600.0, 0.085)], paper_lift=0.15)
     learned = [r for r in rows if r["trajectory"] == "learned"]

@@ -15,6 +15,7 @@ from cyberdog.rl.checkpoint import load_checkpoint
 from cyberdog.rl.env import worker_seed
 from cyberdog.rl.logger import TIMING_COLUMNS
 from cyberdog.rl.trainer import Trainer
+from test_train_cli import stop_after
 
 ROOT = Path(__file__).resolve().parents[1]
 TWO_ENVS = ["train.num_envs=2", "train.stage1.max_env_steps=300", "train.checkpoint_every=100"]
@@ -103,20 +104,7 @@ def test_two_env_runs_repeat_bit_for_bit_and_resume_to_the_same_counters(two_env
     ref_dir, ref, _ = two_env_run
     ref_state = load_checkpoint(ref_dir / "checkpoint.pt")
 
-    class Interrupt(Exception):
-        pass
-
-    trainer = Trainer(tiny(), tmp_path, stages=(1,), progress=False)
-    bookkeep = trainer._bookkeep
-
-    def interrupted(*args):
-        if trainer.c["env_steps"] > 200:
-            raise Interrupt  # after the checkpoint at 200 env steps
-        bookkeep(*args)
-
-    trainer._bookkeep = interrupted
-    with pytest.raises(Interrupt):
-        trainer.run()
+    stop_after(Trainer(tiny(), tmp_path, stages=(1,), progress=False), 200)  # after its checkpoint at 200
     state = load_checkpoint(tmp_path / "checkpoint.pt")
     assert state["counters"]["env_steps"] == 200 and state["replay"]["size"] == 200
     ref_data, data = ref_state["replay"]["data"], state["replay"]["data"]

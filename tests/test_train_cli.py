@@ -20,6 +20,24 @@ ROOT = Path(__file__).resolve().parents[1]
 STAGE1 = ["train.stage1.max_env_steps=300", "train.checkpoint_every=100"]
 
 
+def stop_after(trainer: Trainer, env_steps: int) -> None:
+    """Run `trainer` and stop it, as a crash would, once its env-step counter passes `env_steps` (set that to a
+    checkpoint's step count: the run folder then holds the checkpoint written there)."""
+    class Interrupt(Exception):
+        pass
+
+    bookkeep = trainer._bookkeep
+
+    def interrupted(*args):
+        if trainer.c["env_steps"] > env_steps:
+            raise Interrupt
+        bookkeep(*args)
+
+    trainer._bookkeep = interrupted
+    with pytest.raises(Interrupt):
+        trainer.run()
+
+
 def tiny(extra=()) -> C.ExperimentConfig:
     return C.override(C.load(C.ExperimentConfig, ROOT / "configs/tiny.yaml"), STAGE1 + list(extra))
 
@@ -86,20 +104,7 @@ def test_async_collection_runs_the_same_schedule_reproducibly_and_resumes(refere
     table = rows(tmp_path / "a")
     assert len(table) == first["episodes"] and table[-1]["critic_loss"] != "nan"
 
-    class Interrupt(Exception):
-        pass
-
-    trainer = Trainer(cfg, tmp_path / "b", stages=(1,), progress=False)
-    bookkeep = trainer._bookkeep
-
-    def interrupted(*args):
-        if trainer.c["env_steps"] > 200:
-            raise Interrupt  # after the checkpoint at 200 env steps
-        bookkeep(*args)
-
-    trainer._bookkeep = interrupted
-    with pytest.raises(Interrupt):
-        trainer.run()
+    stop_after(Trainer(cfg, tmp_path / "b", stages=(1,), progress=False), 200)
     assert load_checkpoint(tmp_path / "b" / "checkpoint.pt")["counters"]["env_steps"] == 200
     resumed = Trainer(cfg, tmp_path / "b", resume=True, progress=False).run()
     state = load_checkpoint(tmp_path / "b" / "checkpoint.pt")
