@@ -168,8 +168,17 @@ class AgentConfig:
     action_smoothness: float = 0.0  # actor loss += action_smoothness · mean((μ(s') − μ(s))²), the temporal
     #                                 smoothness term of CAPS (Mysore et al. 2021): a foot-mode policy that
     #                                 changes its offsets from step to step makes the PID jerk, which costs energy
+    actor_observation: Tuple[str, ...] = ()  # the observation groups the actor sees (names of CyberDog-v0's
+    #                                          layout, e.g. ("target_speed", "gait_phase")); () = all. The
+    #                                          critics always see the whole observation. An actor that sees
+    #                                          only the command and the gait phase is a foot trajectory per
+    #                                          speed by construction: what it learns is what extraction replays
 
     def __post_init__(self) -> None:
+        _check(all(isinstance(g, str) and g for g in self.actor_observation)
+               and len(set(self.actor_observation)) == len(self.actor_observation),
+               "AgentConfig.actor_observation", "distinct observation group names (() = all)",
+               self.actor_observation)
         _check(self.algorithm in ALGORITHMS, "AgentConfig.algorithm", f"one of {ALGORITHMS}", self.algorithm)
         _check(self.exploration in EXPLORATION_NOISES, "AgentConfig.exploration", f"one of {EXPLORATION_NOISES}",
                self.exploration)
@@ -200,6 +209,11 @@ class StageConfig:
     keep_moving_weight: Optional[float] = None  # D of Eq. (10) for this stage; None = the preset's (25): the
     #                                             survival bonus per episode, which must outweigh the energy
     #                                             cost of walking or falling at once becomes the best policy
+    y_offset_weight: Optional[float] = None  # B of Eq. (10) per m² for this stage; None = the preset's (−20).
+    #                                          An actor that does not see the lateral offset cannot hold the
+    #                                          line (the trot controller's heading correction does), so for it
+    #                                          the term is noise in the return. With "relabel" both stages
+    #                                          must have the same B (TrainConfig checks)
     energy_model: Optional[str] = None  # what this stage's energy term measures (RewardConfig.energy_model);
     #                                     None = "mechanical" (Eq. 7). With buffer_between_stages="relabel" both
     #                                     stages must name the same model: the stored step energy is the model's
@@ -225,6 +239,9 @@ class StageConfig:
                                                     and self.keep_moving_weight >= 0),
                "StageConfig.keep_moving_weight", "None (the preset's) or a finite number >= 0",
                self.keep_moving_weight)
+        _check(self.y_offset_weight is None or (math.isfinite(self.y_offset_weight) and self.y_offset_weight <= 0),
+               "StageConfig.y_offset_weight", "None (the preset's) or a finite number <= 0 (per m²)",
+               self.y_offset_weight)
         _check(self.energy_model is None or self.energy_model in ENERGY_MODELS, "StageConfig.energy_model",
                f"None or one of {ENERGY_MODELS}", self.energy_model)
         _check(self.actor_lr is None or (math.isfinite(self.actor_lr) and self.actor_lr > 0),
@@ -239,14 +256,16 @@ class StageConfig:
 
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
-    """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight` and
-    `energy_model` if set."""
+    """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight`,
+    `y_offset_weight` and `energy_model` if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
     changes = {}
     if stage.energy_weight is not None:
         changes["energy"] = float(stage.energy_weight)
     if stage.keep_moving_weight is not None:
         changes["keep_moving"] = float(stage.keep_moving_weight)
+    if stage.y_offset_weight is not None:
+        changes["y_offset"] = float(stage.y_offset_weight)
     if stage.energy_model is not None:
         changes["energy_model"] = stage.energy_model
     return dataclasses.replace(preset, **changes) if changes else preset
@@ -298,6 +317,10 @@ class TrainConfig:
         _check(self.buffer_between_stages != "relabel" or models[0] == models[1], "TrainConfig.stage1.energy_model",
                f"the same as stage2's ({models[1]!r}) with buffer_between_stages='relabel' (the stored step "
                "energy is the model's)", models[0])
+        b = [stage_reward(s).y_offset for s in (self.stage1, self.stage2)]
+        _check(self.buffer_between_stages != "relabel" or b[0] == b[1], "TrainConfig.stage1.y_offset_weight",
+               f"the same B as stage2's ({b[1]}) with buffer_between_stages='relabel' (a stored reward's lateral "
+               "term cannot be recomputed)", b[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",

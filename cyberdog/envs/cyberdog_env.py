@@ -52,6 +52,26 @@ def observation_typical_magnitude(cfg: C.EnvConfig | None = None) -> np.ndarray:
     return np.concatenate([np.full(n, m, dtype=np.float32) for _, n, _, _, m in observation_layout(cfg)])
 
 
+def actor_observation_scale(cfg: C.EnvConfig | None = None, groups=()) -> np.ndarray:
+    """The input scale of an actor that sees only the observation `groups` (names of the layout; () = all):
+    the typical magnitude for the entries it sees, +inf for the others, so that s / scale is exactly 0 there
+    (observations are clipped to finite bounds). Hiding inputs this way keeps every network the same shape
+    as the full-observation one (checkpoints, the fast TD3 losses and rollouts need no other change)."""
+    layout = observation_layout(cfg)
+    names = [name for name, *_ in layout]
+    unknown = [g for g in groups if g not in names]
+    if unknown:
+        raise ValueError(f"unknown observation group(s) {unknown} for the actor; this env's groups: {names}")
+    scale = observation_typical_magnitude(cfg)
+    if groups:
+        start = 0
+        for name, n, *_ in layout:
+            if name not in groups:
+                scale[start:start + n] = np.inf
+            start += n
+    return scale
+
+
 
 class CyberDogEnv(gym.Env):
     """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,

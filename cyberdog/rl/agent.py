@@ -39,13 +39,17 @@ def action_spec(action_size: int, device: torch.device | str = "cpu") -> Bounded
     return Bounded(-1.0, 1.0, shape=(action_size,), dtype=torch.float32, device=device)
 
 
-def make_loss(cfg: AgentConfig, observation_size: int, action_size: int, observation_scale=None):
+def make_loss(cfg: AgentConfig, observation_size: int, action_size: int, observation_scale=None,
+              actor_observation_scale=None):
     """Actor, critic, the loss module holding them and their targets, and the soft target updater.
-    `observation_scale`: typical magnitude of each observation entry (default: the env's, for 50 entries)."""
+    `observation_scale`: typical magnitude of each observation entry (default: the env's, for 50 entries);
+    `actor_observation_scale`: the actor's own (default: the same; +inf hides an entry from the actor, see
+    `cyberdog.envs.cyberdog_env.actor_observation_scale`)."""
     scale = observation_scale
     if scale is None and observation_size == len(observation_typical_magnitude()):
         scale = observation_typical_magnitude()
-    actor = make_actor(observation_size, action_size, cfg.hidden_sizes, scale)
+    actor_scale = scale if actor_observation_scale is None else actor_observation_scale
+    actor = make_actor(observation_size, action_size, cfg.hidden_sizes, actor_scale)
     critic = make_critic(observation_size, action_size, cfg.hidden_sizes, scale)
     if cfg.algorithm == "td3":
         loss = TD3Loss(actor, critic, action_spec=action_spec(action_size), num_qvalue_nets=2,
@@ -152,11 +156,11 @@ class Agent:
     """Loss, optimizers and the update schedule of one TD3 or DDPG agent."""
 
     def __init__(self, cfg: AgentConfig, observation_size: int, action_size: int, device: str = "cpu",
-                 observation_scale=None):
+                 observation_scale=None, actor_observation_scale=None):
         self.cfg = cfg
         self.device = torch.device(device)
         self.actor, self.loss, self.target_updater = make_loss(cfg, observation_size, action_size,
-                                                               observation_scale)
+                                                               observation_scale, actor_observation_scale)
         self.loss.to(self.device)
         self.critic_params, self.actor_params = critic_parameters(self.loss), actor_parameters(self.loss)
         self.actor_optimizer, self.critic_optimizer = make_optimizers(cfg, self.loss)

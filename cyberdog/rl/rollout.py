@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 from cyberdog import config as C
-from cyberdog.envs.cyberdog_env import CyberDogEnv, observation_typical_magnitude
+from cyberdog.envs.cyberdog_env import CyberDogEnv, actor_observation_scale
 from cyberdog.loop.result import WalkResult, walk_result
 from cyberdog.rl.checkpoint import CheckpointError, check_shapes
 from cyberdog.rl.networks import TanhActor
@@ -55,7 +55,7 @@ def load_actor(path: str | Path) -> LoadedActor:
     cfg = C.from_dict(C.ExperimentConfig, state["config"])
     # TensorDictModule wraps TanhActor: its parameters are stored under "module."
     weights = {k.removeprefix("module."): v for k, v in state["actor"].items()}
-    scale = observation_typical_magnitude(cfg.env)
+    scale = actor_observation_scale(cfg.env, cfg.agent.actor_observation)  # the saved buffer is loaded below
     module = TanhActor(len(scale), 12, cfg.agent.hidden_sizes, scale)
     check_shapes(weights, module.state_dict(), "the actor", path)
     module.load_state_dict(weights)

@@ -41,7 +41,7 @@ from tqdm import tqdm
 from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
-from cyberdog.envs.cyberdog_env import observation_typical_magnitude
+from cyberdog.envs.cyberdog_env import actor_observation_scale, observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, remove_stale_temporaries,
                                     rng_state, save_atomic, save_checkpoint, set_rng_state)
@@ -106,7 +106,8 @@ class Trainer:
         random.seed(tc.seed)
         obs_scale = observation_typical_magnitude(cfg.env)
         self.observation_size = len(obs_scale)
-        self.agent = Agent(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale)
+        self.agent = Agent(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale,
+                           actor_observation_scale(cfg.env, cfg.agent.actor_observation))
         self.rb = make_replay_buffer(tc.buffer_size, tc.batch_size)
         self.stages = list(stages)
         self.c = dict(stage=self.stages[0], env_steps=0, stage_env_steps=0, episodes=0, stage_episodes=0,
