@@ -124,5 +124,10 @@ def test_a_stage_can_drop_the_lateral_offset_term_and_relabel_needs_the_same_in_
         assert r_no_y == pytest.approx(r_paper + 20.0 * y_term, abs=1e-9)
     with pytest.raises(ValueError, match="y_offset_weight"):
         C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", y_offset_weight=0.0))
+    with pytest.raises(ValueError, match="speed_weight"):
+        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_weight=-40.0))
+    with pytest.raises(ValueError, match="speed_weight"):
+        C.StageConfig(speed_weight=1.0)
+    assert C.stage_reward(C.StageConfig(reward="stage2", speed_weight=-40.0)).speed == -40.0
     C.TrainConfig(buffer_between_stages="relabel", stage1=stage,
                   stage2=C.StageConfig(reward="stage2", y_offset_weight=0.0))  # the same B in both: accepted

@@ -209,6 +209,12 @@ class StageConfig:
     keep_moving_weight: Optional[float] = None  # D of Eq. (10) for this stage; None = the preset's (25): the
     #                                             survival bonus per episode, which must outweigh the energy
     #                                             cost of walking or falling at once becomes the best policy
+    speed_weight: Optional[float] = None  # A of Eq. (10) per (m/s)² for this stage; None = the preset's (−2).
+    #                                       With E = −0.2 per J, walking Δv slower saves ~0.9·Δv per step
+    #                                       (the trot's power rises ~185 W per m/s) and costs |A|·Δv², so the
+    #                                       reward's optimum is Δv = 0.9 / (2|A|): 0.23 m/s below the command
+    #                                       with A = −2, 0.011 m/s with A = −40. With "relabel" both stages
+    #                                       must have the same A (TrainConfig checks)
     y_offset_weight: Optional[float] = None  # B of Eq. (10) per m² for this stage; None = the preset's (−20).
     #                                          An actor that does not see the lateral offset cannot hold the
     #                                          line (the trot controller's heading correction does), so for it
@@ -239,6 +245,9 @@ class StageConfig:
                                                     and self.keep_moving_weight >= 0),
                "StageConfig.keep_moving_weight", "None (the preset's) or a finite number >= 0",
                self.keep_moving_weight)
+        _check(self.speed_weight is None or (math.isfinite(self.speed_weight) and self.speed_weight <= 0),
+               "StageConfig.speed_weight", "None (the preset's) or a finite number <= 0 (per (m/s)²)",
+               self.speed_weight)
         _check(self.y_offset_weight is None or (math.isfinite(self.y_offset_weight) and self.y_offset_weight <= 0),
                "StageConfig.y_offset_weight", "None (the preset's) or a finite number <= 0 (per m²)",
                self.y_offset_weight)
@@ -257,13 +266,15 @@ class StageConfig:
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
     """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight`,
-    `y_offset_weight` and `energy_model` if set."""
+    `speed_weight`, `y_offset_weight` and `energy_model` if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
     changes = {}
     if stage.energy_weight is not None:
         changes["energy"] = float(stage.energy_weight)
     if stage.keep_moving_weight is not None:
         changes["keep_moving"] = float(stage.keep_moving_weight)
+    if stage.speed_weight is not None:
+        changes["speed"] = float(stage.speed_weight)
     if stage.y_offset_weight is not None:
         changes["y_offset"] = float(stage.y_offset_weight)
     if stage.energy_model is not None:
@@ -317,10 +328,10 @@ class TrainConfig:
         _check(self.buffer_between_stages != "relabel" or models[0] == models[1], "TrainConfig.stage1.energy_model",
                f"the same as stage2's ({models[1]!r}) with buffer_between_stages='relabel' (the stored step "
                "energy is the model's)", models[0])
-        b = [stage_reward(s).y_offset for s in (self.stage1, self.stage2)]
-        _check(self.buffer_between_stages != "relabel" or b[0] == b[1], "TrainConfig.stage1.y_offset_weight",
-               f"the same B as stage2's ({b[1]}) with buffer_between_stages='relabel' (a stored reward's lateral "
-               "term cannot be recomputed)", b[0])
+        for term in ("speed", "y_offset"):  # a stored reward's speed and lateral terms cannot be recomputed
+            w = [stage_reward(s).weights[term] for s in (self.stage1, self.stage2)]
+            _check(self.buffer_between_stages != "relabel" or w[0] == w[1], f"TrainConfig.stage1.{term}_weight",
+                   f"the same weight as stage2's ({w[1]}) with buffer_between_stages='relabel'", w[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",
