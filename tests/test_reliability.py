@@ -235,6 +235,15 @@ def test_stage_final_file_of_the_quick_preset_is_small_and_serves_init_from_and_
         assert all(torch.equal(mine[k], saved[k]) for k in saved)
     finally:
         t2.close()
+    # another exploration noise for stage 2 (the preset's is OU): the networks load, the new noise starts afresh
+    gaussian = C.override(cfg, ["train.stage2.max_env_steps=200", "agent.exploration=gaussian"])
+    t3 = Trainer(gaussian, tmp_path / "s2g", stages=(2,), init_from=final, progress=False)
+    try:
+        mine = t3.agent.loss.state_dict()
+        assert all(torch.equal(mine[k], saved[k]) for k in saved)
+        assert "sigma" in t3.agent.policy[-1].state_dict() and "eps" not in t3.agent.policy[-1].state_dict()
+    finally:
+        t3.close()
     with pytest.raises(CheckpointError, match="an actor file.*not a checkpoint"):
         Trainer(cfg, tmp_path / "s3", stages=(2,), init_from=tmp_path / "q" / "stage1_final_actor.pt",
                 progress=False)

@@ -168,7 +168,11 @@ class Trainer:
             self.agent.load_state_dict(agent)
         else:  # stage<N>_final.pt: networks, targets, exploration and counters; new Adam moments
             self.agent.load_state_dict(agent, optimizers=False)
-            self.agent.policy.load_state_dict(agent["exploration"])
+            if set(agent["exploration"]) == set(self.agent.policy.state_dict()):
+                self.agent.policy.load_state_dict(agent["exploration"])
+            else:  # e.g. --set agent.exploration=gaussian after an OU stage: this run's noise starts afresh
+                print(f"{path}: its exploration noise is another kind than this run's "
+                      f"({self.cfg.agent.exploration}); the new noise starts afresh", file=sys.stderr)
             self.agent.updates, self.agent.actor_updates = int(agent["updates"]), int(agent["actor_updates"])
 
     def _final_state(self, stage: int, score: float) -> dict:
