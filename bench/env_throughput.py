@@ -4,7 +4,7 @@
 Both run in this process on the same machine: the env (residual mode, zero action, so the trot controller's
 PID runs at every physics step) and a bare loop that calls the same trot controller and `Robot.step` for the
 same number of physics steps, with nothing else. Several repetitions; the medians and their ratio are
-printed (issue target: env ≤ 1.25 × bare loop time).
+printed (the project aims at env ≤ 1.25 × bare loop time).
 
 Each repetition is timed twice: wall clock (time.perf_counter) and this process's CPU time
 (time.process_time). On a shared machine the wall clock counts the time other processes held the CPU, so

@@ -13,7 +13,7 @@ this process, on the same machine, with the same number of torch threads:
 
 Each learns for a warm-up of `--learning-starts` env steps (no updates; ours rounds it up to whole collection
 batches of `frames_per_batch`), and then `--steps` env steps with one gradient update per env step, which is
-what is timed: env steps/s and updates/s over that window, and the ratio ours / SB3 (issue target: >= 2).
+what is timed: env steps/s and updates/s over that window, and the ratio ours / SB3 (the project aims at >= 2).
 
 The bare update rate (updates/s with no env: batches sampled from a filled replay buffer, one update each) of
 both is printed too: ours through `Trainer._updates`, SB3 through `TD3.train`.
@@ -324,7 +324,7 @@ def main() -> None:
         if f"ratio {mode}" in res:
             print(f"ours ({mode}) / SB3 env steps/s: {statistics.median(res[f'ratio {mode}']):.2f} measured, "
                   f"{statistics.median(res[f'ratio {mode} 2-core est.']):.2f} on 2 idle cores (est. from CPU time); "
-                  f"medians of per-repetition ratios (issue target >= 2)")
+                  f"medians of per-repetition ratios (the project aims at >= 2)")
         for n in env_counts[1:]:
             if f"ratio {mode} x{n}" in res:
                 print(f"ours ({mode}, {n} env processes) / SB3 env steps/s: "

@@ -1,6 +1,6 @@
 """Deterministic rollouts of a trained actor in `CyberDog-v0`, recorded at the physics rate.
 
-This is how a policy is judged (issue "Training": does the stage-1 policy walk at 1.0 m/s, does the stage-2
+This is how a policy is judged (does the stage-1 policy walk at 1.0 m/s, does the stage-2
 policy use less energy per metre) and where the learned foot trajectory is extracted from (paper Section 3,
 after Figure 6): the actor acts without exploration noise, and every physics step's joint angles, velocities,
 applied torques and foot contacts are kept, so that gait cycles can be cut at touch-down and their energy
