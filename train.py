@@ -6,6 +6,7 @@ Examples:
   python train.py --config configs/paper.yaml --stage 1 --seed 3 --run-dir runs/paper_s3
   python train.py --config configs/quick.yaml --set agent.algorithm=ddpg --set train.batch_size=128
   python train.py --resume runs/quick                                         # continue a killed run
+  python train.py --resume runs/quick --set train.stage2.max_env_steps=160000 # train its last stage longer
   python train.py --config configs/quick.yaml --stage 2 --init-from runs/quick/stage1_final.pt --run-dir runs/q2
 
 Seeds at scale (one run per seed in RUN_DIR/seed<N>/, retried from its checkpoint if it fails, then aggregated):
@@ -57,7 +58,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--run-dir", type=Path, help="output folder (default runs/<config name>_seed<seed>)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.FIELD=VALUE",
                    help="override a config field, value parsed as YAML, e.g. --set train.stage1.max_env_steps=5000 "
-                        "(repeatable)")
+                        "(repeatable); with --resume only the current stage's budget may be raised "
+                        "(train.stage<N>.max_env_steps, max_episodes): the stage, finished or not, continues; the "
+                        "stage-final files of a finished one are kept as stage<N>_final*_<steps>steps.pt")
     p.add_argument("--resume", type=Path, metavar="RUN_DIR",
                    help="continue the run in RUN_DIR from its checkpoint.pt with its saved config.yaml; if RUN_DIR is "
                         "a sweep folder (sweep.json), continue every seed of the sweep that is not done")
@@ -214,12 +217,17 @@ def main(argv=None) -> int:
     if used:
         sys.exit(f"{', '.join(used)} only apply to sweeps (--seeds, --resume SWEEP_DIR, --aggregate)")
     if args.resume is not None:
-        if args.config or args.overrides or args.seed is not None or args.init_from:
-            sys.exit("--resume uses the run folder's config.yaml; do not combine it with --config, --set, "
-                     "--seed or --init-from")
+        if args.config or args.seed is not None or args.init_from:
+            sys.exit("--resume uses the run folder's config.yaml; do not combine it with --config, --seed or "
+                     "--init-from (--set may raise the current stage's budget)")
         if args.device:
             sys.exit("--device cannot be combined with --resume: the run continues with its saved train.device")
         cfg = _resumable_config(args.resume)
+        if args.overrides:  # the trainer refuses anything but a raised budget of the current stage
+            try:
+                cfg = C.override(cfg, args.overrides)
+            except (ValueError, TypeError) as e:
+                sys.exit(f"config error: {e}")
         trainer_kwargs = dict(run_dir=args.resume, resume=True)
         run_dir = args.resume
     else:

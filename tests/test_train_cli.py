@@ -186,3 +186,43 @@ def test_a_foot_mode_run_trains_and_its_actor_moves_the_feet(tmp_path):
     moved = rollout(actor, speed=1.0, duration=0.2)
     zero = rollout(type(actor)(lambda obs: torch.zeros(12), actor.config), speed=1.0, duration=0.2)
     assert abs(moved.energy - zero.energy) > 1e-6
+
+
+def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earlier_result(reference_run, tmp_path):
+    import shutil
+    run_dir = tmp_path / "longer"
+    shutil.copytree(reference_run[0], run_dir)
+    before = {p.name: p.read_bytes() for p in run_dir.glob("stage1_final*.pt")}
+    assert set(before) == {"stage1_final.pt", "stage1_final_actor.pt"}
+    config_before = (run_dir / "config.yaml").read_text()
+
+    def resume(*sets):
+        return subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(run_dir), "--no-progress",
+                               *[a for s in sets for a in ("--set", s)]],
+                              cwd=ROOT, capture_output=True, text=True, timeout=120)
+
+    for refused, words in ((["train.stage1.max_env_steps=200"], "not lower it"),
+                           (["train.stage1.max_env_steps=500", "agent.actor_lr=0.01"], "agent.actor_lr"),
+                           (["train.stage2.max_env_steps=500"], "current stage's budget")):
+        proc = resume(*refused)
+        assert proc.returncode != 0 and words in proc.stderr, proc.stderr[-1500:]
+        assert (run_dir / "config.yaml").read_text() == config_before  # nothing touched
+        assert {p.name: p.read_bytes() for p in run_dir.glob("stage1_final*.pt")} == before
+
+    done = resume("train.stage1.max_env_steps=500")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "raised budget" in done.stderr
+    state = load_checkpoint(run_dir / "checkpoint.pt")
+    assert state["counters"]["finished"] and state["counters"]["stage_env_steps"] >= 500
+    assert C.load(C.ExperimentConfig, run_dir / "config.yaml").train.stage1.max_env_steps == 500
+    for name, data in before.items():  # the 300-step result, kept under its step count
+        assert (run_dir / name.replace(".pt", "_300steps.pt")).read_bytes() == data
+    actor = torch.load(run_dir / "stage1_final_actor.pt", weights_only=True)
+    assert actor["env_steps"] >= 500 and state["agent"]["updates"] > reference_run[1]["updates"]
+    assert len(rows(run_dir)) == state["counters"]["episodes"]  # the log continues, no episode twice
+    with open(run_dir / "metrics.csv") as f:
+        log = list(csv.DictReader(f))
+    before_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) <= 300]
+    after_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) > 300]
+    # the resumed process's rate counts its own steps, not the 300 the earlier process made
+    assert after_rates and max(after_rates) < 3 * max(before_rates), (before_rates, after_rates)

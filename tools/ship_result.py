@@ -29,11 +29,17 @@ def stage_summary(rows: list[dict], stage: int) -> dict:
     rs = [r for r in rows if int(r["stage"]) == stage]
     if not rs:
         return {}
-    t = [float(r["wall_time_s"]) for r in rs]
+    t = [float(r["wall_time_s"]) for r in rs]  # the clock time at each episode's end
     first_rate = float(rs[0]["env_steps_per_s"]) or float("nan")
     first_episode_s = float(rs[0]["length"]) / first_rate  # the first episode ran before the first log line
+    gaps = sorted(b - a for a, b in zip(t, t[1:]))
+    typical = gaps[len(gaps) // 2] if gaps else 0.0
+    # a run resumed later (killed, or continued under a raised budget) has one long gap: counted as a typical
+    # episode, so that the wall time is the training's, not the calendar's
+    pauses = [g for g in gaps if g > max(20 * typical, 60.0)]
     return {"episodes": len(rs), "env_steps": int(sum(int(r["length"]) for r in rs)),
-            "wall_time_s": round(t[-1] - t[0] + first_episode_s, 1),
+            "wall_time_s": round(t[-1] - t[0] - sum(pauses) + typical * len(pauses) + first_episode_s, 1),
+            "pauses_excluded": len(pauses),
             "final_window_mean_score": float(rs[-1]["window_mean_score"]),
             "last_episode_score": float(rs[-1]["score"]),
             "last_episode_energy_J": float(rs[-1]["energy_J"])}

@@ -128,3 +128,32 @@ def set_rng_state(state: dict) -> None:
     np.random.set_state((kind, keys.numpy().astype(np.uint32), pos, has_gauss, cached))
     py_version, py_state, py_gauss = state["python"]
     random.setstate((py_version, tuple(py_state), py_gauss))
+
+
+BUDGET_FIELDS = ("max_env_steps", "max_episodes")  # what a resume may raise: "train this stage longer"
+
+
+def budget_extension(saved: dict, current: dict, stage: int, path: str | Path = "checkpoint") -> dict:
+    """The budget fields of `stage` that `current` (config dict) raises over `saved` (the checkpoint's), as
+    {dotted name: (saved, current)}. Any other difference, a budget of another stage, or a lowered budget
+    raises `CheckpointError`: a resumed run continues the same experiment, only for longer."""
+    def flat(d, prefix=""):
+        out = {}
+        for k, v in (d or {}).items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
+        return out
+    a, b = flat(saved), flat(current)
+    budget = {f"train.stage{stage}.{f}" for f in BUDGET_FIELDS}
+    differ = [k for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
+    other = [f"{k}: checkpoint {a.get(k)!r} vs config {b.get(k)!r}" for k in differ if k not in budget]
+    if other:
+        raise CheckpointError(f"{path} was written with another configuration than the run's config: "
+                              + "; ".join(other[:5]) + f" (a resume may only raise the current stage's budget, "
+                              f"train.stage{stage}.max_env_steps or train.stage{stage}.max_episodes)")
+    changes = {k: (a.get(k), b.get(k)) for k in differ}
+    for k, (old, new) in changes.items():
+        # max_env_steps 0 means "no step budget" (the episode budget decides): going to 0 is not lowering
+        lowered = new != 0 and (old == 0 or new < old) if k.endswith("max_env_steps") else new < old
+        if lowered:
+            raise CheckpointError(f"{k}: a resume may raise a stage's budget, not lower it ({old} -> {new})")
+    return changes

@@ -15,7 +15,9 @@ the right reward. A stage's first `critic_warmup_updates` updates train the crit
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
 the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
 at any moment. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
-buffer but it is not logged as an episode. Only `checkpoint.pt` carries the replay buffer and the Adam
+buffer but it is not logged as an episode. A resume may raise the current stage's budget (`max_env_steps`,
+`max_episodes`; nothing else may differ): the stage goes on, and a finished one keeps its earlier stage-final
+files as `stage<N>_final*_<steps>steps.pt`. Only `checkpoint.pt` carries the replay buffer and the Adam
 moments: the stage-final files (`stage<N>_final.pt`: networks, targets, counters; `stage<N>_final_actor.pt`:
 the actor) hold what `--init-from` and the evaluation need: about 1 MB with 128-unit layers.
 
@@ -43,8 +45,8 @@ from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
 from cyberdog.envs.cyberdog_env import actor_observation_scale, observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
-from cyberdog.rl.checkpoint import (CheckpointError, check_shapes, load_checkpoint, remove_stale_temporaries,
-                                    rng_state, save_atomic, save_checkpoint, set_rng_state)
+from cyberdog.rl.checkpoint import (CheckpointError, budget_extension, check_shapes, load_checkpoint,
+                                    remove_stale_temporaries, rng_state, save_atomic, save_checkpoint, set_rng_state)
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
@@ -60,13 +62,6 @@ def resolve_device(name: str) -> str:
     if name == "cuda" and not torch.cuda.is_available():
         raise ValueError("train.device='cuda' but no CUDA device is available; use 'cpu' or 'auto'")
     return name
-
-
-def _differences(a, b, prefix: str = "") -> list[str]:
-    """Dotted names of the fields where two config dicts differ."""
-    if isinstance(a, dict) and isinstance(b, dict):
-        return [d for k in sorted(set(a) | set(b)) for d in _differences(a.get(k), b.get(k), f"{prefix}{k}.")]
-    return [] if a == b else [f"{prefix[:-1]}: checkpoint {a!r} vs config {b!r}"]
 
 
 class Trainer:
@@ -192,10 +187,7 @@ class Trainer:
             saved = C.to_dict(C.from_dict(C.ExperimentConfig, state.get("config")))
         except (ValueError, TypeError) as e:
             raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
-        differ = _differences(saved, C.to_dict(self.cfg))
-        if differ:
-            raise CheckpointError(f"{path} was written with another configuration than {self.run_dir}/config.yaml: "
-                                  + "; ".join(differ[:5]))
+        extension = budget_extension(saved, C.to_dict(self.cfg), int(state["counters"]["stage"]), path)
         self._load_agent(state, path)
         try:
             load_buffer_state(self.rb, state["replay"])
@@ -206,6 +198,24 @@ class Trainer:
         self.scores.extend(state["scores"])
         self.best_score = float(state["best_score"])
         set_rng_state(state["rng"])
+        if extension:
+            self._extend(extension)
+
+    def _extend(self, changes: dict) -> None:
+        """Continue the current stage under a raised budget. If the run had finished, its stage-final files
+        are kept under the stage's step count (`stage2_final_actor_40000steps.pt`): a longer run never
+        overwrites the result of the shorter one. config.yaml records the new budget."""
+        stage, c = self.c["stage"], self.c
+        if c["finished"]:
+            for name in (f"stage{stage}_final.pt", f"stage{stage}_final_actor.pt"):
+                src = self.run_dir / name
+                if src.is_file():
+                    src.rename(src.with_name(f"{src.stem}_{c['stage_env_steps']}steps.pt"))
+            c["finished"] = False
+        C.save(self.cfg, self.run_dir / "config.yaml")
+        print(f"stage {stage} continues past {c['stage_env_steps']} env steps / {c['stage_episodes']} episodes "
+              f"under a raised budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
+              file=sys.stderr, flush=True)
 
     def _save_actor(self, name: str, score: float) -> None:
         save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
@@ -290,7 +300,7 @@ class Trainer:
                    disable=not self.progress, dynamic_ncols=True)
         episodes = [self._new_episode() for _ in range(tc.num_envs)]  # the running episode of each env
         t_env = t_upd = 0.0
-        n_upd = 0
+        n_upd, n_env = 0, 0  # in this process: a resumed stage's rates count only what it did itself
         try:
             t0 = time.perf_counter()
             for batch in collector:
@@ -303,12 +313,13 @@ class Trainer:
                 self.agent.policy[-1].step(n)  # anneal the exploration noise
                 c["env_steps"] += n
                 c["stage_env_steps"] += n
+                n_env += n
                 if is_async:
                     collector.prefetch()  # the next batch is collected while we update on this one
                 t1 = time.perf_counter()
                 n_upd += self._updates(n)
                 t_upd += time.perf_counter() - t1
-                rates = {"env_steps_per_s": c["stage_env_steps"] / max(t_env, 1e-9),
+                rates = {"env_steps_per_s": n_env / max(t_env, 1e-9),
                          "updates_per_s": n_upd / t_upd if t_upd > 0 else math.nan}
                 self._bookkeep(batch, episodes, stage, sc, rates)
                 bar.update(min(n, max(0, budget - bar.n)))
