@@ -22,6 +22,7 @@ OUTPUT_OPTIONS = ("--run-dir", "--out")  # what a run writes to: moved into tmp_
 EXPENSIVE = {
     "train.py --config configs/quick_speeds.yaml --seed 0": "one seed of the shipped preset: 26-39 min",
     "train.py --config configs/quick_speeds.yaml --seeds 0-4": "the shipped five-seed sweep: about 80 min",
+    "train.py --resume runs/speeds/seed0 --set": "needs the sweep above; 120,000 stage-2 env steps: 29-37 min",
     "evaluate.py extract --sweep runs/speeds": "needs the sweep above; rolls out 5 policies at 3 speeds",
     "evaluate.py compare --learned runs/extract/learned": "needs the extraction above; walks for minutes",
     "evaluate.py prototype --prototype-distance 100": "18 walks of 100 m: about 5x command 1's prototype part",
@@ -141,7 +142,9 @@ def test_expensive_next_commands_parse(command):
     args = python_args(command)
     if args[0] == "train.py":
         parsed = load_script("train").parse_args(args[1:])
-        C.load(C.ExperimentConfig, ROOT / parsed.config)
+        # a resume's --set applies to the run's saved config: in the README, a seed of the quick_speeds sweep
+        C.override(C.load(C.ExperimentConfig, ROOT / (parsed.config or "configs/quick_speeds.yaml")),
+                   parsed.overrides)
     else:
         from cyberdog.evaluation.cli import parse_args
 
