@@ -35,7 +35,7 @@ def main() -> None:
             t0, c0 = time.perf_counter(), time.process_time()
             result = walk(cfg, args.duration, robot=robot)
             elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
-            steps = round(result.duration / cfg.sim.physics_dt)
+            steps = round(result.duration / cfg.sim.controller_dt)
             rates.append((steps / elapsed, steps / cpu))
             print(f"rep {i}: {rates[-1][0]:8.0f} physics steps/s (CPU time: {rates[-1][1]:8.0f})  ({steps} steps "
                   f"in {elapsed:.2f} s, E = {result.energy:.3f} J, v = {result.mean_speed:.4f} m/s)", flush=True)

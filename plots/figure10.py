@@ -44,7 +44,7 @@ def chosen_walks(walks: list[dict], lift_height: float | None = None) -> dict[fl
 @styled
 def draw(walks: list[dict], power: dict[int, np.ndarray], lift_height: float | None = None,
          cycles: int = 2) -> Figure:
-    """`power`: W per walk_id at each walk's physics_dt_s; `lift_height` m of the baselines shown."""
+    """`power`: W per walk_id at each walk's controller_dt_s; `lift_height` m of the baselines shown."""
     chosen = chosen_walks(walks, lift_height)
     if not chosen:
         raise ValueError("Figure 10 needs at least one walk")
@@ -54,7 +54,7 @@ def draw(walks: list[dict], power: dict[int, np.ndarray], lift_height: float | N
         period = None
         for z, (key, w) in enumerate(by_key.items()):
             p = np.asarray(power[w["walk_id"]], dtype=float)
-            dt, period = w["physics_dt_s"], w["period_s"]
+            dt, period = w["controller_dt_s"], w["period_s"]
             seg = p[last_cycles_window(len(p), dt, period, cycles)]
             name = w["label"] if key != "learned" else NAMES["learned"]
             if w["fell"] or len(seg) == 0:

@@ -58,7 +58,7 @@ def export_inputs(results_dir: str | Path, dst: str | Path, cycles: int = 2) -> 
     power = {}
     for w in shown:  # only the window Figure 10 draws: its slice of the cut trace is the whole trace
         p = results.power[w["walk_id"]]
-        power[f"walk_{w['walk_id']}"] = p[last_cycles_window(len(p), w["physics_dt_s"], w["period_s"], cycles)]
+        power[f"walk_{w['walk_id']}"] = p[last_cycles_window(len(p), w["controller_dt_s"], w["period_s"], cycles)]
     outputs = {"comparison.json": rows, "walks.json": shown}
     if results.prototype_rows is not None:
         outputs["prototype.json"] = results.prototype_rows

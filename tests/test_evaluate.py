@@ -98,13 +98,13 @@ def test_power_traces_integrate_to_the_tables_energy(reduced_run):
     with np.load(reduced_run / "power_traces.npz") as z:
         for w in walks:
             p = z[f"walk_{w['walk_id']}"]
-            assert len(p) == round(w["duration_s"] / w["physics_dt_s"])
-            assert p.sum() * w["physics_dt_s"] == pytest.approx(w["energy_J"], rel=1e-9)
+            assert len(p) == round(w["duration_s"] / w["controller_dt_s"])
+            assert p.sum() * w["controller_dt_s"] == pytest.approx(w["energy_J"], rel=1e-9)
             e_table = [float(r["energy_kJ"]) for r in table
                        if r["row"] == w["trajectory"] and abs(float(r["lift_height_m"]) - w["lift_height_m"]) < 1e-9]
             assert e_table and all(e == pytest.approx(w["energy_J"] / 1e3, rel=1e-9) for e in e_table)
-            window = p[cmp.two_cycle_window(len(p), w["physics_dt_s"], w["period_s"])]
-            assert len(window) == round(2 * w["period_s"] / w["physics_dt_s"])  # Figure 10's two cycles
+            window = p[cmp.two_cycle_window(len(p), w["controller_dt_s"], w["period_s"])]
+            assert len(window) == round(2 * w["period_s"] / w["controller_dt_s"])  # Figure 10's two cycles
 
 
 def test_figures_redraw_from_a_saved_folder(reduced_run, tmp_path):

@@ -44,7 +44,7 @@ class ReferenceTrot:
         self.cfg, self.robot, self.gait = cfg, cfg.robot, cfg.gait
         self.trajectory = trajectory if trajectory is not None else make_trajectory(cfg.gait)
         self.scheduler = GaitScheduler.from_config(cfg.gait)
-        self.pid = JointPID.from_config(cfg.pid, cfg.sim.physics_dt, cfg.actuator.torque_limit)
+        self.pid = JointPID.from_config(cfg.pid, cfg.sim.controller_dt, cfg.actuator.torque_limit)
         self.stand_height = self.robot.body_height - self.robot.foot_radius
         self.body_weight = self.robot.total_mass * cfg.sim.gravity
         self.speed, self.speed_correction = cfg.gait.speed, 0.0
@@ -56,7 +56,7 @@ class ReferenceTrot:
         if body.forward_speed is not None and c.speed_gain > 0:
             limit = c.max_speed_correction * v
             self.speed_correction = float(np.clip(
-                self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.physics_dt,
+                self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.controller_dt,
                 -limit, limit))
         S = (v + self.speed_correction) * self.gait.stance_time
         skew = np.clip(c.heading_gain * (body.yaw + c.lateral_gain * body.lateral_offset), -0.5, 0.5)
@@ -314,9 +314,11 @@ def test_read_state_equals_the_eager_reference():
             robot.step(rng.uniform(-5, 5, 12))  # tumble in the air: every field non-trivial
             if k % 20 == 19:
                 state, want = robot.read_state(), reference_state(robot)
-                assert state.time == pytest.approx((k + 1) * cfg.sim.physics_dt)
+                assert state.time == pytest.approx((k + 1) * cfg.sim.controller_dt)
                 for name, value in want.items():
                     np.testing.assert_allclose(getattr(state, name), value, rtol=1e-12, atol=1e-12, err_msg=name)
+                assert state.lateral_velocity_body == pytest.approx(want["base_linear_velocity_body"][1],
+                                                                    rel=1e-12, abs=1e-12)
         state = robot.read_state()
         with pytest.raises(dataclasses.FrozenInstanceError):
             state.q = np.zeros(12)
@@ -339,3 +341,20 @@ def test_joint_stop_is_off_inside_the_range_and_a_spring_damper_outside():
     k, c = cfg.joint_stop_stiffness, cfg.joint_stop_damping
     assert tau[1] == pytest.approx(-k * 0.1 - c * dq[1]) and tau[5] == pytest.approx(k * 0.2 - c * dq[5])
     assert np.count_nonzero(tau) == 2
+
+
+@pytest.mark.parametrize("friction", [False, True])
+@pytest.mark.parametrize("curve", [False, True])
+def test_actuator_law_in_floats_equals_the_array_law(friction, curve):
+    """The robot's per-period actuator path (floats) is the array law joint by joint: clip, torque–speed
+    envelope while motoring, friction; over commands beyond the limit and speeds beyond both corner speeds."""
+    from cyberdog.core.actuator import ActuatorModel
+    model = ActuatorModel(C.ActuatorConfig(friction=friction, torque_speed_curve=curve))
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        command, omega = rng.uniform(-40, 40, 12), rng.uniform(-25, 25, 12)
+        omega[:3] = [0.0, 1e-4, -11.4145]  # at rest, inside the dry-friction smoothing, at the corner speed
+        motor, joint = model.joint_torque(command, omega)
+        motor_list, joint_list = model.joint_torque_list(command.tolist(), omega.tolist())
+        np.testing.assert_allclose(motor_list, motor, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(joint_list, joint, rtol=1e-12, atol=1e-12)

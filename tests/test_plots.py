@@ -45,7 +45,7 @@ def fake_results(folder: Path, seed: int = 0) -> Path:
             i = len(walks)
             power[i] = rng.uniform(0, 300, 2300)  # W; 2.3 s: the last whole cycles end at 2.0 s
             walks.append({"walk_id": i, "trajectory": key, "label": key, "seed": s, "lift_height_m": lift,
-                          "speed_command_mps": v, "period_s": 0.4, "physics_dt_s": 0.001, "fell": False,
+                          "speed_command_mps": v, "period_s": 0.4, "controller_dt_s": 0.001, "fell": False,
                           "speed_ok": True, "valid": True, "duration_s": 2.3,
                           "energy_kJ": float(power[i].sum()) * 1e-6, "set": "paper" if lift > 0.1 or s else
                           "same_lift"})

@@ -25,7 +25,7 @@ def ideal_walk():
 
 def test_hardware_config_defaults_are_the_ideal_robot_and_bad_values_raise():
     assert C.HardwareConfig().ideal and not C.HARDWARE_LIKE.ideal
-    assert C.HARDWARE_LIKE.latency_s == 0.003 and C.HARDWARE_LIKE.mass_uncertainty == 0.05
+    assert C.HARDWARE_LIKE.latency_s == 0.0025 and C.HARDWARE_LIKE.mass_uncertainty == 0.05
     for field, value, match in [("latency_s", -0.001, "latency_s"), ("latency_s", 0.5, "latency_s"),
                                 ("mass_uncertainty", 0.6, "mass_uncertainty"), ("seed", -1, "seed"),
                                 ("joint_angle_noise_std", float("nan"), "joint_angle_noise_std"),
@@ -33,7 +33,7 @@ def test_hardware_config_defaults_are_the_ideal_robot_and_bad_values_raise():
         with pytest.raises(ValueError, match=match):
             C.HardwareConfig(**{field: value})
     with pytest.raises(ValueError, match="whole multiple"):
-        walk(CFG, duration=0.01, hardware=C.HardwareConfig(latency_s=0.0025))
+        walk(CFG, duration=0.01, hardware=C.HardwareConfig(latency_s=0.003))
     with pytest.raises(ValueError, match="distance"):
         walk(CFG, duration=1.0, distance=-1.0)
     with pytest.raises(TypeError, match="HardwareConfig"):
@@ -55,15 +55,16 @@ def test_latency_delays_the_torque_by_whole_physics_steps():
     assert TorqueDelay(0).push(np.ones(12)) is not None
     with pytest.raises(ValueError, match="latency"):
         TorqueDelay(-1)
-    # in a walk: 3 ms at 1 kHz = the first 3 applied torques are zero, the 4th is the first command
-    r = walk(CFG, duration=0.006, hardware=C.HardwareConfig(latency_s=0.003), record=True)
-    ideal = walk(CFG, duration=0.001, record=True)
+    # in a walk: 7.5 ms at 400 Hz = the first 3 applied torques are zero, the 4th is the first command
+    dt = CFG.sim.controller_dt
+    r = walk(CFG, duration=6 * dt, hardware=C.HardwareConfig(latency_s=3 * dt), record=True)
+    ideal = walk(CFG, duration=dt, record=True)
     assert np.all(r.traces["tau"][:3] == 0)
     np.testing.assert_allclose(r.traces["tau"][3], ideal.traces["tau"][0], rtol=1e-9, atol=1e-9)
 
 
 def test_latency_costs_energy(ideal_walk):
-    late = walk(CFG, duration=SHORT_S, hardware=C.HardwareConfig(latency_s=0.003))
+    late = walk(CFG, duration=SHORT_S, hardware=C.HardwareConfig(latency_s=0.005))
     assert late.energy > 1.02 * ideal_walk.energy  # delayed PD fights itself (measured: about +8 %)
 
 
@@ -75,7 +76,7 @@ def test_friction_is_simulated_and_counted_once(ideal_walk):
     # Ideal: friction added analytically to the electrical power; hardware-like: in the physics. Both count it
     # once, so they agree closely; counting it twice (analytic on top of simulated) would add about 3 %.
     assert r.electrical_energy == pytest.approx(ideal_walk.electrical_energy, rel=0.015)
-    twice = en.electrical_energy(r.traces["tau"], r.traces["dq"], CFG.sim.physics_dt, CFG.actuator, CFG.energy)
+    twice = en.electrical_energy(r.traces["tau"], r.traces["dq"], CFG.sim.controller_dt, CFG.actuator, CFG.energy)
     assert twice > r.electrical_energy * 1.015
     with pytest.raises(ValueError, match="ActuatorConfig"):  # a robot built without friction is refused
         with Robot(CFG.robot, CFG.actuator, CFG.sim) as robot:

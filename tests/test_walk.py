@@ -28,7 +28,7 @@ def test_trot_walks_10_s_at_1_mps_on_its_feet(trajectory):
 
 def test_recorded_power_integrates_to_the_reported_energy():
     r = walk(walk_cfg("cycloid", 1.0), duration=1.0, record=True)
-    dt = C.SimConfig().physics_dt
+    dt = C.SimConfig().controller_dt
     assert r.traces["power"].sum() * dt == pytest.approx(r.energy, rel=1e-9)
     assert r.energy_per_joint.sum() == pytest.approx(r.energy, rel=1e-12)
     assert r.electrical_energy > 0

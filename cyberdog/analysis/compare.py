@@ -164,7 +164,7 @@ def run_walk_job(job: WalkJob) -> dict:
         "cost_of_transport": r.cost_of_transport, "electrical_energy_J": r.electrical_energy,
         "positive_work_J": r.positive_work, "foot_slip_mm_per_cycle": 1e3 * r.foot_slip_per_cycle,
         "peak_torque_Nm": r.peak_torque, "lateral_drift_m": r.lateral_drift,
-        "physics_dt_s": job.cfg.sim.physics_dt, "wall_s": time.perf_counter() - t0,
+        "controller_dt_s": job.cfg.sim.controller_dt, "wall_s": time.perf_counter() - t0,
         "power_W": total_power,
     }
 

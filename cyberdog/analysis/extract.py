@@ -264,7 +264,7 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
         "step_length_basis": "commanded: speed_command * stance_time", "step_length_m": step_length,
         "measured_x_range_m": float(np.ptp(xs)), "measured_lift_height_m": lift_height,
         "measured_swing_share": swing_share, "contact_level_shift_m": z_ground,
-        "loop_closure_gap_m": [float(gap[0]), float(gap[1])], "physics_dt_s": float(dt),
+        "loop_closure_gap_m": [float(gap[0]), float(gap[1])], "controller_dt_s": float(dt),
     }
     prov.update(provenance or {})
     traj = SampledTrajectory.from_points(grid, xs, zs, step_length, lift_height, prov)
@@ -287,7 +287,7 @@ def extract_from_rollout(rollout, env_config, leg: str = "LF", speed_tolerance: 
                          ) -> Extraction:
     """`extract_trajectory` on a policy rollout (a WalkResult of `cyberdog.rl.rollout.rollout`) in `env_config`."""
     prov = rollout_provenance(rollout, env_config, provenance)
-    return extract_trajectory(rollout.traces, rollout.physics_dt, rollout.speed_command, env_config.walk.robot,
+    return extract_trajectory(rollout.traces, rollout.trace_dt, rollout.speed_command, env_config.walk.robot,
                               env_config.walk.gait, leg, speed_tolerance, settle_time, n_points, provenance=prov)
 
 
@@ -360,7 +360,7 @@ def extract_commanded(traces: dict, dt: float, speed_command: float, gait: GaitC
             "cycles_in_band": len(usable), "cycles_used": [c.index for c in used],
             "cycle_energy_J": energy, "cycle_speed_mps": float(np.mean([c.speed for c in used])),
             "speed_tolerance": float(speed_tolerance), "settle_time_s": float(settle_time),
-            "offset_rms_mm": np.round(1e3 * table.rms(), 3).tolist(), "physics_dt_s": float(dt),
+            "offset_rms_mm": np.round(1e3 * table.rms(), 3).tolist(), "controller_dt_s": float(dt),
             **(provenance or {})}
     path = CommandedPath(float(speed_command), gait, table, prov)
     return CommandedExtraction(path, cycles, [c.index for c in used], energy)
@@ -373,7 +373,7 @@ def commanded_from_rollout(rollout, env_config, cycle: str = "mean", speed_toler
         raise ExtractionError(f"a policy of action_mode {env_config.action_mode!r} commands no foot path; "
                               "use the measured-path extraction")
     prov = rollout_provenance(rollout, env_config, provenance)
-    return extract_commanded(rollout.traces, rollout.physics_dt, rollout.speed_command, env_config.walk.gait,
+    return extract_commanded(rollout.traces, rollout.trace_dt, rollout.speed_command, env_config.walk.gait,
                              cycle, speed_tolerance, settle_time, prov)
 
 

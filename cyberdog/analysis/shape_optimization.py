@@ -247,8 +247,8 @@ def walk_cost(job: ShapeWalk) -> dict:
     traj = shape_trajectory(job.params, gait)
     t0 = time.process_time()
     r = walk(cfg, job.duration, trajectory=traj, record=True)
-    first = int(round(job.measure_from / cfg.sim.physics_dt))
-    energy_J = float(r.traces["power"][first:].sum() * cfg.sim.physics_dt)  # Eq. (7) over the window
+    first = int(round(job.measure_from / cfg.sim.controller_dt))
+    energy_J = float(r.traces["power"][first:].sum() * cfg.sim.controller_dt)  # Eq. (7) over the window
     miss_pct = 100.0 * abs(r.mean_speed - job.speed) / job.speed
     if r.fell or not math.isfinite(energy_J):
         cost, status = FALL_PENALTY_J * (2.0 - r.duration / job.duration), f"fell at {r.duration:.2f} s"

@@ -29,7 +29,7 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
         raise ValueError(f"fps must be in [1, 100], got {fps!r}")
     from PIL import Image, ImageDraw
 
-    dt = cfg.sim.physics_dt
+    dt = cfg.sim.controller_dt
     every = max(1, int(round(1.0 / (fps * dt))))
     ctrl = TrotController(cfg, trajectory)
     frames = []

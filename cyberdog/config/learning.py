@@ -101,8 +101,8 @@ class EnvConfig:
 
     @property
     def decimation(self) -> int:
-        """Physics steps per agent step."""
-        return int(round(self.control_dt / self.walk.sim.physics_dt))
+        """Controller periods (`walk.sim.controller_dt`) per agent step."""
+        return int(round(self.control_dt / self.walk.sim.controller_dt))
 
     @property
     def max_episode_steps(self) -> int:
@@ -112,14 +112,15 @@ class EnvConfig:
         _positive(self, "control_dt", "episode_time", "action_scale", "foot_offset_scale", "joint_range_deg",
                   "fall_height", "fall_tilt_deg")
         _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping")
-        dt = self.walk.sim.physics_dt
+        dt = self.walk.sim.controller_dt
         _check(abs(self.control_dt / dt - round(self.control_dt / dt)) < 1e-6 and self.control_dt >= dt,
-               "EnvConfig.control_dt", f"a whole multiple of physics_dt ({dt} s)", self.control_dt)
+               "EnvConfig.control_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", self.control_dt)
         hw_dt = self.hardware.estimator_dt
         _check(abs(hw_dt / dt - round(hw_dt / dt)) < 1e-6 and hw_dt >= dt,
-               "EnvConfig.hardware.estimator_dt", f"a whole multiple of physics_dt ({dt} s)", hw_dt)
+               "EnvConfig.hardware.estimator_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", hw_dt)
         _check(abs(self.hardware.latency_s / dt - round(self.hardware.latency_s / dt)) < 1e-6,
-               "EnvConfig.hardware.latency_s", f"a whole multiple of physics_dt ({dt} s)", self.hardware.latency_s)
+               "EnvConfig.hardware.latency_s", f"a whole multiple of walk.sim.controller_dt ({dt} s)",
+               self.hardware.latency_s)
         _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
                self.action_mode)
         r = self.target_speed_range

@@ -61,16 +61,37 @@ class ActuatorConfig:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """PyBullet world."""
+    """PyBullet world and the two rates of the simulated robot.
 
-    physics_dt: float = 0.001  # s, 1 kHz physics (NOTES: 240 Hz makes the abad joints chatter)
+    The joint controller (trot scheduler, IK, PID, feedforward, the hardware model, the actuator envelope and
+    the energy bookkeeping) runs once every `controller_dt`; its torque is held constant over that period, as
+    the robot's motor drivers hold the last command between two controller cycles. PyBullet's contact solver
+    steps `physics_dt` = `controller_dt / n` underneath, the n substeps in C++ (`numSubSteps`). The real
+    CyberDog runs its locomotion controller at 500 Hz; 400 Hz is the nearest rate that divides the agent's
+    Ts = 25 ms. The defaults were chosen by the convergence study of docs/design.md (control 1000 / 400 /
+    200 Hz x physics 0.5 / 1 / 1.25 ms against a 2 kHz reference).
+    """
+
+    physics_dt: float = 0.00125  # s, contact solver step (800 Hz; NOTES: 240 Hz makes the abad joints chatter)
+    controller_dt: float = 0.0025  # s, joint controller period (400 Hz), a whole multiple of physics_dt
     gravity: float = 9.81  # m/s²
     ground_friction: float = 0.8  # lateral friction coefficient of foot on ground [G]
     solver_iterations: int = 50  # PyBullet numSolverIterations
 
+    @property
+    def physics_substeps(self) -> int:
+        """Solver steps per controller period."""
+        return int(round(self.controller_dt / self.physics_dt))
+
     def __post_init__(self) -> None:
-        _positive(self, "physics_dt", "gravity", "ground_friction")
+        _positive(self, "physics_dt", "controller_dt", "gravity", "ground_friction")
         _check(self.physics_dt <= 0.005, "SimConfig.physics_dt", "<= 0.005 s", self.physics_dt)
+        _check(self.controller_dt <= 0.01, "SimConfig.controller_dt", "<= 0.01 s (100 Hz)", self.controller_dt)
+        ratio = self.controller_dt / self.physics_dt
+        _check(ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6, "SimConfig.controller_dt",
+               f"a whole multiple of physics_dt ({self.physics_dt} s); a config written when the controller ran "
+               f"at every physics step has no controller_dt: give it controller_dt = physics_dt",
+               self.controller_dt)
         _check(self.solver_iterations >= 1, "SimConfig.solver_iterations", ">= 1", self.solver_iterations)
 
 
@@ -227,7 +248,10 @@ class HardwareConfig:
       its 3 % sim-to-real gap). The torque–speed curve and copper loss are on in both cases (ActuatorConfig,
       cyberdog.core.energy).
     - `latency_s`: a joint torque reaches the joint this long after the controller computed it (a FIFO of
-      whole physics steps). 3 ms [G]: one 500 Hz cycle of Xiaomi's locomotion controller plus the motor bus.
+      whole controller periods). 2.5 ms [G]: one 400 Hz controller cycle. With the zero-order hold of the
+      drivers (half a period on average) the torque lags the state it was computed from by 3.75 ms on
+      average: about one 500 Hz cycle of Xiaomi's locomotion controller plus the motor bus, as the 3 ms FIFO
+      of the earlier 1 kHz loop did (3.5 ms with its hold).
     - `joint_angle_noise_std`, `joint_velocity_noise_std`: white encoder noise on the q, q̇ the controller
       reads (the energy is computed from the true values) [G, as EnvConfig's defaults].
     - `estimated_velocity`: the controller's speed feedback is the Kalman estimate (simulated IMU + leg
@@ -240,12 +264,12 @@ class HardwareConfig:
     """
 
     friction: bool = False  # joint viscous + dry friction in the physics (values from ActuatorConfig [X])
-    latency_s: float = 0.0  # s, actuation delay, a whole multiple of SimConfig.physics_dt [G: 0.003]
+    latency_s: float = 0.0  # s, actuation delay, a whole multiple of SimConfig.controller_dt [G: 0.0025]
     joint_angle_noise_std: float = 0.0  # rad, encoder noise on the controller's q [G: 0.002]
     joint_velocity_noise_std: float = 0.0  # rad/s, noise on the controller's q̇ [G: 0.05]
     estimated_velocity: bool = False  # speed feedback from the IMU + leg-odometry Kalman filter, not the truth
     imu_noise: bool = False  # simulated IMU noise and bias (`estimator`'s values), with estimated_velocity
-    estimator_dt: float = 0.005  # s, Kalman filter period, a whole multiple of physics_dt (as EnvConfig's)
+    estimator_dt: float = 0.005  # s, Kalman filter period, a whole multiple of SimConfig.controller_dt
     mass_uncertainty: float = 0.0  # ± fraction; mass scale drawn from U(1 − u, 1 + u) [G: 0.05]
     seed: int = 0  # seeds the mass draw and the sensor noise (scripted walks; the env seeds per episode)
     # the IMU's noise and bias values and the Kalman filter's tuning; `imu_noise` switches the noise on
@@ -277,6 +301,6 @@ class HardwareConfig:
 
 
 # the prototype experiment's robot: every effect of HardwareConfig on ([G] values, see its docstring)
-HARDWARE_LIKE = HardwareConfig(friction=True, latency_s=0.003, joint_angle_noise_std=0.002,
+HARDWARE_LIKE = HardwareConfig(friction=True, latency_s=0.0025, joint_angle_noise_std=0.002,
                                joint_velocity_noise_std=0.05, estimated_velocity=True, imu_noise=True,
                                mass_uncertainty=0.05)

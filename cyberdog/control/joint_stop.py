@@ -16,11 +16,12 @@ class JointStop:
         lo, hi = kin.joint_limits(robot)
         self.q_low, self.q_high = np.maximum(q_stand - range_rad, lo), np.minimum(q_stand + range_rad, hi)
         self.stiffness, self.damping = float(stiffness), float(damping)
+        self._bounds = list(zip(self.q_low.tolist(), self.q_high.tolist()))
 
     def torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray | None:
-        """N·m (12,); None while every joint is inside its range (almost always: two comparisons instead of
-        the torque)."""
-        if (self.q_low <= q).all() and (q <= self.q_high).all():
+        """N·m (12,); None while every joint is inside its range (almost always: a check in floats, a third
+        of the time of the array comparisons, instead of the torque)."""
+        if all(lo <= x <= hi for x, (lo, hi) in zip(q.tolist(), self._bounds)):
             return None
         over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
         if not over.any():

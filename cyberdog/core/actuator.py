@@ -14,6 +14,8 @@ Sources (parameter file `shared/robot/cyberdog1_parameters.yaml`):
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from cyberdog.config import ActuatorConfig
@@ -68,3 +70,24 @@ class ActuatorModel:
         """(motor torque, motor torque + friction torque): what the motors produce and what acts on the joints."""
         motor = self.motor_torque(torque_command, joint_velocity)
         return motor, motor + self.friction_torque(joint_velocity)
+
+    def joint_torque_list(self, torque_command: list, joint_velocity: list) -> tuple[list, list]:
+        """`joint_torque` for lists of Python floats (the robot's per-period path): the same law joint by
+        joint. For 12 joints this takes under 2 µs against about 16 µs for the numpy calls, whose per-call
+        overhead exceeds the arithmetic at this size (tests/test_fast_paths.py checks that the two agree)."""
+        limit, n1, n2 = self.torque_limit, self._n1, self._n2
+        curve, inv_span = self.config.torque_speed_curve, 1.0 / (n2 - n1)
+        motor = []
+        for tau, omega in zip(torque_command, joint_velocity):
+            if tau > limit:
+                tau = limit
+            elif tau < -limit:
+                tau = -limit
+            if curve and (omega > n1 or omega < -n1) and tau * omega > 0.0:  # motoring beyond full torque
+                envelope = limit * min(max((n2 - abs(omega)) * inv_span, 0.0), 1.0)
+                tau = envelope if tau > envelope else -envelope if tau < -envelope else tau
+            motor.append(tau)
+        if not self.config.friction:
+            return motor, motor
+        b, f, tanh, smooth = self.config.viscous_damping, self.config.dry_friction, math.tanh, DRY_FRICTION_SMOOTHING
+        return motor, [tau - (b * omega + f * tanh(omega / smooth)) for tau, omega in zip(motor, joint_velocity)]

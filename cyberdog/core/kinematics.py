@@ -203,11 +203,16 @@ def leg_joint_velocity(abad: float, hip: float, knee: float, side: float, vx: fl
     (x, z_leg) velocity, so the 3×3 system splits into the abad speed and a 2×2 sagittal system.
     Raises numpy.linalg.LinAlgError where J is singular (straight knee, or foot level with the abad axis).
     """
-    c1, s1 = math.cos(abad), math.sin(abad)
-    s_hk, c_hk = math.sin(hip + knee), math.cos(hip + knee)
-    z_leg = -l2 * math.cos(hip) - l3 * c_hk
-    dx_dhip, dx_dknee = -l2 * math.cos(hip) - l3 * c_hk, -l3 * c_hk
-    dz_dhip, dz_dknee = l2 * math.sin(hip) + l3 * s_hk, l3 * s_hk
+    return _leg_velocity(math.cos(abad), math.sin(abad), math.cos(hip), math.sin(hip), math.cos(hip + knee),
+                         math.sin(hip + knee), side, vx, vy, vz, l1, l2, l3)
+
+
+def _leg_velocity(c1: float, s1: float, c_h: float, s_h: float, c_hk: float, s_hk: float, side: float,
+                  vx: float, vy: float, vz: float, l1: float, l2: float, l3: float) -> tuple[float, float, float]:
+    """`leg_joint_velocity` from the cosines and sines of abad, hip and hip + knee."""
+    z_leg = -l2 * c_h - l3 * c_hk
+    dx_dhip, dx_dknee = -l2 * c_h - l3 * c_hk, -l3 * c_hk
+    dz_dhip, dz_dknee = l2 * s_h + l3 * s_hk, l3 * s_hk
     det = dx_dhip * dz_dknee - dx_dknee * dz_dhip  # = −l2·l3·sin(knee)
     if z_leg == 0.0 or det == 0.0:
         raise np.linalg.LinAlgError("Singular matrix")
@@ -218,6 +223,28 @@ def leg_joint_velocity(abad: float, hip: float, knee: float, side: float, vx: fl
     dhip = (vx * dz_dknee - dx_dknee * vz_leg) / det
     dknee = (dx_dhip * vz_leg - dz_dhip * vx) / det
     return dabad, dhip, dknee
+
+
+def leg_inverse_kinematics_velocity(x: float, y: float, z: float, vx: float, vy: float, vz: float, side: float,
+                                    l1: float, l2: float, l3: float) -> tuple[float, ...]:
+    """`leg_inverse_kinematics` and `leg_joint_velocity` in one call, sharing the trigonometry (the trot
+    controller's per-period path): (abad, hip, knee, dabad, dhip, dknee), rad and rad/s, for the foot at
+    (x, y, z), m, moving at (vx, vy, vz), m/s, leg frame. Raises ValueError for an unreachable target."""
+    r2 = y * y + z * z
+    l1_sq = l1 * l1
+    if r2 < l1_sq - 1e-12:
+        raise ValueError(f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
+    z_leg = -math.sqrt(max(r2 - l1_sq, 0.0))
+    abad = math.atan2(z, y) - math.atan2(z_leg, side * l1)
+    abad = (abad + math.pi) % (2.0 * math.pi) - math.pi
+    cos_knee = (x * x + z_leg * z_leg - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+    if cos_knee > 1.0 + 1e-12 or cos_knee < -1.0 - 1e-12:
+        raise ValueError(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
+    knee = -math.acos(min(max(cos_knee, -1.0), 1.0))
+    hip = math.atan2(-x, -z_leg) - math.atan2(l3 * math.sin(knee), l2 + l3 * math.cos(knee))
+    return (abad, hip, knee) + _leg_velocity(math.cos(abad), math.sin(abad), math.cos(hip), math.sin(hip),
+                                             math.cos(hip + knee), math.sin(hip + knee), side, vx, vy, vz,
+                                             l1, l2, l3)
 
 
 def leg_jacobian_z_row(abad: float, hip: float, knee: float, side: float, l1: float, l2: float, l3: float

@@ -77,10 +77,12 @@ class CyberDogEnv(gym.Env):
     """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
     body height, survival and energy.
 
-    **Timing.** Physics at 1 kHz (`walk.sim.physics_dt`); the agent acts every Ts = 25 ms (`control_dt`,
-    25 physics steps); an episode lasts Tf = 10 s = 400 steps (registered `max_episode_steps=400`, Table 4).
-    The torque, or the trot controller's PID that produces it, is applied at every physics step, by the
-    project's one simulation loop (`cyberdog.loop.walker.Walker`, the same as the scripted walks').
+    **Timing.** The joint controller runs at 400 Hz (`walk.sim.controller_dt`, its torque held over the
+    period as the motor drivers hold it; physics at 800 Hz underneath, `walk.sim.physics_dt`); the agent
+    acts every Ts = 25 ms (`control_dt`, 10 controller periods); an episode lasts Tf = 10 s = 400 steps
+    (registered `max_episode_steps=400`, Table 4). The torque, or the trot controller's PID that produces
+    it, is applied at every controller period, by the project's one simulation loop
+    (`cyberdog.loop.walker.Walker`, the same as the scripted walks').
 
     **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
     `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
@@ -92,7 +94,7 @@ class CyberDogEnv(gym.Env):
       same leg order, reached by a linear ramp over the agent step from the last action's; the controller's
       IK + PID track the shifted
       path. The policy reshapes the foot trajectory itself (a trajectory-modulating policy, cf. Iscen et al.
-      2018, "Policies Modulating Trajectory Generators"), which a torque residual barely can: the 1 kHz PID
+      2018, "Policies Modulating Trajectory Generators"), which a torque residual barely can: the joint PID
       (60 N·m/rad) pulls the joints back to the path, and the residual policies stayed within 0.5 % of the
       controller's energy (README).
     Table 4's joint control range (±45°) is enforced around the standing pose by a virtual end stop: beyond
@@ -111,7 +113,7 @@ class CyberDogEnv(gym.Env):
     | 8:11 | body angular velocity, body frame | rad/s |
     | 11:23 | joint angles | rad |
     | 23:35 | joint velocities | rad/s |
-    | 35:47 | joint torques (last physics step) | N·m |
+    | 35:47 | joint torques (last controller period) | N·m |
     | 47 | commanded speed (ramped up over the first `speed_ramp_time`, then the set speed) | m/s |
     | 48:50 | sin, cos of the gait phase | – |
     | 50:62 | the previous action, only with `observe_last_action` | action units |
@@ -177,7 +179,7 @@ class CyberDogEnv(gym.Env):
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
         self.render_mode = render_mode
         walk = cfg.walk
-        self.dt = walk.sim.physics_dt
+        self.dt = walk.sim.controller_dt
         self.decimation = cfg.decimation
         # the one simulation loop: robot + trot controller + hardware model; the controller is off in the
         # paper's torque mode; virtual end stops at ±joint_range around the standing pose (Table 4)
@@ -249,13 +251,13 @@ class CyberDogEnv(gym.Env):
             start = self._foot_offset
             self._foot_offset = np.clip(a, -1.0, 1.0).reshape(4, 3) * self._foot_offset_scale
             rate = (self._foot_offset - start) / self.cfg.control_dt  # m/s
+            # the offset of controller period k (from 0) is start + rate·(k + 1)·dt: this action's at the last
+            controller.set_foot_offsets(start + rate * dt, rate, at_time=w.time)
             tau_action = None
         else:
             tau_action = np.clip(a, -1.0, 1.0) * self.cfg.action_scale
         k0 = w.steps
-        for k in range(self.decimation):  # 1 kHz: keep this loop lean (see bench/env_throughput.py)
-            if foot:
-                controller.set_foot_offsets(start + rate * ((k + 1) * dt), rate)
+        for _ in range(self.decimation):  # the controller rate: keep this loop lean (bench/env_throughput.py)
             applied = w.step(tau_action)
         s = self._state = w.state
         self.last_torque = applied

@@ -12,7 +12,7 @@ from cyberdog.core import energy as en
 
 @dataclass
 class WalkResult:
-    """Metrics of one walk (SI units) and, if recorded, its traces at the physics rate."""
+    """Metrics of one walk (SI units) and, if recorded, its traces at the controller rate."""
 
     speed_command: float  # m/s
     duration: float  # s walked (shorter than asked if the robot fell)
@@ -55,8 +55,8 @@ class WalkResult:
         return self.energy / self.distance if self.distance > 0 else float("nan")
 
     @property
-    def physics_dt(self) -> float:
-        """s between trace samples."""
+    def trace_dt(self) -> float:
+        """s between trace samples: the controller period (`SimConfig.controller_dt`)."""
         t = self.traces.get("t")
         return float(t[1] - t[0]) if t is not None and len(t) > 1 else float("nan")
 
@@ -85,7 +85,8 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
     cfg, dt = walker.cfg, walker.dt
     tr = walker.traces()
     tau, dq = tr["tau"], tr["dq"]
-    vx, rpy, z = walker.vx.view(), walker.rpy.view(), walker.z.view()
+    body = walker.body.view()
+    vx, rpy, z = body[:, 0], body[:, 1:4], body[:, 4]
     n = len(tau)
     start, end = walker.start, walker.state.base_position
     e_joint = en.joint_energy(tau, dq, dt)

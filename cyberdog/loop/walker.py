@@ -1,18 +1,26 @@
-"""`Walker`: robot + trot controller + hardware model, advanced one physics step at a time.
+"""`Walker`: robot + trot controller + hardware model, advanced one controller period at a time.
 
 Every loop of the project that steps the simulated CyberDog runs through `Walker.step`: the learning
-environment (`CyberDog-v0`, 25 steps per agent step), the scripted walks of the trajectory comparison and the
-prototype (`cyberdog.analysis.walk`), the videos and the policy rollouts. One step:
+environment (`CyberDog-v0`, 10 steps per agent step at the default 400 Hz), the scripted walks of the
+trajectory comparison and the prototype (`cyberdog.analysis.walk`), the videos and the policy rollouts. One
+step is one period of the joint controller (`SimConfig.controller_dt`, 2.5 ms by default):
 
 1. the robot's software reads its sensors (the hardware model: encoder noise, Kalman speed; the truth on the
    ideal robot) and the trot controller computes its torque (trajectory + IK + PID), unless the controller is
    off (the paper's torque-mode env); an extra torque (a policy's) is added;
 2. the virtual end stop of Table 4's joint range adds its torque, if one is given;
-3. the command waits out the actuation latency, goes through the actuator model and one `stepSimulation`;
-4. the applied torque and the joint speed at the start of the step are kept, for Eq. (7)
-   (E = Σ∫|τ·ω|dt, rectangle rule at the physics dt) and the electrical energy, and with `record` the state,
-   contacts and the controller's foot targets; with `gait_metrics` the non-foot ground contacts and the feet's
-   positions for foot slip are sampled.
+3. the command waits out the actuation latency, goes through the actuator model and is held constant over
+   the period's `SimConfig.physics_substeps` solver steps (one `stepSimulation`, substeps in C++);
+4. the applied torque τ and the joint's mean speed over the period, ω̄ = Δq / dt, are kept for Eq. (7) and
+   the electrical energy, and with `record` the state, contacts and the controller's foot targets; with
+   `gait_metrics` the non-foot ground contacts and the feet's positions for foot slip are sampled.
+
+Energy. Over a period of constant torque the joint's work is exactly ∫τ·ω dt = τ·Δq, so Eq. (7) is taken as
+Σ_k |τ_k·Δq_k| = Σ_k |τ_k·ω̄_k|·dt per joint. That equals ∫|τ·ω|dt unless ω changes sign inside a period;
+then it counts the net rather than the total rotation, an error of second order in dt (ω is near zero
+where it turns; measured against the physics-rate integral in tests/test_control_rate.py). The electrical
+energy takes the same ω̄: its shaft power τ·ω̄ is exact and its copper loss, (τ/(N·K_T))²·R, is constant
+over the period.
 
 Time is `steps · dt` since the reset.
 """
@@ -31,15 +39,15 @@ from cyberdog.sim.robot import Robot
 # "fallen" means the same everywhere (EnvConfig's defaults; the env passes its own)
 FALL_HEIGHT = EnvConfig.fall_height  # m, body centre below this
 FALL_TILT = np.deg2rad(EnvConfig.fall_tilt_deg)  # rad, |roll| or |pitch| above this
-CONTACT_CHECK_EVERY = 10  # physics steps between checks of which links touch the ground
-SLIP_SAMPLE_EVERY = 5  # physics steps between samples of the feet's positions and contacts (foot slip)
+CONTACT_CHECK_PERIOD = 0.010  # s between checks of which links touch the ground
+SLIP_SAMPLE_PERIOD = 0.005  # s between samples of the feet's positions and contacts (foot slip)
 
 _NO_TARGET = [(float("nan"),) * 3] * 4
 _NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
 
 
 class _Rows:
-    """A growing (n, *shape) float array, appended one row per physics step."""
+    """A growing (n, *shape) float array, appended one row per controller period."""
 
     def __init__(self, shape: tuple, dtype=float, capacity: int = 1024) -> None:
         self.data = np.zeros((capacity, *shape), dtype=dtype)
@@ -56,7 +64,7 @@ class _Rows:
 
 
 class Walker:
-    """The CyberDog under the trot controller at the physics rate (see the module docstring).
+    """The CyberDog under the trot controller at the controller rate (see the module docstring).
 
     cfg: the walk (robot, actuator, sim, gait, PID, controller, energy).
     controller: the trot controller (default: `TrotController(cfg)`); `drive=False` leaves it off (torque mode).
@@ -85,7 +93,9 @@ class Walker:
         self.joint_stop, self.drive = joint_stop, drive
         self.record, self.gait_metrics = record, gait_metrics
         self.fall_height, self.fall_tilt = fall_height, fall_tilt
-        self.dt = cfg.sim.physics_dt
+        self.dt = cfg.sim.controller_dt  # s, one `step`
+        self.contact_check_every = max(1, int(round(CONTACT_CHECK_PERIOD / self.dt)))  # steps
+        self.slip_sample_every = max(1, int(round(SLIP_SAMPLE_PERIOD / self.dt)))  # steps
         self.delay = TorqueDelay(whole_steps(hardware.latency_s, self.dt, "HardwareConfig.latency_s")
                                  if hardware is not None else 0)
         self.sensing: HardwareSensing | None = None
@@ -117,11 +127,11 @@ class Walker:
             self.sensing.reset(self.state)
         self.start = self.state.base_position.copy()
         self.steps = 0
-        self.tau, self.dq = _Rows((12,)), _Rows((12,))  # applied motor torque, joint speed at the step start
-        self.vx, self.rpy, self.z = _Rows(()), _Rows((3,)), _Rows(())  # body state at the step start
+        self.tau, self.dq = _Rows((12,)), _Rows((12,))  # applied motor torque, mean joint speed Δq / dt
+        self.body = _Rows((5,))  # body state at the step start: forward speed (m/s), roll, pitch, yaw (rad), z (m)
         self._traces: dict[str, _Rows] = {}
         self.non_foot_contacts: set[str] = set()
-        self.slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_EVERY steps
+        self.slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_PERIOD
         self.slip_contacts: list[np.ndarray] = []
         return self.state
 
@@ -154,7 +164,7 @@ class Walker:
         return self.sensing.velocity_estimate_world
 
     def step(self, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
-        """One physics step; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
+        """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
         torque applied (12,)."""
         s, k = self.state, self.steps
         if self.drive:
@@ -173,20 +183,19 @@ class Walker:
                 tau = tau + stop
         applied = self.robot.step(self.delay.push(tau))
         self.tau.append(applied)
-        self.dq.append(s.dq)
-        self.vx.append(s.base_linear_velocity_world[0])
-        self.rpy.append(s.base_rpy)
-        self.z.append(s.base_position[2])
+        rpy = s.base_rpy
+        self.body.append((s.base_linear_velocity_world[0], rpy[0], rpy[1], rpy[2], s.base_position[2]))
         if self.record:
             self._record(s)
         if self.gait_metrics:
-            if k % CONTACT_CHECK_EVERY == 0:
+            if k % self.contact_check_every == 0:
                 self.non_foot_contacts |= self.robot.ground_contact_links() - self.foot_link_names
-            if k % SLIP_SAMPLE_EVERY == 0:
+            if k % self.slip_sample_every == 0:
                 self.slip_xy.append(self.robot.foot_positions_world()[:, :2])
                 self.slip_contacts.append(self.robot.foot_contacts())
         self.steps = k + 1
-        self.state = self.robot.read_state()
+        self.state = state = self.robot.read_state()
+        self.dq.append((state.q - s.q) * (1.0 / self.dt))  # ω̄ over the period: τ·ω̄·dt = τ·Δq exactly
         return applied
 
     def _record(self, s) -> None:
@@ -208,11 +217,11 @@ class Walker:
         return bool(s.base_position[2] < self.fall_height or np.max(np.abs(s.base_rpy[:2])) > self.fall_tilt)
 
     def energy(self, since: int = 0) -> float:
-        """J, Eq. (7) Σ∫|τ·ω|dt over the physics steps from `since` to now."""
+        """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the controller periods from `since` to now."""
         return float(en.joint_energy(self.tau.view(since), self.dq.view(since), self.dt).sum())
 
     def electrical_energy(self, since: int = 0) -> float:
-        """J drawn from the battery over the physics steps from `since` (copper loss, friction, driver)."""
+        """J drawn from the battery over the controller periods from `since` (copper loss, friction, driver)."""
         c = self.cfg
         return float(np.sum(en.electrical_power(self.tau.view(since), self.dq.view(since), c.actuator,
                                                 c.energy))) * self.dt

@@ -1,11 +1,11 @@
 """The one hardware model: what separates the simulated robot from the real one (beyond the paper).
 
-`HardwareConfig` (cyberdog.config) names the effects; this module applies them at the physics rate, for the
+`HardwareConfig` (cyberdog.config) names the effects; this module applies them at the controller rate, for the
 learning environment and for the scripted walks alike (`cyberdog.loop.walker.Walker` owns one):
 
 - `hardware_walk_config`: the walk config the simulator must be built with (joint friction on or off);
 - `draw_mass_scale`: the mass-scale draw in [1 − u, 1 + u];
-- `TorqueDelay`: actuation latency as a FIFO of whole physics steps;
+- `TorqueDelay`: actuation latency as a FIFO of whole controller periods;
 - `HardwareSensing`: what the robot's software reads: noisy joint encoders and the Kalman body velocity
   from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`).
 
@@ -53,10 +53,10 @@ def hardware_walk_config(cfg: WalkConfig, hw: HardwareConfig | None) -> WalkConf
 
 
 def whole_steps(duration_s: float, dt: float, name: str) -> int:
-    """`duration_s` in physics steps of `dt`; ValueError unless it is a whole multiple (0 allowed)."""
+    """`duration_s` in controller periods of `dt`; ValueError unless it is a whole multiple (0 allowed)."""
     n = int(round(duration_s / dt))
     if abs(duration_s / dt - n) > 1e-6:
-        raise ValueError(f"{name} must be a whole multiple of physics_dt ({dt} s), got {duration_s!r}")
+        raise ValueError(f"{name} must be a whole multiple of SimConfig.controller_dt ({dt} s), got {duration_s!r}")
     return n
 
 
@@ -83,7 +83,7 @@ class TorqueDelay:
 
 
 class HardwareSensing:
-    """What the robot's software measures, once per physics step.
+    """What the robot's software measures, once per controller period.
 
     `read(k, state, contacts)` → (q, dq, v_world): encoder readings with white noise, and the Kalman estimate
     of the body velocity (world frame) when `estimated_velocity`, else None (the simulator's truth is used).
@@ -93,10 +93,11 @@ class HardwareSensing:
 
     def __init__(self, hw: HardwareConfig, cfg: WalkConfig, rng: np.random.Generator) -> None:
         self.hw, self.cfg, self.rng = hw, cfg, rng
-        dt = cfg.sim.physics_dt
+        dt = cfg.sim.controller_dt
         self.estimator_every = whole_steps(hw.estimator_dt, dt, "HardwareConfig.estimator_dt")
         if self.estimator_every < 1:
-            raise ValueError(f"HardwareConfig.estimator_dt must be >= physics_dt ({dt} s), got {hw.estimator_dt!r}")
+            raise ValueError(f"HardwareConfig.estimator_dt must be >= SimConfig.controller_dt ({dt} s), "
+                             f"got {hw.estimator_dt!r}")
         est = hw.estimator_config
         self.imu = SimulatedIMU(est, rng, hw.estimator_dt, cfg.sim.gravity)
         self.estimator = VelocityEstimator(est, hw.estimator_dt, cfg.sim.gravity)
@@ -135,7 +136,7 @@ class HardwareSensing:
         self.estimator.update(imu, leg_v, R)
 
     def read(self, k: int, state, contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Sensor readings at physics step k (state read after step k − 1); `contacts()` → (4,) bool."""
+        """Sensor readings at controller period k (state read after period k − 1); `contacts()` → (4,) bool."""
         if self.hw.estimated_velocity and k > 0 and k % self.estimator_every == 0:
             self._update_estimator(state, contacts)
         q, dq = self.joints(state.q, state.dq)
