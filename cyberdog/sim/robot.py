@@ -320,12 +320,17 @@ class Robot:
         return np.array([link in touching for link in self.foot_link_ids])
 
     def foot_contact_forces(self) -> np.ndarray:
-        """(4,) normal force of the ground on each foot, N (0 in the air)."""
+        """(4,) normal force of the ground on each foot over the last physics substep, N (0 in the air).
+
+        PyBullet reports a contact's normal force as its impulse divided by fixedTimeStep, which is the whole
+        controller period when the period has substeps; the impulse is of the last substep, so the force is
+        that quotient times the number of substeps (measured: a standing robot's feet then carry m·g)."""
         force = dict.fromkeys(self.foot_link_ids, 0.0)
         for pt in self._ground_contacts():
             if pt[3] in force:
                 force[pt[3]] += pt[9]
-        return np.array([force[link] for link in self.foot_link_ids])
+        n = self.sim_config.physics_substeps
+        return np.array([force[link] * n for link in self.foot_link_ids])
 
     def ground_contact_links(self) -> set[str]:
         """Names of the robot's links touching the ground (in a healthy gait: feet only)."""
