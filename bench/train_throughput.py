@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Training throughput: env steps/s of this pipeline at one update per env step, against Stable-Baselines3 TD3.
 
-Both learn on the same CyberDog-v0 (residual mode, configs/quick_residual.yaml's environment, the stage-1 reward) in
-this process, on the same machine, with the same number of torch threads:
+Both learn on the same CyberDog-v0 (the environment of `--config`, by default configs/quick_speeds.yaml's, the
+shipped policies': foot mode, 62 observations; the stage-1 reward) in this process, on the same machine, with the
+same number of torch threads:
 
   ours   the real training path, `cyberdog.rl.Trainer` (TorchRL TD3Loss, replay buffer, collector, logging),
          with updates_per_frame=1, batch 256, actor and critics of 3x128, no initial random actions,
@@ -52,7 +53,8 @@ from tensordict import TensorDict
 import cyberdog.rl.trainer as trainer_module
 from cyberdog import config as C
 from cyberdog.rl.env import make_gym_env
-from cyberdog.rl.trainer import ACTION_SIZE, OBSERVATION_SIZE, Trainer
+from cyberdog.envs.cyberdog_env import observation_size
+from cyberdog.rl.trainer import ACTION_SIZE, Trainer
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -63,11 +65,10 @@ def frames_per_batch(args, num_envs: int = 1) -> int:
 
 
 def experiment(args, collection: str, steps: int, num_envs: int = 1) -> C.ExperimentConfig:
-    """configs/quick_residual.yaml's environment; default agent with 3x128 nets; one update per env step, batch
-    256 and a stage-1 budget of `steps`, collected by `num_envs` envs. (Only the env section of the preset is
-    read: the timing does not depend on the other agent settings, and the script keeps working when the preset
-    gains fields.)"""
-    with open(ROOT / "configs/quick_residual.yaml") as f:
+    """`--config`'s environment; default agent with 3x128 nets; one update per env step, batch 256 and a stage-1
+    budget of `steps`, collected by `num_envs` envs. (Only the env section of the preset is read: the timing does
+    not depend on the other agent settings, and the script keeps working when the preset gains fields.)"""
+    with open(ROOT / args.config) as f:
         env = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
     sets = ["train.batch_size=256", "train.updates_per_frame=1", "train.init_random_frames=0",
             f"train.learning_starts={args.learning_starts}", f"train.stage1.max_env_steps={steps}",
@@ -139,11 +140,11 @@ def run_ours(args, collection: str, num_envs: int = 1) -> dict:
     return out
 
 
-def random_transitions(n: int, seed: int = 0) -> TensorDict:
+def random_transitions(n: int, obs_size: int, seed: int = 0) -> TensorDict:
     g = torch.Generator().manual_seed(seed)
-    return TensorDict({"observation": torch.randn(n, OBSERVATION_SIZE, generator=g),
+    return TensorDict({"observation": torch.randn(n, obs_size, generator=g),
                        "action": torch.rand(n, ACTION_SIZE, generator=g) * 2 - 1,
-                       "next": {"observation": torch.randn(n, OBSERVATION_SIZE, generator=g),
+                       "next": {"observation": torch.randn(n, obs_size, generator=g),
                                 "reward": torch.randn(n, 1, generator=g),
                                 "done": torch.zeros(n, 1, dtype=torch.bool),
                                 "terminated": torch.zeros(n, 1, dtype=torch.bool)}}, [n])
@@ -208,8 +209,9 @@ def bare_sb3(args, cfg: C.ExperimentConfig) -> float:
     model.set_logger(configure(None, []))
     rng = np.random.default_rng(0)
     for _ in range(5000):
-        model.replay_buffer.add(rng.standard_normal((1, OBSERVATION_SIZE), dtype=np.float32),
-                                rng.standard_normal((1, OBSERVATION_SIZE), dtype=np.float32),
+        obs_size = observation_size(cfg.env)
+        model.replay_buffer.add(rng.standard_normal((1, obs_size), dtype=np.float32),
+                                rng.standard_normal((1, obs_size), dtype=np.float32),
                                 rng.uniform(-1, 1, (1, ACTION_SIZE)).astype(np.float32),
                                 rng.standard_normal(1).astype(np.float32), np.zeros(1), [{}])
     model.train(gradient_steps=10, batch_size=256)  # warm-up
@@ -243,6 +245,8 @@ def main() -> None:
     p.add_argument("--frames-per-batch", type=int, default=200,
                    help="our env steps per collection batch (default 200, as configs/quick_residual.yaml)")
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--config", default="configs/quick_speeds.yaml",
+                   help="the preset whose env both learn on (default configs/quick_speeds.yaml, the shipped policies')")
     p.add_argument("--threads", type=int, default=1, help="torch threads of the updates, ours and SB3 (default 1)")
     p.add_argument("--collection", nargs="+", default=["sync", "async"], choices=C.COLLECTION_MODES
                    if hasattr(C, "COLLECTION_MODES") else ["sync"], help="our collection modes to run")
@@ -277,7 +281,7 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         bare_trainer = Trainer(cfg, tmp, stages=(1,), progress=False)
-        bare_trainer.rb.extend(random_transitions(5000))
+        bare_trainer.rb.extend(random_transitions(5000, observation_size(cfg.env)))
         bare_trainer._updates(10)  # warm-up
         for r in range(args.repeats):
             print(f"rep {r}:", flush=True)

@@ -54,6 +54,10 @@ class JointPID:
         self.dt = float(dt)  # s
         self.torque_limit = float(torque_limit)  # N·m
         self.integral = np.zeros(N_JOINTS)  # N·m, the integral term ki·∫e dt
+        # the per-period path's view of the gains: (kp, kd) per joint as floats, and whether there is no
+        # integral action (ki = 0: the integral then stays zero, `torque_unchecked` never moves it)
+        self._pd_gains = list(zip(self.kp.tolist(), self.kd.tolist()))
+        self._pd_only = not np.count_nonzero(self.ki)
 
     @classmethod
     def from_config(cls, pid_cfg: PIDConfig, dt: float, torque_limit: float) -> "JointPID":
@@ -75,12 +79,12 @@ class JointPID:
     def torque_from_lists(self, q_target: list, q: list, dq_target: list, dq: list) -> list:
         """`torque` for four lists of 12 Python floats, as a list (the trot controller's 1 kHz path).
 
-        Without integral action (ki = 0 and no stored integral, the default gains) and with finite errors
+        Without integral action (ki = 0, the default gains) and with finite errors
         this is τ = clamp(kp·e + kd·ė) joint by joint in floats, which beats numpy's call overhead at this
         size; otherwise it is the array update `torque_unchecked`."""
-        if not np.count_nonzero(self.ki) and not np.count_nonzero(self.integral):  # (faster than .any())
-            tau = [kp * (qt - qm) + kd * (dqt - dqm) for kp, kd, qt, qm, dqt, dqm
-                   in zip(self.kp.tolist(), self.kd.tolist(), q_target, q, dq_target, dq)]
+        if self._pd_only:
+            tau = [kp * (qt - qm) + kd * (dqt - dqm) for (kp, kd), qt, qm, dqt, dqm
+                   in zip(self._pd_gains, q_target, q, dq_target, dq)]
             if math.isfinite(sum(tau)):  # else a non-finite error: the array update (it stores the NaN)
                 limit = self.torque_limit
                 if -limit <= min(tau) and max(tau) <= limit:
