@@ -9,7 +9,7 @@ from typing import Optional, Tuple
 from cyberdog.config._validate import _check, _non_negative, _positive
 
 from cyberdog.config.legacy import fold_legacy_env_fields
-from cyberdog.config.robot import GaitConfig, HardwareConfig, WalkConfig
+from cyberdog.config.robot import GaitConfig, HardwareConfig, RandomizationConfig, WalkConfig
 
 
 REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E
@@ -96,6 +96,9 @@ class EnvConfig:
     # feedback, mass draw): the same model as the prototype walks'. In the env the mass is drawn per episode
     # from the env's seed and the sensors are seeded per episode too (`HardwareConfig.seed` is not used)
     hardware: HardwareConfig = field(default_factory=HardwareConfig)
+    # domain randomisation: the ranges each episode's robot is drawn from (friction, latency, mass, motor
+    # strength, PID gains, ground friction); the default is the nominal robot, every episode the same
+    randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
     fall_height: float = 0.15  # m, body centre below this = fallen
     fall_tilt_deg: float = 45.0  # |roll| or |pitch| above this = fallen
 
@@ -123,6 +126,9 @@ class EnvConfig:
                self.hardware.latency_s)
         _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
                self.action_mode)
+        _check(self.randomization.joint_friction_scale == (1.0, 1.0) or self.hardware.friction,
+               "EnvConfig.randomization.joint_friction_scale", "(1, 1) unless hardware.friction is on (the scale "
+               "acts on the simulated joint friction)", self.randomization.joint_friction_scale)
         r = self.target_speed_range
         _check(len(r) == 0 or (len(r) == 2 and 0 <= r[0] <= r[1]), "EnvConfig.target_speed_range",
                "() or (low, high) with 0 <= low <= high (m/s)", r)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Tuple
 
@@ -304,3 +305,52 @@ class HardwareConfig:
 HARDWARE_LIKE = HardwareConfig(friction=True, latency_s=0.0025, joint_angle_noise_std=0.002,
                                joint_velocity_noise_std=0.05, estimated_velocity=True, imu_noise=True,
                                mass_uncertainty=0.05)
+
+
+@dataclass(frozen=True)
+class RandomizationConfig:
+    """Domain randomisation: the ranges the robot of each training episode is drawn from (beyond the paper).
+
+    A policy trained on one simulated robot learns that robot's quirks (its saving may rest on how the ideal
+    PID tracks a path, docs/results.md); drawn anew each episode from ranges around the real robot's
+    uncertain values, it must find what works on all of them, as legged_gym and walk-these-ways train
+    (their ranges, for robots of similar size, in brackets). Each range is (low, high), drawn uniformly
+    and independently per episode from the env's generator (`cyberdog.sim.hardware.draw_robot`); a range
+    with low = high is that value, and the defaults are the nominal robot (no randomisation). It acts on top
+    of `HardwareConfig`, which says which effects exist: the friction scale needs `friction` on, and the
+    drawn mass and latency replace `mass_uncertainty`'s draw and `latency_s`.
+
+    [G] marks a guess for this robot; every range of `configs/quick_speeds_battery.yaml` contains the
+    prototype's hardware-like robot (`HARDWARE_LIKE`: scales 1, one period of latency, mass within ±5 %).
+    """
+
+    joint_friction_scale: Tuple[float, float] = (1.0, 1.0)  # × ActuatorConfig viscous and dry friction [G]
+    latency_periods: Tuple[int, int] = (0, 0)  # controller periods of actuation delay, each whole value equally likely
+    mass_scale: Tuple[float, float] = (1.0, 1.0)  # × every link's mass and inertia [legged_gym: −1..+3 kg on 13 kg]
+    motor_strength: Tuple[float, float] = (1.0, 1.0)  # × the torque the motors produce [walk-these-ways: 0.9..1.1]
+    kp_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's proportional gains [walk-these-ways: 0.8..1.3]
+    kd_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's derivative gains [walk-these-ways: 0.5..1.5]
+    ground_friction_scale: Tuple[float, float] = (1.0, 1.0)  # × SimConfig.ground_friction [legged_gym: 0.5..1.25 absolute]
+
+    RANGES = ("joint_friction_scale", "latency_periods", "mass_scale", "motor_strength", "kp_factor", "kd_factor",
+              "ground_friction_scale")
+
+    @property
+    def enabled(self) -> bool:
+        """True unless every range is the nominal robot's value."""
+        return self != RandomizationConfig()
+
+    def __post_init__(self) -> None:
+        for name in self.RANGES:
+            lo, hi = getattr(self, name)
+            _check(lo <= hi and all(math.isfinite(v) for v in (lo, hi)), f"RandomizationConfig.{name}",
+                   "(low, high) with low <= high, finite", (lo, hi))
+        lo, hi = self.latency_periods
+        _check(isinstance(lo, int) and isinstance(hi, int) and 0 <= lo and hi <= 40,
+               "RandomizationConfig.latency_periods", "(low, high) whole controller periods in [0, 40]", (lo, hi))
+        _check(self.joint_friction_scale[0] >= 0, "RandomizationConfig.joint_friction_scale", ">= 0",
+               self.joint_friction_scale)
+        for name, low, high in (("mass_scale", 0.5, 2.0), ("motor_strength", 0.1, 2.0), ("kp_factor", 0.1, 3.0),
+                                ("kd_factor", 0.1, 3.0), ("ground_friction_scale", 0.05, 5.0)):
+            lo, hi = getattr(self, name)
+            _check(low <= lo and hi <= high, f"RandomizationConfig.{name}", f"within [{low}, {high}]", (lo, hi))

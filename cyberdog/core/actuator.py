@@ -34,6 +34,15 @@ class ActuatorModel:
         self.torque_limit = float(config.torque_limit)
         self._n1 = float(config.full_torque_speed)
         self._n2 = float(config.zero_torque_speed)
+        self.set_scales()
+
+    def set_scales(self, friction_scale: float = 1.0, strength: float = 1.0) -> None:
+        """A drawn actuator (domain randomisation): joint friction × `friction_scale`, and the torque the
+        motors produce × `strength` (after the clip and the envelope: a weaker or stronger motor for the same
+        command). 1 and 1: the nominal actuator of the config."""
+        if not (np.isfinite(friction_scale) and friction_scale >= 0 and np.isfinite(strength) and strength > 0):
+            raise ValueError(f"friction scale must be >= 0 and strength > 0, got {friction_scale!r}, {strength!r}")
+        self.friction_scale, self.strength = float(friction_scale), float(strength)
 
     def torque_envelope(self, joint_velocity: np.ndarray) -> np.ndarray:
         """Largest |τ| (N·m) available while motoring at joint speed ω: torque_limit up to full_torque_speed,
@@ -47,7 +56,8 @@ class ActuatorModel:
 
         1. clip to ±torque_limit;
         2. if `torque_speed_curve`: where the motor drives the joint (τ·ω > 0), limit |τ| to
-           `torque_envelope(ω)`; braking torques keep the clipped value.
+           `torque_envelope(ω)`; braking torques keep the clipped value;
+        3. × `strength` (1 unless a drawn actuator, `set_scales`).
         """
         limit = self.torque_limit
         tau = np.minimum(np.maximum(np.asarray(torque_command, dtype=float), -limit), limit)  # np.clip is slower
@@ -55,7 +65,7 @@ class ActuatorModel:
             omega = np.asarray(joint_velocity, dtype=float)
             envelope = self.torque_envelope(omega)
             tau = np.where(tau * omega > 0.0, np.minimum(np.maximum(tau, -envelope), envelope), tau)
-        return tau
+        return tau if self.strength == 1.0 else tau * self.strength
 
     def friction_torque(self, joint_velocity: np.ndarray) -> np.ndarray:
         """Joint friction torque (N·m), opposing motion: −(b·ω + f_dry·tanh(ω / 0.01 rad/s)) with
@@ -63,8 +73,8 @@ class ActuatorModel:
         omega = np.asarray(joint_velocity, dtype=float)
         if not self.config.friction:
             return np.zeros_like(omega)
-        c = self.config
-        return -(c.viscous_damping * omega + c.dry_friction * np.tanh(omega / DRY_FRICTION_SMOOTHING))
+        c, k = self.config, self.friction_scale
+        return -k * (c.viscous_damping * omega + c.dry_friction * np.tanh(omega / DRY_FRICTION_SMOOTHING))
 
     def joint_torque(self, torque_command: np.ndarray, joint_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(motor torque, motor torque + friction torque): what the motors produce and what acts on the joints."""
@@ -87,7 +97,10 @@ class ActuatorModel:
                 envelope = limit * min(max((n2 - abs(omega)) * inv_span, 0.0), 1.0)
                 tau = envelope if tau > envelope else -envelope if tau < -envelope else tau
             motor.append(tau)
+        if self.strength != 1.0:
+            motor = [tau * self.strength for tau in motor]
         if not self.config.friction:
             return motor, motor
-        b, f, tanh, smooth = self.config.viscous_damping, self.config.dry_friction, math.tanh, DRY_FRICTION_SMOOTHING
+        k, tanh, smooth = self.friction_scale, math.tanh, DRY_FRICTION_SMOOTHING
+        b, f = k * self.config.viscous_damping, k * self.config.dry_friction
         return motor, [tau - (b * omega + f * tanh(omega / smooth)) for tau, omega in zip(motor, joint_velocity)]

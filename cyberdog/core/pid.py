@@ -54,6 +54,16 @@ class JointPID:
         self.dt = float(dt)  # s
         self.torque_limit = float(torque_limit)  # N·m
         self.integral = np.zeros(N_JOINTS)  # N·m, the integral term ki·∫e dt
+        self._nominal = (self.kp, self.kd)
+        self.set_gain_factors()
+
+    def set_gain_factors(self, kp_factor: float = 1.0, kd_factor: float = 1.0) -> None:
+        """Gains kp × `kp_factor` and kd × `kd_factor` of the configured ones (a drawn controller, domain
+        randomisation); 1 and 1: the configured gains."""
+        if not (np.isfinite(kp_factor) and kp_factor > 0 and np.isfinite(kd_factor) and kd_factor > 0):
+            raise ValueError(f"gain factors must be > 0 and finite, got {kp_factor!r}, {kd_factor!r}")
+        kp, kd = self._nominal
+        self.kp, self.kd = kp * kp_factor, kd * kd_factor
         # the per-period path's view of the gains: (kp, kd) per joint as floats, and whether there is no
         # integral action (ki = 0: the integral then stays zero, `torque_unchecked` never moves it)
         self._pd_gains = list(zip(self.kp.tolist(), self.kd.tolist()))

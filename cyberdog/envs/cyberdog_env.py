@@ -13,7 +13,7 @@ from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import TrotController
 from cyberdog.core import rewards
 from cyberdog.loop.walker import Walker
-from cyberdog.sim.hardware import draw_mass_scale
+from cyberdog.sim.hardware import draw_mass_scale, draw_robot
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
 
@@ -147,6 +147,11 @@ class CyberDogEnv(gym.Env):
     top-level `EnvConfig` field, e.g. `action_mode="torque"`, `target_speed=1.2`,
     `hardware=C.HARDWARE_LIKE`.
 
+    **Domain randomisation** (`randomization`, a `RandomizationConfig`, off by default): each episode's robot
+    is drawn from ranges of joint friction, actuation latency, link masses, motor strength, PID gains and
+    ground friction, from the env's generator (same seed, same robots; `info["robot_draw"]` of `reset` says
+    which). `configs/quick_speeds_battery.yaml` switches it on around the hardware-like robot.
+
     **Hardware model** (`hardware`, a `HardwareConfig`, all off by default): joint friction, actuation
     latency, encoder noise, Kalman speed feedback (simulated IMU + leg odometry) and a mass draw, the same model
     the prototype walks use. The robot's software sees what its sensors read: with `estimated_velocity` the
@@ -214,12 +219,18 @@ class CyberDogEnv(gym.Env):
         hw = cfg.hardware  # per episode: a mass draw and sensor noise seeded from the env's generator
         mass_scale = draw_mass_scale(hw, self.np_random) if hw.mass_uncertainty > 0 else None
         sensor_rng = np.random.default_rng(self.np_random.integers(2 ** 63))
+        # domain randomisation: this episode's robot, drawn after the other draws (so that an env without
+        # it repeats its episodes exactly as before)
+        draw = draw_robot(cfg.randomization, self.np_random) if cfg.randomization.enabled else None
         self.controller.set_speed(self.target_speed)
-        self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng)
+        self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng, draw=draw)
         self.last_torque = np.zeros(12)
         self._foot_offset = np.zeros((4, 3))  # m, the foot-target offsets of the last action (action_mode="foot")
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
-        return self._observation(), {"target_speed": self.target_speed}
+        info = {"target_speed": self.target_speed}
+        if draw is not None:
+            info["robot_draw"] = dataclasses.asdict(draw)
+        return self._observation(), info
 
     @property
     def t(self) -> float:

@@ -32,7 +32,7 @@ from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
 from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
-from cyberdog.sim.hardware import (HardwareSensing, TorqueDelay, draw_mass_scale, hardware_walk_config,
+from cyberdog.sim.hardware import (HardwareSensing, RobotDraw, TorqueDelay, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
 from cyberdog.sim.robot import Robot
 
@@ -96,32 +96,44 @@ class Walker:
         self.dt = cfg.sim.controller_dt  # s, one `step`
         self.contact_check_every = max(1, int(round(CONTACT_CHECK_PERIOD / self.dt)))  # steps
         self.slip_sample_every = max(1, int(round(SLIP_SAMPLE_PERIOD / self.dt)))  # steps
-        self.delay = TorqueDelay(whole_steps(hardware.latency_s, self.dt, "HardwareConfig.latency_s")
-                                 if hardware is not None else 0)
+        self.latency_steps = (whole_steps(hardware.latency_s, self.dt, "HardwareConfig.latency_s")
+                              if hardware is not None else 0)  # periods, of the configured hardware
+        self.delay = TorqueDelay(self.latency_steps)
         self.sensing: HardwareSensing | None = None
         self.foot_link_names = set(self.robot.foot_link_names)
         self.reset()
 
     # ------------------------------------------------------------------------------------------------------
-    def reset(self, mass_scale: float | None = None, sensor_rng: np.random.Generator | None = None):
+    def reset(self, mass_scale: float | None = None, sensor_rng: np.random.Generator | None = None,
+              draw: RobotDraw | None = None):
         """Robot at rest in its standing pose, controller and hardware model reset, traces cleared.
 
         mass_scale: the link-mass scale to walk with; None = the hardware's seeded draw (1 on the ideal
             robot). sensor_rng: the sensors' generator; None = the stream seeded by `HardwareConfig.seed`.
+        draw: a robot drawn from a `RandomizationConfig` (`cyberdog.sim.hardware.draw_robot`): its joint
+            friction and motor strength, latency, mass (instead of `mass_scale`), PID gains and ground
+            friction; None = the configured robot.
         Returns the state (a RobotState)."""
         hw = self.hardware
         if hw is not None:
             mass_rng, seeded_sensor_rng = seeded_streams(hw)
-            if mass_scale is None:
+            if mass_scale is None and draw is None:
                 mass_scale = draw_mass_scale(hw, mass_rng)
             sensing = not hw.ideal or hw.imu_noise
             self.sensing = (HardwareSensing(hw, self.cfg, sensor_rng if sensor_rng is not None
                                             else seeded_sensor_rng) if sensing else None)
+        self.draw = draw
+        d = draw if draw is not None else RobotDraw(latency_periods=self.latency_steps)
+        if draw is not None:
+            mass_scale = draw.mass_scale
         if mass_scale is not None:
             self.robot.set_mass_scale(mass_scale)
+        self.robot.actuator.set_scales(d.joint_friction_scale, d.motor_strength)
+        self.robot.set_ground_friction(self.cfg.sim.ground_friction * d.ground_friction_scale)
+        self.controller.pid.set_gain_factors(d.kp_factor, d.kd_factor)
         self.robot.reset()
         self.controller.reset()
-        self.delay.reset()
+        self.delay.reset(d.latency_periods)
         self.state = self.robot.read_state()
         if self.sensing is not None:
             self.sensing.reset(self.state)

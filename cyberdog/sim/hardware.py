@@ -7,7 +7,9 @@ learning environment and for the scripted walks alike (`cyberdog.loop.walker.Wal
 - `draw_mass_scale`: the mass-scale draw in [1 − u, 1 + u];
 - `TorqueDelay`: actuation latency as a FIFO of whole controller periods;
 - `HardwareSensing`: what the robot's software reads: noisy joint encoders and the Kalman body velocity
-  from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`).
+  from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`);
+- `draw_robot`: one robot from the ranges of a `RandomizationConfig` (domain randomisation), a `RobotDraw`
+  that `Walker.reset` applies.
 
 Randomness: a scripted walk seeds everything from `HardwareConfig.seed`: one `numpy.random.SeedSequence`
 spawns independent streams for the mass draw and the sensors, so that the mass draw does not depend on which
@@ -20,7 +22,7 @@ from collections import deque
 
 import numpy as np
 
-from cyberdog.config import HardwareConfig, WalkConfig
+from cyberdog.config import HardwareConfig, RandomizationConfig, WalkConfig
 from cyberdog.core.estimator import SimulatedIMU, VelocityEstimator, leg_odometry_velocity
 
 MASS_STREAM, SENSOR_STREAM = 0, 1  # indices of the child seed sequences of HardwareConfig.seed
@@ -40,6 +42,32 @@ def draw_mass_scale(hw: HardwareConfig, rng: np.random.Generator | None = None) 
         return 1.0
     rng = rng if rng is not None else seeded_streams(hw)[MASS_STREAM]
     return float(rng.uniform(1.0 - u, 1.0 + u))
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotDraw:
+    """One robot drawn from a `RandomizationConfig`: the values a walk or an episode is simulated with."""
+
+    joint_friction_scale: float = 1.0  # × ActuatorConfig viscous and dry friction
+    latency_periods: int = 0  # controller periods of actuation delay
+    mass_scale: float = 1.0  # × every link's mass and inertia
+    motor_strength: float = 1.0  # × the torque the motors produce
+    kp_factor: float = 1.0  # × the PID's proportional gains
+    kd_factor: float = 1.0  # × the PID's derivative gains
+    ground_friction_scale: float = 1.0  # × SimConfig.ground_friction
+
+
+def draw_robot(ranges: RandomizationConfig, rng: np.random.Generator) -> RobotDraw:
+    """One draw of every range of `ranges`, uniformly and in the order of its fields (the same generator state
+    gives the same robot); the latency is a whole number of periods, each value of its range equally likely."""
+    values = {}
+    for name in RandomizationConfig.RANGES:
+        lo, hi = getattr(ranges, name)
+        if name == "latency_periods":
+            values[name] = int(rng.integers(lo, hi + 1))
+        else:
+            values[name] = float(rng.uniform(lo, hi))
+    return RobotDraw(**values)
 
 
 def hardware_walk_config(cfg: WalkConfig, hw: HardwareConfig | None) -> WalkConfig:
@@ -72,7 +100,12 @@ class TorqueDelay:
         self.steps, self.size = steps, size
         self.reset()
 
-    def reset(self) -> None:
+    def reset(self, steps: int | None = None) -> None:
+        """Empty the queue (zeros), with a new delay of `steps` periods if given."""
+        if steps is not None:
+            if not (isinstance(steps, int) and steps >= 0):
+                raise ValueError(f"latency steps must be an integer >= 0, got {steps!r}")
+            self.steps = steps
         self._queue: deque = deque([np.zeros(self.size)] * self.steps)
 
     def push(self, torque: np.ndarray) -> np.ndarray:
@@ -143,5 +176,5 @@ class HardwareSensing:
         return q, dq, (self.estimator.velocity if self.hw.estimated_velocity else None)
 
 
-__all__ = ["HardwareSensing", "TorqueDelay", "draw_mass_scale", "hardware_walk_config", "seeded_streams",
-           "whole_steps"]
+__all__ = ["HardwareSensing", "RobotDraw", "TorqueDelay", "draw_mass_scale", "draw_robot", "hardware_walk_config",
+           "seeded_streams", "whole_steps"]

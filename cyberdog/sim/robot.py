@@ -170,6 +170,7 @@ class Robot:
                                     numSolverIterations=sim.solver_iterations, deterministicOverlappingPairs=1)
         self.plane_id = c.loadURDF(str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True)
         c.changeDynamics(self.plane_id, -1, lateralFriction=sim.ground_friction)
+        self.ground_friction = sim.ground_friction  # foot–ground coefficient now (set_ground_friction)
         self.body_id = c.loadURDF(str(urdf), [0.0, 0.0, robot.body_height], flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
 
         # link and joint maps
@@ -344,6 +345,14 @@ class Robot:
     def total_mass(self) -> float:
         """Sum of the link masses as PyBullet holds them, kg."""
         return float(sum(self.client.getDynamicsInfo(self.body_id, link)[0] for link in self.link_names))
+
+    def set_ground_friction(self, coefficient: float) -> None:
+        """The foot–ground Coulomb coefficient (the plane's lateral friction; every robot link has 1.0, and
+        Bullet multiplies the two)."""
+        if not (math.isfinite(coefficient) and 0.0 < coefficient <= 5.0):
+            raise ValueError(f"ground friction must be in (0, 5], got {coefficient!r}")
+        self.client.changeDynamics(self.plane_id, -1, lateralFriction=float(coefficient))
+        self.ground_friction = float(coefficient)
 
     def set_mass_scale(self, scale: float) -> None:
         """Scale every link's mass and inertia by `scale` relative to the URDF (e.g. 0.95..1.05)."""
