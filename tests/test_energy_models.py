@@ -73,3 +73,20 @@ def test_vertical_foot_offset_authority():
     assert offsets[:, :2] == pytest.approx(0.03) and offsets[:, 2] == pytest.approx(-0.10)
     with pytest.raises(ValueError, match="foot_offset_scale_z"):
         C.EnvConfig(foot_offset_scale_z=-0.1)
+
+
+def test_the_electrical_models_friction_is_what_the_simulated_joint_feels():
+    """One friction law: with friction left out of the physics, the electrical model adds to the motor's
+    torque exactly the friction a joint moving at ω feels when the physics models it."""
+    from cyberdog.core.actuator import ActuatorModel
+    from cyberdog.core import energy as en
+    omega = np.linspace(-5.0, 5.0, 12)
+    omega[:3] = [0.0, 0.004, -0.02]  # at rest and inside the dry friction's smoothing
+    tau = np.full(12, 3.0)
+    simulated = C.ActuatorConfig(friction=True)
+    felt = ActuatorModel(simulated).joint_torque(tau, omega)
+    felt_friction = felt[1] - felt[0]  # joint torque minus motor torque: the friction on the joint
+    added = en.drive_torque(tau, omega, C.ActuatorConfig(friction=False)) - tau
+    np.testing.assert_allclose(added, -felt_friction, rtol=1e-12, atol=1e-15)
+    assert en.drive_torque(tau, omega, simulated) is not None
+    np.testing.assert_array_equal(en.drive_torque(tau, omega, simulated), tau)  # counted once: in the physics

@@ -23,6 +23,15 @@ from cyberdog.config import ActuatorConfig
 DRY_FRICTION_SMOOTHING = 0.01  # rad/s: the Coulomb term is dry_friction · tanh(ω / this), smooth through 0
 
 
+def joint_friction(joint_velocity, viscous: float, dry: float) -> np.ndarray:
+    """The one joint-friction law, N·m, of magnitude b·ω + f·tanh(ω / 0.01 rad/s) and the sign of ω: what a
+    joint moving at ω loses to friction (viscous b, N·m·s/rad; dry f, N·m [X] cyberdog.hpp). The simulated
+    joint feels its negative (`ActuatorModel.friction_torque`); the electrical model adds it to what the motor
+    must produce where the simulation leaves friction out (`cyberdog.core.energy.drive_torque`)."""
+    omega = np.asarray(joint_velocity, dtype=float)
+    return viscous * omega + dry * np.tanh(omega / DRY_FRICTION_SMOOTHING)
+
+
 class ActuatorModel:
     """Turns joint torque commands into the torques the 12 actuators produce, and their friction.
 
@@ -68,13 +77,13 @@ class ActuatorModel:
         return tau if self.strength == 1.0 else tau * self.strength
 
     def friction_torque(self, joint_velocity: np.ndarray) -> np.ndarray:
-        """Joint friction torque (N·m), opposing motion: −(b·ω + f_dry·tanh(ω / 0.01 rad/s)) with
-        b = viscous_damping and f_dry = dry_friction ([X] cyberdog.hpp); zeros when `friction` is off."""
+        """Joint friction torque (N·m) on the joint, opposing motion: −`joint_friction` (× the drawn
+        `friction_scale`); zeros when `friction` is off."""
         omega = np.asarray(joint_velocity, dtype=float)
         if not self.config.friction:
             return np.zeros_like(omega)
         c, k = self.config, self.friction_scale
-        return -k * (c.viscous_damping * omega + c.dry_friction * np.tanh(omega / DRY_FRICTION_SMOOTHING))
+        return -joint_friction(omega, k * c.viscous_damping, k * c.dry_friction)
 
     def joint_torque(self, torque_command: np.ndarray, joint_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(motor torque, motor torque + friction torque): what the motors produce and what acts on the joints."""
@@ -103,4 +112,5 @@ class ActuatorModel:
             return motor, motor
         k, tanh, smooth = self.friction_scale, math.tanh, DRY_FRICTION_SMOOTHING
         b, f = k * self.config.viscous_damping, k * self.config.dry_friction
+        # `joint_friction` in floats
         return motor, [tau - (b * omega + f * tanh(omega / smooth)) for tau, omega in zip(motor, joint_velocity)]

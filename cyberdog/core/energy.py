@@ -6,7 +6,8 @@ Paper (Section 2.2). Mechanical power per joint P_ij = |τ_ij · θ̇_ij| (W) an
 Negative work (a joint braking) counts as spent, as the absolute value says.
 
 Beyond the paper (its own omissions, Section 4.2: "thermal power and joint friction loss"). Per joint:
-    τ_m   = τ + b·ω + f_c·sign(ω)  if friction is NOT simulated (the real motor must also overcome it);
+    τ_m   = τ + b·ω + f_c·tanh(ω/0.01)  if friction is NOT simulated (the real motor must also overcome it;
+                                   the law the simulated joint feels, `cyberdog.core.actuator.joint_friction`);
             τ                      if friction IS simulated (ActuatorConfig.friction): the applied torque
                                    already includes what overcomes friction, adding it again would count twice;
     P_out = τ_m·ω + (τ_m / (N·K_T))²·R    shaft power + copper loss (motor current i = τ_m / (N·K_T));
@@ -28,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, EnergyConfig
+from cyberdog.core.actuator import joint_friction
 
 N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)  # 12
 J_PER_WH = 3600.0
@@ -119,27 +121,24 @@ def _check_distance(distance_m: float) -> None:
 # Beyond the paper: electrical power (copper loss, friction, driver efficiency, idle power)
 # ---------------------------------------------------------------------------------------------------------
 
-def friction_torque(omega: Any, actuator: ActuatorConfig) -> np.ndarray:
-    """Joint friction torque b·ω + f_c·sign(ω), N·m (viscous + Coulomb, ActuatorConfig)."""
-    omega = np.asarray(omega, dtype=float)
-    return actuator.viscous_damping * omega + actuator.dry_friction * np.sign(omega)
-
-
 def copper_loss(tau: Any, actuator: ActuatorConfig) -> np.ndarray:
     """Winding (Joule) loss (τ / (N·K_T))²·R, W, for joint torque τ (N·m) through gear ratio N."""
     current = np.asarray(tau, dtype=float) / (actuator.gear_ratio * actuator.motor_kt)  # A
     return current * current * actuator.motor_resistance
 
 
-def motor_torque(tau: Any, omega: Any, actuator: ActuatorConfig) -> np.ndarray:
-    """Torque the real actuator delivers: τ plus friction when the simulation did not model friction."""
+def drive_torque(tau: Any, omega: Any, actuator: ActuatorConfig) -> np.ndarray:
+    """Torque the real motor must produce for the joint torque τ: τ itself when the simulation modelled the
+    joint friction (the applied torque already overcame it), else τ plus the friction of `joint_friction`."""
     tau, omega = _joint_arrays(tau, omega)
-    return tau if actuator.friction else tau + friction_torque(omega, actuator)
+    if actuator.friction:
+        return tau
+    return tau + joint_friction(omega, actuator.viscous_damping, actuator.dry_friction)
 
 
 def electrical_joint_power(tau: Any, omega: Any, actuator: ActuatorConfig, energy: EnergyConfig) -> np.ndarray:
     """(..., 12) power drawn from the bus per joint, W (see the module docstring); idle power excluded."""
-    tau_m = motor_torque(tau, omega, actuator)
+    tau_m = drive_torque(tau, omega, actuator)
     p_out = tau_m * np.asarray(omega, dtype=float) + copper_loss(tau_m, actuator)
     eta = energy.driver_efficiency
     p_in = np.where(p_out > 0, p_out / eta, p_out * eta)

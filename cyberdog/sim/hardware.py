@@ -74,7 +74,7 @@ def hardware_walk_config(cfg: WalkConfig, hw: HardwareConfig | None) -> WalkConf
     """`cfg` with the actuator's joint friction set by `hw.friction` (unchanged when hw is None).
 
     The energy model then counts friction once: simulated (in the applied torque) when on, added analytically
-    to the electrical power when off (cyberdog.core.energy.motor_torque)."""
+    to the electrical power when off (cyberdog.core.energy.drive_torque)."""
     if hw is None or cfg.actuator.friction == hw.friction:
         return cfg
     return dataclasses.replace(cfg, actuator=dataclasses.replace(cfg.actuator, friction=hw.friction))
