@@ -13,6 +13,7 @@ from cyberdog.analysis import table5 as t5
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
+from plots.figure10 import last_cycles_window
 from cyberdog.evaluation import learned as learned_module
 
 FIGURES = ("figure4_baseline_trajectories", "figure6_reward_curves", "figure7_learned_trajectory",
@@ -103,7 +104,7 @@ def test_power_traces_integrate_to_the_tables_energy(reduced_run):
             e_table = [float(r["energy_kJ"]) for r in table
                        if r["row"] == w["trajectory"] and abs(float(r["lift_height_m"]) - w["lift_height_m"]) < 1e-9]
             assert e_table and all(e == pytest.approx(w["energy_J"] / 1e3, rel=1e-9) for e in e_table)
-            window = p[cmp.two_cycle_window(len(p), w["controller_dt_s"], w["period_s"])]
+            window = p[last_cycles_window(len(p), w["controller_dt_s"], w["period_s"])]
             assert len(window) == round(2 * w["period_s"] / w["controller_dt_s"])  # Figure 10's two cycles
 
 

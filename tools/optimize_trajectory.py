@@ -35,6 +35,7 @@ sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
 from cyberdog.analysis import shape_optimization as so  # noqa: E402
 from cyberdog.analysis.compare import WalkJob, reduction, run_jobs, walk_config  # noqa: E402
+from cyberdog.analysis.report import json_safe  # noqa: E402
 from cyberdog.config import GaitConfig, WalkConfig  # noqa: E402
 from cyberdog.core.trajectories import SampledTrajectory  # noqa: E402
 
@@ -137,10 +138,6 @@ def replay_rows(optimized: SampledTrajectory, start: SampledTrajectory, lift_hei
     return rows
 
 
-def _finite_or_none(x):
-    return float(x) if isinstance(x, (int, float)) and math.isfinite(x) else None
-
-
 def _fmt(x, spec: str) -> str:
     return "—" if isinstance(x, float) and not math.isfinite(x) else format(x, spec)
 
@@ -225,7 +222,7 @@ def main(argv=None) -> int:
         opt = [r for r in rows if r["trajectory"] == "optimized"]
         # nan (an invalid walk) → null: strict JSON
         for key in ("D_t_vs_cycloid_pct", "D_t_pct", "energy_J", "D_el_vs_cycloid_pct"):
-            optimized.provenance[f"replay_{key}"] = {f"{r['speed_command_mps']:.2f}": _finite_or_none(r[key])
+            optimized.provenance[f"replay_{key}"] = {f"{r['speed_command_mps']:.2f}": json_safe(float(r[key]))
                                                      for r in opt}
         optimized.provenance["replay_duration_s"] = args.replay_duration
         for path in (args.result, args.out / "optimized_trajectory.json"):

@@ -290,14 +290,6 @@ def seed_means(rows: list[dict]) -> list[dict]:
     return out
 
 
-def two_cycle_window(n: int, dt: float, period: float, cycles: int = 2) -> slice:
-    """Samples of the last `cycles` whole gait-clock cycles of a walk of n samples (t = k·dt)."""
-    per = int(round(period / dt))
-    last = (n // per) * per  # end of the last whole cycle
-    start = max(0, last - cycles * per)
-    return slice(start, last)
-
-
 __all__ = ["BASELINES", "COLUMNS", "REFERENCE", "LearnedPath", "PAPER_SPEEDS", "SETS", "WalkJob", "comparison_jobs",
            "comparison_rows", "learned_at", "learned_lift_height", "pinned_lift", "reduction", "run_jobs",
-           "run_walk_job", "seed_means", "two_cycle_window", "walk_config"]
+           "run_walk_job", "seed_means", "walk_config"]

@@ -383,13 +383,7 @@ def cycle_rows(extraction: Extraction | CommandedExtraction) -> list[dict]:
     return [{**c.row(), "chosen": c.index in chosen} for c in extraction.cycles]
 
 
-def with_provenance(traj: SampledTrajectory, **extra) -> SampledTrajectory:
-    """A copy of `traj` with more provenance entries."""
-    return SampledTrajectory(traj.phase, traj.x, traj.z, traj.step_length, traj.lift_height,
-                             {**traj.provenance, **extra})
-
-
 __all__ = ["CYCLE_CHOICES", "CommandedExtraction", "Cycle", "Extraction", "ExtractionError", "SPEED_TOLERANCE",
            "clock_cycles", "commanded_from_rollout", "cycle_rows", "debounce", "extract_commanded",
            "extract_from_rollout", "extract_trajectory", "find_cycles", "foot_paths", "resample_closed",
-           "touch_downs", "with_provenance"]
+           "touch_downs"]

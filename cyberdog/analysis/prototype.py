@@ -18,12 +18,11 @@ starting at E_f = 95 % (paper), motor drivers 95 % efficient [G], no electronics
 legs only, so ranges are upper bounds). Battery % used = 100·E_el / pack energy (= Eq. 13's E_f − E_n);
 range = distance × 95 / battery % used (the walk's rate until the usable 95 % is spent).
 
-Walks run in parallel processes (spawn; each owns its PyBullet DIRECT client). `python -m
-cyberdog.analysis.prototype --out runs/prototype` runs the full experiment and writes CSV/JSON/Markdown.
+Walks run in parallel processes (spawn; each owns its PyBullet DIRECT client); `evaluate.py prototype` runs
+the experiment and writes CSV/JSON/Markdown.
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
 import pickle
@@ -38,7 +37,7 @@ from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS
 from cyberdog.core import energy as en
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
-from cyberdog.core.trajectories import FootTrajectory, SampledTrajectory
+from cyberdog.core.trajectories import FootTrajectory
 
 PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
 PAPER_SIM_TO_REAL_GAP_PP = 3.0  # percentage points: 12 % (simulation) vs 9 % (prototype) energy reduction
@@ -262,38 +261,3 @@ def write_prototype(rows: list[dict], folder: str | Path) -> None:
     write_rows(rows, folder, "prototype")
     write_rows(gap_rows(rows), folder, "prototype_gaps")
     (folder / "prototype.md").write_text(prototype_table(rows) + "\n")
-
-
-def _parse_trajectory(spec: str) -> tuple[str, FootTrajectory | None]:
-    """"cycloid" / "straight", or NAME=FILE / FILE of a saved SampledTrajectory (JSON or CSV)."""
-    if spec in TRAJECTORY_NAMES and spec != "sampled":
-        return spec, None
-    name, _, path = spec.rpartition("=")
-    path = path or spec
-    return (name or Path(path).stem), SampledTrajectory.load(path)
-
-
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--trajectories", nargs="+", default=["cycloid", "straight"],
-                   help="cycloid, straight, or [NAME=]FILE of a sampled trajectory (JSON/CSV)")
-    p.add_argument("--speeds", nargs="+", type=float, default=list(PAPER_SPEEDS), help="m/s")
-    p.add_argument("--distance", type=float, default=PAPER_DISTANCE_M, help="m per walk (paper: 100)")
-    p.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
-    p.add_argument("--seed", type=int, default=0, help="hardware-like robot's seed (mass draw, sensor noise)")
-    p.add_argument("--workers", type=int, default=None, help="processes (default: one per walk, <= CPUs)")
-    p.add_argument("--out", type=Path, default=None, help="folder for prototype.{csv,json,md}")
-    args = p.parse_args(argv)
-    trajectories = dict(_parse_trajectory(s) for s in args.trajectories)
-    t0 = time.perf_counter()
-    rows = run_prototype(trajectories, args.speeds, args.distance, args.modes,
-                         dataclasses.replace(HARDWARE_LIKE, seed=args.seed), args.workers)
-    print(prototype_table(rows))
-    print(f"\nwall time {time.perf_counter() - t0:.0f} s")
-    if args.out is not None:
-        write_prototype(rows, args.out)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

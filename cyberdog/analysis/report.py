@@ -3,7 +3,20 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from pathlib import Path
+
+
+def json_safe(x):
+    """`x` with every non-finite float (NaN, ±inf, which strict JSON has no words for) replaced by None, through
+    dicts and lists."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    return x
 
 
 def _fmt(v) -> str:

@@ -181,10 +181,6 @@ class VelocityEstimator:
     def covariance(self) -> np.ndarray:
         return self.kf.P.copy()
 
-    def body_velocity(self, rotation_matrix: np.ndarray) -> np.ndarray:
-        """(3,) estimated velocity in the body frame, Rᵀ v, m/s."""
-        return np.asarray(rotation_matrix, dtype=float).reshape(3, 3).T @ self.velocity
-
     def update(self, imu: ImuReading | np.ndarray, leg_velocity: np.ndarray | None,
                rotation_matrix: np.ndarray, dt: float | None = None) -> np.ndarray:
         """One filter step: predict with the accelerometer over dt (s; default the constructor's), then correct

@@ -53,7 +53,7 @@ from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buf
                                 transitions)
 from cyberdog.runlock import RunFolderError, RunLock
 
-OBSERVATION_SIZE, ACTION_SIZE = 50, 12  # Table 3's observation (62 with env.observe_last_action), actions
+ACTION_SIZE = 12  # joint torques or foot offsets (Table 3); the observation's size is the env config's
 
 
 def resolve_device(name: str) -> str:

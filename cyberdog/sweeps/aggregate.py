@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from cyberdog.analysis.parallel import map_in_processes
-from cyberdog.analysis.report import markdown_table
+from cyberdog.analysis.report import json_safe, markdown_table
 from cyberdog.analysis.stats import mean_ci, mean_ci_band
 from cyberdog.metrics_csv import read_stages
 from cyberdog.sweeps.folder import is_sweep_dir, load_sweep, seed_dir
@@ -125,16 +125,6 @@ def evaluate_actor(path: str, speed: float, duration: float, seed: int = 0) -> d
     torch.set_num_threads(1)
     r = rollout(load_actor(path), speed=speed, duration=duration, seed=seed)
     return {k: v for k, v in r.summary().items()}
-
-
-def _finite_or_none(x):
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if isinstance(x, dict):
-        return {k: _finite_or_none(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_finite_or_none(v) for v in x]
-    return x
 
 
 def aggregate_sweep(sweep_dir, eval_duration: float = 10.0, eval_speed: float = 1.0, workers: int = 1,
@@ -232,6 +222,6 @@ def aggregate_sweep(sweep_dir, eval_duration: float = 10.0, eval_speed: float = 
                   "evaluation": ({"speed_mps": eval_speed, "duration_s": eval_duration, "rollout_seed": 0,
                                   "reward": "stage2"} if eval_duration > 0 else None),
                   "seeds": entries, "mean_ci95": stats, "missing": missing}
-    (sweep_dir / "evaluation.json").write_text(json.dumps(_finite_or_none(evaluation), indent=1) + "\n")
+    (sweep_dir / "evaluation.json").write_text(json.dumps(json_safe(evaluation), indent=1) + "\n")
     echo(f"aggregate: wrote aggregate.csv/.md, evaluation.json, learning_curves.csv/.png in {sweep_dir}")
     return {"rows": rows, "stats": stats, "curves": curves, "evaluation": evaluation, "markdown": md}
