@@ -346,12 +346,10 @@ class Trainer:
 
     def _updates(self, frames: int) -> int:
         tc = self.cfg.train
-        if (len(self.rb) < tc.batch_size or self._random_frames_left(self.c["stage"]) > 0
-                or (self.agent.updates == 0 and self.c["stage_env_steps"] < tc.learning_starts)):
+        if C.update_blockers(tc, len(self.rb), self._random_frames_left(self.c["stage"]), self.agent.updates,
+                             self.c["stage_env_steps"]):
             return 0
-        self.c["update_credit"] += frames * tc.updates_per_frame
-        n = int(self.c["update_credit"])
-        self.c["update_credit"] -= n
+        n, self.c["update_credit"] = C.update_credit(self.c["update_credit"], frames, tc.updates_per_frame)
         warmup = getattr(tc, f"stage{self.c['stage']}").critic_warmup_updates
         metrics = []
         for b in sample_batches(self.rb, n, tc.batch_size):
