@@ -227,21 +227,10 @@ def _leg_velocity(c1: float, s1: float, c_h: float, s_h: float, c_hk: float, s_h
 
 def leg_inverse_kinematics_velocity(x: float, y: float, z: float, vx: float, vy: float, vz: float, side: float,
                                     l1: float, l2: float, l3: float) -> tuple[float, ...]:
-    """`leg_inverse_kinematics` and `leg_joint_velocity` in one call, sharing the trigonometry (the trot
-    controller's per-period path): (abad, hip, knee, dabad, dhip, dknee), rad and rad/s, for the foot at
-    (x, y, z), m, moving at (vx, vy, vz), m/s, leg frame. Raises ValueError for an unreachable target."""
-    r2 = y * y + z * z
-    l1_sq = l1 * l1
-    if r2 < l1_sq - 1e-12:
-        raise ValueError(f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
-    z_leg = -math.sqrt(max(r2 - l1_sq, 0.0))
-    abad = math.atan2(z, y) - math.atan2(z_leg, side * l1)
-    abad = (abad + math.pi) % (2.0 * math.pi) - math.pi
-    cos_knee = (x * x + z_leg * z_leg - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-    if cos_knee > 1.0 + 1e-12 or cos_knee < -1.0 - 1e-12:
-        raise ValueError(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
-    knee = -math.acos(min(max(cos_knee, -1.0), 1.0))
-    hip = math.atan2(-x, -z_leg) - math.atan2(l3 * math.sin(knee), l2 + l3 * math.cos(knee))
+    """`leg_inverse_kinematics` and `leg_joint_velocity` in one call (the trot controller's per-period path):
+    (abad, hip, knee, dabad, dhip, dknee), rad and rad/s, for the foot at (x, y, z), m, moving at (vx, vy, vz),
+    m/s, leg frame. Raises ValueError for an unreachable target."""
+    abad, hip, knee = leg_inverse_kinematics(x, y, z, side, l1, l2, l3)
     return (abad, hip, knee) + _leg_velocity(math.cos(abad), math.sin(abad), math.cos(hip), math.sin(hip),
                                              math.cos(hip + knee), math.sin(hip + knee), side, vx, vy, vz,
                                              l1, l2, l3)
