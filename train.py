@@ -56,11 +56,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                    help="stage 1 (no energy term), stage 2 (Eq. 11 with energy), or both in sequence (default)")
     p.add_argument("--seed", type=int, help="random seed; overrides train.seed")
     p.add_argument("--run-dir", type=Path, help="output folder (default runs/<config name>_seed<seed>)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.FIELD=VALUE",
-                   help="override a config field, value parsed as YAML, e.g. --set train.stage1.max_env_steps=5000 "
-                        "(repeatable); with --resume only the current stage's budget may be raised "
-                        "(train.stage<N>.max_env_steps, max_episodes): the stage, finished or not, continues; the "
-                        "stage-final files of a finished one are kept as stage<N>_final*_<steps>steps.pt")
+    C.add_override_option(p, "train.stage1.max_env_steps=5000",
+                          "; with --resume only the current stage's budget may be raised (train.stage<N>.max_env_steps, "
+                          "max_episodes): the stage, finished or not, continues; the stage-final files of a finished "
+                          "one are kept as stage<N>_final*_<steps>steps.pt")
     p.add_argument("--resume", type=Path, metavar="RUN_DIR",
                    help="continue the run in RUN_DIR from its checkpoint.pt with its saved config.yaml; if RUN_DIR is "
                         "a sweep folder (sweep.json), continue every seed of the sweep that is not done")

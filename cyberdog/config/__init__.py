@@ -11,7 +11,7 @@ The settings live in four modules: `robot` (one scripted walk), `learning` (rewa
 agent, training), `schedule` (when a training updates) and `io` (YAML and overrides); everything is re-exported here, so `from cyberdog import
 config as C; C.EnvConfig()` works.
 """
-from cyberdog.config.io import from_dict, load, override, replace, save, to_dict  # noqa: F401
+from cyberdog.config.io import add_override_option, from_dict, load, override, replace, save, to_dict  # noqa: F401
 from cyberdog.config.learning import *  # noqa: F401,F403
 from cyberdog.config.learning import STAGE1_REWARD, STAGE2_REWARD, stage_reward  # noqa: F401
 from cyberdog.config.robot import *  # noqa: F401,F403

@@ -149,6 +149,16 @@ def save(cfg: Any, path: str | Path) -> None:
         yaml.safe_dump(to_dict(cfg), f, sort_keys=False)
 
 
+def add_override_option(parser, example: str, extra_help: str = "") -> None:
+    """The one `--set SECTION.FIELD=VALUE` option of the command lines (train.py, evaluate.py) on `parser` (or an
+    argument group): values parsed as YAML, into `args.overrides` in the order given; several values after one
+    --set and repeated --set flags add up, and a later assignment of a field wins (`override`)."""
+    parser.add_argument("--set", dest="overrides", action="extend", nargs="+", default=[],
+                        metavar="SECTION.FIELD=VALUE",
+                        help=f"override a config field, value parsed as YAML, e.g. --set {example}; repeatable, "
+                             f"and one --set may take several (default: none){extra_help}")
+
+
 def override(cfg: Any, assignments: list[str]) -> Any:
     """Apply command-line overrides such as ``gait.speed=1.2`` (values parsed as YAML)."""
     data = to_dict(cfg)

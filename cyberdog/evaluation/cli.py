@@ -10,7 +10,7 @@ import argparse
 import math
 from pathlib import Path
 
-from cyberdog.config import LEG_NAMES
+from cyberdog.config import LEG_NAMES, add_override_option
 from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS, PAPER_WALK_DURATION, SPEED_BAND
 
 # Literal copies of library constants whose modules import the simulator or numpy (a test keeps them equal):
@@ -110,8 +110,7 @@ def _output_options() -> argparse.ArgumentParser:
     g.add_argument("--config", type=Path, default=None,
                    help="YAML walk config (WalkConfig sections: robot, actuator, sim, gait, pid, controller, "
                         "energy); default: the built-in defaults (paper lift height 0.15 m)")
-    g.add_argument("--set", nargs="*", default=[], metavar="SECTION.FIELD=VALUE",
-                   help="config overrides, e.g. gait.lift_height=0.1 gait.straight_shape=trapezoid")
+    add_override_option(g, "gait.lift_height=0.1 --set gait.straight_shape=trapezoid")
     g.add_argument("--out", type=Path, default=None, help="output folder (default runs/evaluate-<time>)")
     g.add_argument("--force", action="store_true",
                    help="write into an --out folder that already holds results: the files earlier evaluate.py runs "

@@ -54,7 +54,7 @@ def new_out() -> Path:
 def walk_config(args) -> C.WalkConfig:
     try:
         cfg = C.load(C.WalkConfig, args.config) if args.config else C.WalkConfig()
-        return C.override(cfg, args.set)
+        return C.override(cfg, args.overrides)
     except (ValueError, OSError) as err:
         raise UsageError(f"config error: {err}") from None
 
