@@ -30,3 +30,14 @@ def test_a_later_assignment_wins():
     args = evaluate_args(["baselines", "--set", "gait.lift_height=0.1", "--set", "gait.lift_height=0.12"])
     assert walk_config(args).gait.lift_height == 0.12
     assert C.WalkConfig().gait.lift_height != 0.12
+
+
+def test_compare_at_a_speed_without_a_learned_path_fails_before_any_walk(tmp_path, capsys):
+    """`evaluate.py compare --speeds 0.8` with the shipped paths (1.0-1.4 m/s): one line naming the speeds that
+    exist and what to do, exit 2, and no output folder."""
+    import evaluate
+    out = tmp_path / "out"
+    assert evaluate.main(["compare", "--speeds", "0.8", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "no learned path at 0.8 m/s" in err and "1, 1.2, 1.4 m/s" in err and "--policy-speed" in err
+    assert not out.exists()

@@ -114,15 +114,20 @@ def flat_learned(learned: dict, speed: float = 1.0) -> dict[str, SampledTrajecto
     return out
 
 
-def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float | None) -> list[float]:
+def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float | None, log=print) -> list[float]:
     """Speeds at which a policy is rolled out for extraction (see --policy-speed)."""
     if policy_speed is not None:
+        lo, hi = env.target_speed_range or (env.target_speed, env.target_speed)
+        if not lo - 1e-9 <= policy_speed <= hi + 1e-9:
+            log(f"warning: --policy-speed {policy_speed:g} m/s lies outside the speeds the policy was trained at "
+                f"({lo:g}-{hi:g} m/s): its path there is an extrapolation")
         return [policy_speed]
     if env.target_speed_range:
         lo, hi = env.target_speed_range
         outside = [v for v in speeds if not lo - 1e-9 <= v <= hi + 1e-9]
         if outside:
-            raise UsageError(f"--speeds {outside} lie outside the policy's training range {lo:g}-{hi:g} m/s")
+            raise UsageError(f"--speeds {outside} lie outside the policy's training range {lo:g}-{hi:g} m/s; "
+                             f"--policy-speed V rolls it out at one speed anyway (an extrapolation)")
         return list(speeds)
     return [env.target_speed]
 
@@ -143,7 +148,7 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
                              "--path measured")
         seed = actor.config.train.seed
         found = {}
-        for speed in extraction_speeds(env, speeds, args.policy_speed):
+        for speed in extraction_speeds(env, speeds, args.policy_speed, log):
             t0 = time.perf_counter()
             r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=args.rollout_seed,
                         env_config=env)
@@ -182,9 +187,27 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
 
 
 def check_learned_inputs(args) -> None:
-    """Fail now, before any walk, on a missing or unreadable trajectory file or policy."""
+    """Fail now, before any walk, on a missing or unreadable trajectory file or policy, or on a requested
+    speed that no learned path can walk."""
     if not policy_paths(args.policies, args.sweep):
-        load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
+        learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
+        check_speeds_covered(learned, getattr(args, "speeds", []))
+
+
+def check_speeds_covered(learned: dict, speeds: list[float]) -> None:
+    """UsageError unless every speed of `speeds` has a learned path in at least one entry of `learned` (by the
+    comparison's own rule, `cyberdog.analysis.compare.learned_at`): a table without its learned row is no
+    Table 5."""
+    from cyberdog.analysis.compare import learned_at
+
+    missing = [v for v in speeds if all(learned_at(e, v) is None for e in learned.values())]
+    if missing:
+        have = sorted({float(v) for e in learned.values() if isinstance(e, dict) for v in e})
+        raise UsageError(
+            f"no learned path at {', '.join(f'{v:g}' for v in missing)} m/s: the learned paths are at "
+            f"{', '.join(f'{v:g}' for v in have)} m/s. Ask for those --speeds, or extract paths at the speed "
+            f"from a policy (evaluate.py extract --policies results/policy_speeds --speeds V; a policy trained "
+            f"at other speeds needs --policy-speed V) and pass them with --learned")
 
 
 def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> dict:
