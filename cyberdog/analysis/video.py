@@ -52,6 +52,18 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
     return frames
 
 
+def mp4_writer_problem() -> str | None:
+    """Why an MP4 cannot be written here (None if it can): checked before any frame is rendered."""
+    import importlib.util
+
+    if importlib.util.find_spec("imageio") and importlib.util.find_spec("imageio_ffmpeg"):
+        return None
+    if shutil.which("ffmpeg") is not None:
+        return None
+    return ("MP4 needs imageio with its ffmpeg plugin (pip install 'imageio[ffmpeg]') or an ffmpeg binary on the "
+            "PATH, and neither is here; write a GIF instead (--video-format gif, the default)")
+
+
 def write_video(frames: list[np.ndarray], path: str | Path, fps: int = 25) -> Path:
     """Write frames as GIF (Pillow) or MP4 (imageio-ffmpeg, else matplotlib + ffmpeg), by the suffix."""
     path = Path(path)

@@ -163,7 +163,8 @@ def _extraction_options() -> argparse.ArgumentParser:
                         "(default): commanded for foot-mode policies, else measured")
     g.add_argument("--cycle", default="mean", choices=CYCLE_CHOICES,
                    help="commanded path: average the settled in-band cycles (default) or take the cheapest")
-    g.add_argument("--rollout-duration", type=positive, default=10.0, help="s of each extraction rollout")
+    g.add_argument("--rollout-duration", type=positive, default=10.0,
+                   help="s of each extraction rollout (default 10)")
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
                    help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
@@ -178,7 +179,9 @@ def _prototype_options() -> argparse.ArgumentParser:
                    help=f"m per walk (default {DEFAULT_PROTOTYPE_DISTANCE:g}, so that the default run stays under "
                         f"5 min on 2 cores; the paper's is {PAPER_DISTANCE_M:g}: about 5x the time). Battery use "
                         "and range are also reported per 100 m")
-    g.add_argument("--prototype-modes", nargs="+", default=["ideal", "hardware"], choices=["ideal", "hardware"])
+    g.add_argument("--prototype-modes", nargs="+", default=["ideal", "hardware"], choices=["ideal", "hardware"],
+                   help="the robots the prototype walks: ideal (the paper's simulation) and hardware (friction, "
+                        "latency, sensor noise, Kalman speed, mass draw: HARDWARE_LIKE) (default both)")
     return p
 
 
@@ -193,10 +196,13 @@ def _metrics_option() -> argparse.ArgumentParser:
 def _video_options() -> argparse.ArgumentParser:
     p = _parent()
     g = p.add_argument_group("video")
-    g.add_argument("--video-trajectory", default="learned", choices=["learned", *BASELINE_CHOICES])
-    g.add_argument("--video-speed", type=positive, default=1.0, help="m/s")
-    g.add_argument("--video-duration", type=positive, default=4.0, help="s of simulated walking")
-    g.add_argument("--video-format", default="gif", choices=["gif", "mp4"])
+    g.add_argument("--video-trajectory", default="learned", choices=["learned", *BASELINE_CHOICES],
+                   help="the foot trajectory the trot walks: the first learned path (its seed is named in the "
+                        "frame and the file name) or a common one (default learned)")
+    g.add_argument("--video-speed", type=positive, default=1.0, help="commanded speed, m/s (default 1.0)")
+    g.add_argument("--video-duration", type=positive, default=4.0, help="s of simulated walking (default 4)")
+    g.add_argument("--video-format", default="gif", choices=["gif", "mp4"],
+                   help="gif (Pillow, always available) or mp4 (needs imageio[ffmpeg] or ffmpeg; default gif)")
     return p
 
 

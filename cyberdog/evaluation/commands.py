@@ -61,9 +61,13 @@ def walk_config(args) -> C.WalkConfig:
 
 def open_run(args, cfg: C.WalkConfig) -> Run:
     """The output folder of a sub-command that walks: --out (default runs/evaluate-<time>) with config.yaml."""
-    run = Run(args, args.out or new_out())
-    run.out.mkdir(parents=True, exist_ok=True)
-    C.save(cfg, run.out / "config.yaml")
+    out = args.out or new_out()
+    try:
+        run = Run(args, out)
+        C.save(cfg, run.out / "config.yaml")
+    except OSError as err:  # an unwritable place, or a path through a file
+        raise UsageError(f"cannot write the output folder --out {out}: {err.strerror or err}; choose a folder "
+                         f"you can write") from None
     return run
 
 
@@ -120,6 +124,8 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_compare, run_figures, run_prototype_part, run_video
 
     L.check_learned_inputs(args)
+    if args.video:
+        check_video_format(args)
     reference = L.reference_shape(args)
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
@@ -147,9 +153,20 @@ def cmd_figures(args, cfg: C.WalkConfig) -> int:
     return run.finish()
 
 
+def check_video_format(args) -> None:
+    """An MP4 that cannot be written fails before any frame is rendered."""
+    if getattr(args, "video_format", "gif") == "mp4":
+        from cyberdog.analysis.video import mp4_writer_problem
+
+        problem = mp4_writer_problem()
+        if problem:
+            raise UsageError(problem)
+
+
 def cmd_video(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_video
 
+    check_video_format(args)
     learned = None
     if args.video_trajectory == "learned":
         L.check_learned_inputs(args)

@@ -189,9 +189,18 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
 def check_learned_inputs(args) -> None:
     """Fail now, before any walk, on a missing or unreadable trajectory file or policy, or on a requested
     speed that no learned path can walk."""
-    if not policy_paths(args.policies, args.sweep):
+    paths = policy_paths(args.policies, args.sweep)
+    if not paths:
         learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
         check_speeds_covered(learned, getattr(args, "speeds", []))
+    from cyberdog.rl.checkpoint import CheckpointError
+    from cyberdog.rl.rollout import load_actor
+
+    for path in paths:  # each policy loads (small files): a wrong file fails here, not after other extractions
+        try:
+            load_actor(path)
+        except (CheckpointError, ValueError) as err:
+            raise UsageError(f"--policies {path}: {err}") from None
 
 
 def check_speeds_covered(learned: dict, speeds: list[float]) -> None:

@@ -113,15 +113,18 @@ def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
     """A GIF/MP4 of the trot with --video-trajectory at --video-speed."""
     from cyberdog.analysis.video import record_video
 
-    name = args.video_trajectory
+    name = label = args.video_trajectory
     traj = None
     lift = cfg.gait.lift_height
     if name == "learned":  # a commanded path is shown as its LF leg's x-z path on all four legs
-        label, traj = next(iter(flat_learned(learned, args.video_speed).items()))
+        seed, traj = next(iter(flat_learned(learned, args.video_speed).items()))
         lift = cmp.learned_lift_height(traj)
-    vcfg = cmp.walk_config(cfg, name, args.video_speed, lift)
+        label = f"learned, {seed}"  # which of the learned paths the video walks
+        name = f"learned_{seed}"
+    vcfg = cmp.walk_config(cfg, args.video_trajectory, args.video_speed, lift)
     path = out / f"trot_{name}_{args.video_speed:g}mps.{args.video_format}"
-    return record_video(vcfg, traj, path, args.video_duration, label=name)
+    print(f"video: the trot with the {label} trajectory at {args.video_speed:g} m/s, {args.video_duration:g} s")
+    return record_video(vcfg, traj, path, args.video_duration, label=label)
 
 
 __all__ = ["FIGURES", "run_compare", "run_figures", "run_prototype_part", "run_video"]

@@ -80,15 +80,22 @@ def save_checkpoint(state: dict, path: str | Path) -> Path:
     return save_atomic({"format": FORMAT, "version": VERSION, **state}, path)
 
 
-def load_checkpoint(path: str | Path) -> dict:
+def load_torch_file(path: str | Path, what: str):
+    """`torch.load` of a file the trainer wrote (tensors and plain containers only), or one clear
+    CheckpointError naming `what` and the file: torch's own message for a file that is not one (advice to load
+    it with weights_only=False, which would run code from the file) is not passed on."""
     path = Path(path)
     if not path.is_file():
-        raise CheckpointError(f"checkpoint {path} does not exist")
+        raise CheckpointError(f"{what} {path} does not exist")
     try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # truncated or otherwise unreadable file
-        raise CheckpointError(f"checkpoint {path} is corrupt or unreadable ({type(e).__name__}: {e}); "
-                              f"delete it or resume from another run folder") from e
+        return torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:  # not a torch file, truncated, or holding more than tensors and containers
+        raise CheckpointError(f"{what} {path} is not a file written by train.py, or it is truncated "
+                              f"(torch.load failed: {type(e).__name__})") from e
+
+
+def load_checkpoint(path: str | Path) -> dict:
+    state = load_torch_file(path, "checkpoint")
     if isinstance(state, dict) and "actor" in state and "format" not in state:
         raise CheckpointError(f"{path} is an actor file (for evaluate.py), not a checkpoint: use a run's "
                               f"checkpoint.pt or stage<N>_final.pt")

@@ -22,7 +22,7 @@ import torch
 from cyberdog import config as C
 from cyberdog.envs.cyberdog_env import CyberDogEnv, actor_observation_scale
 from cyberdog.loop.result import WalkResult, walk_result
-from cyberdog.rl.checkpoint import CheckpointError, check_shapes
+from cyberdog.rl.checkpoint import CheckpointError, check_shapes, load_torch_file
 from cyberdog.rl.networks import TanhActor
 
 
@@ -44,12 +44,7 @@ def load_actor(path: str | Path) -> LoadedActor:
     """Load an actor file written by the trainer (`stage<N>_final_actor.pt`, `stage<N>_best_actor.pt`,
     `saved/*.pt`): its weights, and the experiment config saved beside them (needed for the env)."""
     path = Path(path)
-    if not path.is_file():
-        raise CheckpointError(f"actor file {path} does not exist")
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:
-        raise CheckpointError(f"actor file {path} is corrupt or unreadable ({type(e).__name__}: {e})") from e
+    state = load_torch_file(path, "actor file")
     if not isinstance(state, dict) or "actor" not in state or "config" not in state:
         raise CheckpointError(f"{path} is not an actor file (expected keys 'actor' and 'config')")
     cfg = C.from_dict(C.ExperimentConfig, state["config"])

@@ -1,0 +1,52 @@
+"""Mistakes a new user makes end in one line naming the problem and what to do, exit 2, before any work."""
+import pytest
+
+import evaluate
+import train
+
+
+@pytest.mark.parametrize("out", ["/proc/x", "README.md/sub"])
+def test_an_unwritable_output_folder_is_one_line(out, capsys):
+    assert evaluate.main(["baselines", "--speeds", "1", "--duration", "0.1", "--out", out]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot write the output folder --out" in err[0]
+
+
+def test_a_policy_that_is_not_an_actor_file_is_one_line(tmp_path, capsys):
+    assert evaluate.main(["extract", "--policies", "results/policy_speeds/metrics.csv",
+                          "--out", str(tmp_path / "e")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a file written by train.py" in err[0]
+    assert not (tmp_path / "e").exists()  # refused before the output folder was made
+
+
+def test_mp4_without_a_writer_fails_before_rendering(tmp_path, capsys, monkeypatch):
+    import cyberdog.analysis.video as video
+    monkeypatch.setattr(video, "mp4_writer_problem", lambda: "MP4 needs imageio[ffmpeg] or ffmpeg")
+    rendered = []
+    monkeypatch.setattr(video, "render_walk", lambda *a, **k: rendered.append(1) or [])
+    assert evaluate.main(["video", "--video-trajectory", "cycloid", "--video-format", "mp4",
+                          "--out", str(tmp_path / "v")]) == 2
+    assert "MP4 needs" in capsys.readouterr().err and not rendered
+
+
+def test_a_garbage_init_from_file_is_one_clear_line(tmp_path, capsys):
+    garbage = tmp_path / "garbage.pt"
+    garbage.write_text("not a checkpoint")
+    with pytest.raises(SystemExit) as exit_:
+        train.main(["--config", "configs/tiny.yaml", "--init-from", str(garbage), "--run-dir", str(tmp_path / "run")])
+    message = str(exit_.value.code)
+    assert "not a file written by train.py" in message and len(message.splitlines()) == 1
+    assert "weights_only" not in message and "file an issue" not in message.lower()
+
+
+@pytest.mark.parametrize("command, option", [("video", "--video-trajectory"), ("video", "--video-format"),
+                                             ("prototype", "--prototype-modes"), ("video", "--video-speed"),
+                                             ("video", "--video-duration"), ("extract", "--rollout-duration")])
+def test_every_option_says_what_it_does_and_its_default(command, option, capsys):
+    with pytest.raises(SystemExit):
+        evaluate.main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    start = text.rindex(option + " ")  # its entry in the options list, after the usage line
+    entry = text[start:start + 400]
+    assert "default" in entry, entry
