@@ -1,4 +1,5 @@
-"""Output folders of `evaluate.py`: the results of two runs never mix silently.
+"""Output folders of `evaluate.py`: the results of two runs never mix silently, and a run that failed can be
+run again.
 
 A folder that already holds files is refused unless the user asks to write into it (`force=True`); then the
 files that earlier runs recorded in the folder's `outputs.json` are removed first, so that `config.yaml` and
@@ -7,9 +8,12 @@ every result recorded there come from this run. Files no run recorded (a folder 
 adds to the results it reads from the same folder (`evaluate.py figures --from DIR`): nothing is refused or
 removed.
 
-Every run appends to `outputs.json` its command, arguments, start and end time and exactly the files it wrote
-(new or rewritten); a file rewritten by a later run leaves the earlier run's list. So the folder says what is
-whose, and `finish()` returns exactly this run's files for the summary. Standard library only.
+Every run is entered in `outputs.json` as it starts (status "running", its start time) and, however it ends,
+with exactly the files it wrote (new or rewritten) and its status: "finished", or "failed" / "interrupted"
+(`abandon`). A file rewritten by a later run leaves the earlier run's list. A run killed outright stays
+"running"; the files in the folder written after its start are taken as its own. So the folder says what is
+whose, `finish()` returns exactly this run's files for the summary, and a folder that holds only what runs
+that did not finish left behind is emptied of it and reused without `--force`. Standard library only.
 """
 from __future__ import annotations
 
@@ -67,18 +71,31 @@ class OutputFolder:
             raise OutputFolderError(f"--out {self.out} is a file, not a folder")
         existing = _snapshot(self.out)
         if existing and not append:
-            if not force:
+            unfinished = _unfinished_files(self.out, existing)
+            if set(existing) <= unfinished:  # only what runs that did not finish left: theirs to replace
+                self._remove(unfinished, "an earlier run that did not finish")
+            elif not force:
                 raise OutputFolderError(
                     f"--out {self.out} already holds {len(existing)} file(s) ({_examples(existing)}): this run's "
                     f"results would mix with them; choose a new --out, or pass --force to replace the results "
                     f"that earlier evaluate.py runs wrote there")
-            self._remove_earlier(existing)
+            else:
+                self._remove_earlier(existing, unfinished)
         self.started = time.time()
         self.before = _snapshot(self.out)
+        self._record("running", [])  # entered now: a failure or a kill still leaves this run named
 
-    def _remove_earlier(self, existing: dict) -> None:
-        recorded = {f for run in read_manifest(self.out)["runs"] for f in run.get("files", [])}
-        for rel in sorted(recorded & set(existing)):
+    def _remove_earlier(self, existing: dict, unfinished: set[str]) -> None:
+        recorded = {f for run in read_manifest(self.out)["runs"] for f in run.get("files", [])} | unfinished
+        self._remove(recorded & set(existing), "earlier evaluate.py runs", "--force: ")
+        kept = set(existing) - recorded
+        if kept:
+            self.notes.append(f"--force: kept {len(kept)} file(s) in {self.out} that no evaluate.py run recorded "
+                              f"({_examples(kept)}); {MANIFEST} lists the files this run writes")
+
+    def _remove(self, names, whose: str, prefix: str = "") -> None:
+        """Delete the files `names` (relative to the folder) and the manifest, then folders left empty."""
+        for rel in sorted(names):
             path = self.out / rel
             path.unlink()
             self.removed.append(path)
@@ -88,12 +105,7 @@ class OutputFolder:
             if d.is_dir() and not any(d.iterdir()):
                 d.rmdir()
         if self.removed:
-            self.notes.append(f"--force: removed {len(self.removed)} file(s) that earlier evaluate.py runs wrote "
-                              f"in {self.out}")
-        kept = set(existing) - recorded
-        if kept:
-            self.notes.append(f"--force: kept {len(kept)} file(s) in {self.out} that no evaluate.py run recorded "
-                              f"({_examples(kept)}); {MANIFEST} lists the files this run writes")
+            self.notes.append(f"{prefix}removed {len(self.removed)} file(s) that {whose} wrote in {self.out}")
 
     def written(self) -> list[Path]:
         """The files this run has written so far (new, or rewritten since it started)."""
@@ -101,22 +113,53 @@ class OutputFolder:
         return [self.out / rel for rel, stat in sorted(now.items()) if self.before.get(rel) != stat]
 
     def finish(self) -> list[Path]:
-        """Record this run in outputs.json; returns the files it wrote, outputs.json included."""
-        files = self.written()
+        """Record this run as finished in outputs.json; returns the files it wrote, outputs.json included."""
+        files = self._record("finished", self.written())
+        return files + [self.out / MANIFEST]
+
+    def abandon(self, status: str = "failed") -> None:
+        """Record this run as ended without finishing ("failed" or "interrupted"), with the files it wrote, so
+        that the same command can run again into this folder."""
+        self._record(status, self.written())
+
+    def _record(self, status: str, files: list[Path]) -> list[Path]:
+        """This run's entry in outputs.json with `status` and `files` (a file now this run's leaves earlier
+        runs' lists); written atomically."""
         rel = [p.relative_to(self.out).as_posix() for p in files]
         manifest = read_manifest(self.out)
         mine = set(rel)
         runs = []
-        for run in manifest["runs"]:  # a file rewritten now is no longer the earlier run's
+        for run in manifest["runs"]:
+            if run.get("started_ns") == self._started_ns():
+                continue  # this run's own earlier entry
             run["files"] = [f for f in run.get("files", []) if f not in mine and (self.out / f).is_file()]
-            if run["files"]:
+            if run["files"] or run.get("status", "finished") == "running":
                 runs.append(run)
-        runs.append({"command": self.command, "argv": self.argv,
-                     "started": time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(self.started)),
-                     "finished": time.strftime("%Y-%m-%d %H:%M:%S"), "files": rel})
-        manifest["runs"] = runs
+        entry = {"command": self.command, "argv": self.argv,
+                 "started": time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(self.started)),
+                 "started_ns": self._started_ns(), "status": status, "files": rel}
+        if status != "running":
+            entry["ended"] = time.strftime("%Y-%m-%d %H:%M:%S")
+        manifest["runs"] = runs + [entry]
         self.out.mkdir(parents=True, exist_ok=True)
         tmp = self.out / f".{MANIFEST}.{os.getpid()}.tmp"
         tmp.write_text(json.dumps(manifest, indent=1) + "\n")
         os.replace(tmp, self.out / MANIFEST)
-        return files + [self.out / MANIFEST]
+        return files
+
+    def _started_ns(self) -> int:
+        return int(self.started * 1e9)
+
+
+def _unfinished_files(out: Path, existing: dict) -> set[str]:
+    """The files of `existing` that runs which did not finish left: those they recorded (failed, interrupted),
+    and, for a run still marked running (killed outright), every file written since it started that no
+    finished run recorded."""
+    runs = read_manifest(out)["runs"]
+    finished = {f for r in runs if r.get("status", "finished") == "finished" for f in r.get("files", [])}
+    mine = {f for r in runs if r.get("status") in ("failed", "interrupted") for f in r.get("files", [])}
+    starts = [r["started_ns"] for r in runs if r.get("status") == "running" and "started_ns" in r]
+    if starts:  # (file times come from a coarser clock than time.time(): a second's margin)
+        since = min(starts) - 1_000_000_000
+        mine |= {rel for rel, (mtime_ns, _, _) in existing.items() if mtime_ns >= since and rel not in finished}
+    return mine & set(existing)

@@ -50,3 +50,38 @@ def test_every_option_says_what_it_does_and_its_default(command, option, capsys)
     start = text.rindex(option + " ")  # its entry in the options list, after the usage line
     entry = text[start:start + 400]
     assert "default" in entry, entry
+
+
+def test_an_interrupted_run_can_be_run_again_into_the_same_folder(tmp_path, monkeypatch, capsys):
+    """Ctrl-C after the output folder was made: the folder records the run as interrupted with its files, and
+    the same command then runs again without --force."""
+    import cyberdog.analysis.baselines as baselines
+    out = tmp_path / "out"
+    argv = ["baselines", "--speeds", "1", "--duration", "0.2", "--out", str(out)]
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(baselines, "baseline_rows", interrupted)
+        assert evaluate.main(argv) == 130
+    assert (out / "config.yaml").is_file()
+    from cyberdog.output_folder import read_manifest
+    assert [r["status"] for r in read_manifest(out)["runs"]] == ["interrupted"]
+    assert evaluate.main(argv) == 0  # no --force needed: only the interrupted run's files were there
+    runs = read_manifest(out)["runs"]
+    assert [r["status"] for r in runs] == ["finished"] and "config.yaml" in runs[0]["files"]
+
+
+def test_a_killed_run_leaves_a_folder_the_next_run_can_use(tmp_path):
+    """A run killed outright stays "running" in outputs.json; what it wrote is taken as its own."""
+    from cyberdog.output_folder import OutputFolder, OutputFolderError
+    out = tmp_path / "out"
+    OutputFolder(out, command="compare")  # entered as running, then killed: no finish, no abandon
+    (out / "config.yaml").write_text("sim: {}\n")
+    again = OutputFolder(out, command="compare")
+    assert not (out / "config.yaml").exists() and any("did not finish" in n for n in again.notes)
+    (out / "someone_elses.txt").write_text("x")  # a file no run wrote: still refused without --force
+    again.finish()
+    with pytest.raises(OutputFolderError, match="already holds"):
+        OutputFolder(out, command="compare")

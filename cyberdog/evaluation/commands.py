@@ -31,6 +31,11 @@ class Run:
             raise UsageError(str(err)) from None
         for note in self.folder.notes:
             print(note)
+        args.run = self  # so that `run` can record this run's files if the command fails
+
+    def abandon(self, status: str) -> None:
+        """Record the files written so far, the run as `status` ("failed", "interrupted")."""
+        self.folder.abandon(status)
 
     def finish(self) -> int:
         files = self.folder.finish()
@@ -185,14 +190,25 @@ def run(args, argv: list[str]) -> int:
     """Run the sub-command `args.command` (parsed by `cyberdog.evaluation.cli.parse_args` from `argv`);
     returns the exit status."""
     args.argv = list(argv)  # as typed, for outputs.json
+    args.run = None
     try:
         return COMMAND_FUNCTIONS[args.command](args, walk_config(args))
     except UsageError as err:
+        _abandon(args, "failed")
         print(f"evaluate.py: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("\nevaluate.py: interrupted", file=sys.stderr)
+        _abandon(args, "interrupted")
+        print("\nevaluate.py: interrupted; the same command runs again into the same --out", file=sys.stderr)
         return 130
+    except BaseException:
+        _abandon(args, "failed")
+        raise
+
+
+def _abandon(args, status: str) -> None:
+    if args.run is not None:
+        args.run.abandon(status)
 
 
 __all__ = ["BASELINE_COLUMNS", "COMMAND_FUNCTIONS", "run"]

@@ -90,7 +90,7 @@ def load_torch_file(path: str | Path, what: str):
     try:
         return torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # not a torch file, truncated, or holding more than tensors and containers
-        raise CheckpointError(f"{what} {path} is not a file written by train.py, or it is truncated "
+        raise CheckpointError(f"{what} {path} is corrupt, truncated, or not a file written by train.py "
                               f"(torch.load failed: {type(e).__name__})") from e
 
 
