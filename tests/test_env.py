@@ -166,3 +166,42 @@ def test_rgb_array_rendering_works_headless():
     env.close()
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
     assert frame.std() > 1.0  # not a blank image
+
+
+def _score(reward, action) -> tuple[float, bool]:
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make("CyberDog-v0", **({} if reward is None else {"reward": reward}))
+    try:
+        env.reset(seed=0)
+        total = 0.0
+        for _ in range(400):
+            _, r, terminated, truncated, _ = env.step(action)
+            total += r
+            if terminated or truncated:
+                return total, terminated
+        return total, False
+    finally:
+        env.close()
+
+
+@pytest.mark.slow
+def test_the_default_task_rewards_falling_and_the_documented_settings_reward_walking():
+    """What docs/environment.md and the warning say: with the paper's stage-2 reward (the default) falling beats
+    the walking trot; with reward='stage1' or the presets' keep-moving bonus walking wins."""
+    walk, fall = np.zeros(12, dtype=np.float32), np.ones(12, dtype=np.float32)
+    for reward, walking_wins in ((None, False), ("stage1", True), (C.RewardConfig(keep_moving=300.0), True)):
+        walked, fell_walking = _score(reward, walk)
+        fallen, fell = _score(reward, fall)
+        assert not fell_walking and fell
+        assert (walked > fallen) == walking_wins, (reward, walked, fallen)
+
+
+def test_gym_make_warns_when_the_default_reward_is_taken():
+    with pytest.warns(UserWarning, match="falling early scores higher than walking"):
+        gym.make("CyberDog-v0").close()
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym.make("CyberDog-v0", reward="stage2").close()  # chosen: no warning

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from typing import Any
 
 import gymnasium as gym
@@ -16,6 +17,11 @@ from cyberdog.loop.walker import Walker
 from cyberdog.sim.hardware import draw_mass_scale, draw_robot
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
+PAPER_REWARD_WARNING = (
+    "CyberDog-v0 with the paper's stage-2 reward (Eq. 11: keep-moving bonus D = 25, energy E = -0.2 per J; the "
+    "default) has no fall penalty, and with it falling early scores higher than walking: a policy trained on it "
+    "learns to fall. Train with reward='stage1' first, or with a larger keep-moving bonus (RewardConfig("
+    "keep_moving=300), as configs/quick*.yaml's stage 2); see docs/environment.md")
 
 # Observation layout: (name, size, low, high, typical magnitude). Bounds are generous physical limits, values
 # are clipped to them; the typical magnitude is what a learner may divide by to bring inputs to order one.
@@ -137,6 +143,12 @@ class CyberDogEnv(gym.Env):
     loss, friction, driver efficiency: `cyberdog.core.energy.electrical_power`), also in
     `step_electrical_energy_J` (None otherwise).
 
+    **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
+    penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
+    all-ones action that falls after 38 steps about −73, so falling early is the better policy (a warning says
+    so, unless a reward is passed). Train with `reward="stage1"` (walking +18, falling −50) or a larger keep-moving bonus,
+    `RewardConfig(keep_moving=300)` as the presets' stage 2 (walking +70, falling −47).
+
     **Episode end.** `terminated` when the body falls below `fall_height` (0.15 m), tilts beyond
     `fall_tilt_deg` (45°) in roll or pitch, or the state is not finite; `truncated` only by the time limit
     of the registration.
@@ -166,6 +178,7 @@ class CyberDogEnv(gym.Env):
     def __init__(self, config: C.EnvConfig | None = None, reward: str | C.RewardConfig | None = None,
                  render_mode: str | None = None, **overrides: Any):
         cfg = config or C.EnvConfig()
+        reward_chosen = reward is not None
         if reward is not None:
             if isinstance(reward, str):
                 if reward not in REWARD_PRESETS:
@@ -180,6 +193,8 @@ class CyberDogEnv(gym.Env):
         if unknown:
             raise ValueError(f"unknown CyberDog-v0 option(s) {unknown}")
         self.cfg = cfg = dataclasses.replace(cfg, **overrides) if overrides else cfg
+        if not reward_chosen and cfg.reward == C.STAGE2_REWARD:  # the default, taken without a word
+            warnings.warn(PAPER_REWARD_WARNING, UserWarning, stacklevel=2)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
         self.render_mode = render_mode
