@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cyberdog.analysis.parallel import map_in_processes
+from cyberdog.analysis.parallel import map_in_processes, milestone
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.analysis.walk import walk
 from cyberdog.config import WalkConfig
@@ -169,12 +169,14 @@ def run_walk_job(job: WalkJob) -> dict:
     }
 
 
-def run_jobs(jobs: list[WalkJob], workers: int | None = None, log=print) -> list[dict]:
+def run_jobs(jobs: list[WalkJob], workers: int | None = None, log=print, every_walk: bool = True) -> list[dict]:
     """Run the walks (in `workers` spawned processes; None: one per walk, at most the CPUs; 1 = in this
-    process); rows in job order."""
+    process); rows in job order. A line per walk, or with `every_walk=False` one per quarter of them."""
     t0 = time.perf_counter()
 
     def progress(i: int, row: dict, done: int) -> None:
+        if not (every_walk or milestone(done, len(jobs))):
+            return
         elapsed = time.perf_counter() - t0
         eta = elapsed / done * (len(jobs) - done)
         seed = f" [{row['seed']}]" if row["seed"] else ""

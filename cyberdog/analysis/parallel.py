@@ -140,6 +140,12 @@ class ProcessMap:
         self.close()
 
 
+def milestone(done: int, total: int, parts: int = 4) -> bool:
+    """True when `done` of `total` jobs completes one of `parts` equal shares (the last job included): when a
+    brief progress log prints a line."""
+    return done == total or done * parts // total != (done - 1) * parts // total
+
+
 def map_in_processes(fn: Callable[[Any], Any], jobs: Sequence, workers: int | None = None,
                      on_result: Callable[[int, Any, int], None] | None = None,
                      describe: Callable[[Any], str] | None = None) -> list:
@@ -150,4 +156,4 @@ def map_in_processes(fn: Callable[[Any], Any], jobs: Sequence, workers: int | No
         return run(fn, jobs, on_result=on_result, describe=describe)
 
 
-__all__ = ["ProcessMap", "available_cores", "map_in_processes", "resolve_workers"]
+__all__ = ["ProcessMap", "available_cores", "map_in_processes", "milestone", "resolve_workers"]

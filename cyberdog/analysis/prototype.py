@@ -29,7 +29,7 @@ import pickle
 import time
 from pathlib import Path
 
-from cyberdog.analysis.parallel import map_in_processes
+from cyberdog.analysis.parallel import map_in_processes, milestone
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
@@ -111,7 +111,8 @@ def _check_picklable(name: str, trajectory) -> None:
 def run_prototype(trajectories: dict | None = None,
                   speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
-                  base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print) -> list[dict]:
+                  base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
+                  every_walk: bool = True) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
 
     trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
@@ -121,6 +122,7 @@ def run_prototype(trajectories: dict | None = None,
         learned path's own, for a matched comparison); default `base_cfg.gait.lift_height`.
     modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
+    every_walk: a progress line per walk (False: one per quarter of them).
     Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
     (`add_gaps`); see the module docstring for the battery assumptions.
     """
@@ -164,6 +166,8 @@ def run_prototype(trajectories: dict | None = None,
     t0 = time.perf_counter()
 
     def progress(i: int, row: dict, done: int) -> None:
+        if not (every_walk or milestone(done, len(jobs))):
+            return
         elapsed = time.perf_counter() - t0
         eta = elapsed / done * (len(jobs) - done)
         log(f"[{done}/{len(jobs)}] {row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} "

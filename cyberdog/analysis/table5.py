@@ -187,8 +187,9 @@ def _mci(m: float, ci: float, fmt: str) -> str:
     return fmt.format(m) + (f" ± {fmt.format(ci)}" if math.isfinite(ci) else "")
 
 
-def summary_markdown(summary: list[dict], set_name: str) -> str:
-    """One set of `summary_rows` as a table: rows = quantities, columns = speeds; mean ± 95 % CI over seeds."""
+def summary_markdown(summary: list[dict], set_name: str, brief: bool = False) -> str:
+    """One set of `summary_rows` as a table: rows = quantities, columns = speeds; mean ± 95 % CI over seeds.
+    `brief`: the valid walks, the lift height, E of each trajectory and both D_t only (the main job's summary)."""
     rows = [r for r in summary if r["set"] == set_name]
     if not rows:
         return ""
@@ -201,11 +202,11 @@ def summary_markdown(summary: list[dict], set_name: str) -> str:
     line("learned walks valid (no fall, speed ±5 %)", [f"{r['n_valid']} of {r['n_seeds']}" for r in rows])
     line("lift height H of the learned path (m)",
          [_mci(r["lift_height_m_mean"], r["lift_height_m_ci95"], "{:.4f}") for r in rows])
-    has_reference = all(f"{REFERENCE}_lift_height_m" in r for r in rows)
+    has_reference = all(f"{REFERENCE}_lift_height_m" in r for r in rows) and not brief
     names = {"learned": "learned", "cycloid": "composite cycloid", "straight": "straight line"}
     if has_reference:
         names[REFERENCE] = f"searched shape (H = {rows[0][f'{REFERENCE}_lift_height_m']:.3f} m, reference)"
-    for key, label, _, fmt in SUMMARY_QUANTITIES:
+    for key, label, _, fmt in SUMMARY_QUANTITIES[:1] if brief else SUMMARY_QUANTITIES:  # brief: E only
         for name in ("learned",) + BASELINES + ((REFERENCE,) if has_reference else ()):
             line(f"{label}, {names[name]}", [_mci(r[f"{name}_{key}_mean"], r[f"{name}_{key}_ci95"], fmt)
                                              for r in rows])

@@ -37,11 +37,20 @@ class Run:
         """Record the files written so far, the run as `status` ("failed", "interrupted")."""
         self.folder.abandon(status)
 
-    def finish(self) -> int:
+    def finish(self, headline: str | None = None) -> int:
+        """Record the run; print the files it wrote (with `headline`, a file of them: only where the headline
+        and the figures are, and how many files in all)."""
         files = self.folder.finish()
-        print(f"\nwrote {len(files)} files in {self.out}/ ({time.perf_counter() - self.t0:.1f} s):")
-        for p in files:
-            print(f"  {p}")
+        print(f"\nwrote {len(files)} files in {self.out}/ ({time.perf_counter() - self.t0:.1f} s)"
+              + ("; every file is listed in outputs.json" if headline else ":"))
+        if headline:
+            print(f"  the headline table:  {self.out / headline}")
+            figures = sorted(p.name for p in files if p.suffix == ".png")
+            if figures:
+                print(f"  the figures:         {self.out}/{{{','.join(figures)}}}")
+        else:
+            for p in files:
+                print(f"  {p}")
         print(f"output folder: {self.out}/")  # the last line: where to look
         return 0
 
@@ -136,14 +145,14 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
-                reference=reference)
+                reference=reference, brief=True)
     if not args.no_prototype:
         run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                           run.out)
+                           run.out, brief=True)
     run_figures(run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)
-    return run.finish()
+    return run.finish(headline="table5.md")
 
 
 def cmd_figures(args, cfg: C.WalkConfig) -> int:

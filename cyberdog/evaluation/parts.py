@@ -19,9 +19,11 @@ FIGURES = ("figure4", "figure6", "figure7", "figure10", "figure13")
 
 
 def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration: float, same_lift: bool,
-                workers: int | None, out: Path, log=print, reference=None) -> tuple[list, list, dict]:
+                workers: int | None, out: Path, log=print, reference=None, brief: bool = False) -> tuple[list, list, dict]:
     """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power).
-    reference: the direct search's shape (a SampledTrajectory) for the matched-lift table's reference row."""
+    reference: the direct search's shape (a SampledTrajectory) for the matched-lift table's reference row.
+    brief: print a progress line per quarter of the walks and the headline's main rows only (the full tables
+    are in the files)."""
     for label, entry in learned.items():
         for t in (entry.values() if isinstance(entry, dict) else [entry]):
             period = t.gait.period if isinstance(t, CommandedPath) else t.provenance.get("period_s")
@@ -32,11 +34,12 @@ def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration:
         lifts = [cmp.learned_lift_height(t) for e in learned.values()
                  for t in (e.values() if isinstance(e, dict) else [e])]
         gap = abs(reference.lift_height - sum(lifts) / len(lifts))
-        log(f"reference row: the searched shape at H = {reference.lift_height:.3f} m"
-            + (f" (warning: {1e3 * gap:.1f} mm from the learned paths' mean lift height)" if gap > 2e-3 else ""))
+        log(f"reference row: the direct search's best shape, searched at H = {reference.lift_height:.3f} m"
+            + (f" ({1e3 * gap:.1f} mm from the learned paths' mean lift height: compare with care)"
+               if gap > 2e-3 else ""))
     jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift, reference=reference)
     log(f"comparison: {len(jobs)} walks of {duration:g} s")
-    walks = cmp.run_jobs(jobs, workers, log)
+    walks = cmp.run_jobs(jobs, workers, log, every_walk=not brief)
     power = {w["walk_id"]: w.pop("power_W") for w in walks}
     rows = cmp.comparison_rows(walks, cfg.gait.lift_height)
     means = cmp.seed_means(rows)
@@ -62,6 +65,16 @@ def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration:
         write_rows(means, out, "learned_mean_ci")
     (out / "walks.json").write_text(json.dumps(walks, indent=1))
     np.savez_compressed(out / "power_traces.npz", **{f"walk_{i}": p for i, p in power.items()})
+    if brief:
+        matched = t5.summary_markdown(summary, "same_lift", brief=True)
+        paper = [r for r in summary if r["set"] == "paper"]
+        print("\nTable 5 at matched lift (mean ± 95 % CI over seeds; in full: table5.md):\n")
+        print(matched or t5.summary_markdown(summary, "paper", brief=True))
+        if matched and paper:
+            print("\nThe paper's protocol (baselines at H = " f"{cfg.gait.lift_height:g} m): D_t on E "
+                  + " / ".join(f"{r['D_t_pct_mean']:.1f} %" for r in paper)
+                  + " at " + " / ".join(f"{r['speed_command_mps']:g}" for r in paper) + " m/s")
+        return rows, walks, power
     print("\nTable 5: energy consumption of the foot trajectories over the walk\n")
     print(headline)
     print("\nEvery walk of the paper's protocol (E in kJ over the walk; matched-lift walks: comparison.md)\n")
@@ -72,8 +85,9 @@ def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration:
 
 
 def run_prototype_part(cfg: C.WalkConfig, learned: dict, speeds: list[float], distance_m: float, modes: list[str],
-                       workers: int | None, out: Path, log=print) -> list[dict]:
-    """Section 4.2 in simulation: the first learned trajectory and both baselines → prototype.*."""
+                       workers: int | None, out: Path, log=print, brief: bool = False) -> list[dict]:
+    """Section 4.2 in simulation: the first learned trajectory and both baselines → prototype.*. `brief`: a
+    progress line per quarter of the walks and the battery use per 100 m only (the tables are in the files)."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
 
     label, entry = next(iter(learned.items()))
@@ -89,8 +103,17 @@ def run_prototype_part(cfg: C.WalkConfig, learned: dict, speeds: list[float], di
     log(f"prototype: {len(trajectories) * len(speeds) * len(modes)} walks of {distance_m:g} m (learned = {label}"
         + (", baselines at its own lift height)" if lifts else ")"))
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
-                         base_cfg=cfg, lift_heights=lifts, log=log)
+                         base_cfg=cfg, lift_heights=lifts, log=log, every_walk=not brief)
     write_prototype(rows, out)
+    if brief:
+        print(f"\nPrototype run, {label} (battery % per 100 m, Eq. 13; {distance_m:g} m walks; in full: "
+              f"prototype.md):")
+        for mode in modes:
+            cells = {name: [f"{100 * r['battery_used_pct'] / r['distance_m']:.2f}" for r in rows
+                            if r["trajectory"] == name and r["robot"] == mode] for name in trajectories}
+            print(f"  {mode:8s} " + "   ".join(f"{name} {' / '.join(c)}" for name, c in cells.items())
+                  + f"  at {' / '.join(f'{v:g}' for v in speeds)} m/s")
+        return rows
     print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks (paper: 100 m); "
           f"learned = {label}\n")
     print(prototype_table(rows))
