@@ -26,6 +26,8 @@ EXPENSIVE = {
     "evaluate.py extract --sweep runs/speeds": "needs the sweep above; rolls out 5 policies at 3 speeds",
     "evaluate.py compare --learned runs/extract/learned": "needs the extraction above; walks for minutes",
     "evaluate.py prototype --prototype-distance 100": "18 walks of 100 m: about 5x command 1's prototype part",
+    "evaluate.py extract --policies results/policy_speeds": "rolls out the shipped policy at 3 speeds: a minute",
+    "evaluate.py compare --learned runs/extract_shipped/learned": "needs the extraction above; walks for minutes",
 }
 SERVER = {".venv/bin/tensorboard --logdir runs": "a server that runs until stopped: checked to be installed"}
 RUN = ("train.py --config configs/tiny.yaml", "-m plots --from results/figures_input", "train.py --help",
