@@ -242,6 +242,7 @@ def main(argv=None) -> int:
                 sys.exit(f"--stage 2 needs a stage-1 agent: pass --init-from, or run stage 1 in {run_dir} first")
         trainer_kwargs = dict(run_dir=run_dir, stages=stages, init_from=init_from)
     from cyberdog.rl import CheckpointError, NonFiniteError, Trainer  # slow import after --help
+    from cyberdog.rl.stop import TrainingInterrupted
     from cyberdog.runlock import RunFolderError
 
     try:
@@ -250,8 +251,12 @@ def main(argv=None) -> int:
         sys.exit(f"error: {e}")
     except (ValueError, OSError) as e:  # settings refused before the start (no update would happen, no CUDA)
         sys.exit(f"error: {e}")
-    except KeyboardInterrupt:
-        print(f"\ninterrupted; continue with: python train.py --resume {run_dir}", file=sys.stderr)
+    except TrainingInterrupted as stop:
+        print(f"\n{stop}; continue with: python train.py --resume {run_dir}", file=sys.stderr)
+        return stop.exit_code
+    except KeyboardInterrupt:  # a second Ctrl-C: stopped at once
+        print(f"\nstopped at once: the steps since the last checkpoint are lost; continue with: python train.py "
+              f"--resume {run_dir}", file=sys.stderr)
         return 130
     print("done: " + ", ".join(f"{k}={v}" for k, v in summary.items()
                                if k in ("stage", "env_steps", "episodes", "updates", "buffer_size",

@@ -40,6 +40,7 @@ from torchrl.collectors import Collector
 
 from cyberdog.config import AgentConfig, EnvConfig, RewardConfig
 from cyberdog.rl.env import make_batched_env, make_env
+from cyberdog.rl.stop import ignore_stop_signals
 
 WORKER_START_TIMEOUT_S = 300.0  # first batch: the worker imports torch, builds the env and collects
 WORKER_STOP_TIMEOUT_S = 60.0  # several envs: the batch in flight, then closing the env processes
@@ -67,6 +68,7 @@ def _worker(conn, env_cfg: EnvConfig, reward: RewardConfig, seed: int, agent_cfg
             observation_size: int, action_size: int, frames_per_batch: int, init_random_frames: int,
             num_envs: int = 1) -> None:
     """Worker process: build env and policy, then per request load the weights and collect one batch."""
+    ignore_stop_signals()  # the trainer answers SIGINT and SIGTERM, and then stops this worker
     try:
         torch.set_num_threads(1)
         torch.manual_seed(seed)

@@ -17,6 +17,7 @@ from torchrl.envs.gym_like import default_info_dict_reader
 
 from cyberdog.config import REWARD_TERM_NAMES, EnvConfig, RewardConfig
 from cyberdog.envs.cyberdog_env import CyberDogEnv
+from cyberdog.rl.stop import ignore_stop_signals
 
 INFO_KEYS = tuple(f"reward_{n}" for n in REWARD_TERM_NAMES) + ("energy_J", "forward_speed")
 
@@ -62,6 +63,13 @@ def make_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, device: 
     return env
 
 
+def make_worker_env(*args, **kwargs) -> TransformedEnv:
+    """`make_env` in an env worker process of `ParallelEnv`: the trainer, not the worker, answers SIGINT and
+    SIGTERM (`cyberdog.rl.stop`)."""
+    ignore_stop_signals()
+    return make_env(*args, **kwargs)
+
+
 def worker_seed(seed: int, index: int) -> int:
     """Env seed of worker `index` of a batch of envs started with `seed`: numpy's `SeedSequence` of the pair,
     so that the workers draw independent streams (seed + index would give run seed s's worker 1 the stream
@@ -81,7 +89,7 @@ def make_batched_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, 
     """
     if int(num_envs) != num_envs or num_envs < 2:
         raise ValueError(f"make_batched_env needs num_envs >= 2 (one env is make_env), got {num_envs!r}")
-    make_one = functools.partial(make_env, env_cfg, reward, track_init=track_init)
+    make_one = functools.partial(make_worker_env, env_cfg, reward, track_init=track_init)
     return ParallelEnv(int(num_envs), make_one, create_env_kwargs=[{"seed": worker_seed(seed, i)}
                                                                   for i in range(num_envs)],
                        mp_start_method="spawn", num_threads=torch.get_num_threads())

@@ -14,7 +14,9 @@ the right reward. A stage's first `critic_warmup_updates` updates train the crit
 
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
 the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
-at any moment. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
+at any moment. SIGINT and SIGTERM do not kill it: the batch in hand is stored, learned from and logged, a
+checkpoint is written and `run()` raises `cyberdog.rl.stop.TrainingInterrupted`, so that the resume loses no
+step that was logged. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
 buffer but it is not logged as an episode. A resume may raise the current stage's budget (`max_env_steps`,
 `max_episodes`; nothing else may differ): the stage goes on, and a finished one keeps its earlier stage-final
 files as `stage<N>_final*_<steps>steps.pt`. Only `checkpoint.pt` carries the replay buffer and the Adam
@@ -51,6 +53,7 @@ from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_c
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
                                 transitions)
+from cyberdog.rl.stop import StopSignals, TrainingInterrupted
 from cyberdog.runlock import RunFolderError, RunLock
 
 ACTION_SIZE = 12  # joint torques or foot offsets (Table 3); the observation's size is the env config's
@@ -72,6 +75,7 @@ class Trainer:
                  init_from: str | Path | None = None, progress: bool = True):
         self.cfg, self.run_dir, self.progress = cfg, Path(run_dir), progress
         self.lock = None
+        self._stop = StopSignals()  # entered by run(): SIGINT and SIGTERM then stop at a safe point
         init_state = None
         if not resume:  # bad settings fail here, before the folder is touched
             if init_from is not None:
@@ -224,32 +228,46 @@ class Trainer:
 
     # ---- the loop --------------------------------------------------------------------------------------
     def run(self) -> dict:
+        """Train the stages to their ends; on SIGINT or SIGTERM, stop after the batch in hand with a checkpoint
+        and raise `TrainingInterrupted` (`cyberdog.rl.stop`)."""
         try:
-            while not self.c["finished"]:
-                stage = self.c["stage"]
-                self._run_stage(stage)
-                score = self.scores[-1] if self.scores else math.nan
-                if self.c["stage_updates"] > 0:
-                    self._save_actor(f"stage{stage}_final_actor.pt", score)
-                    save_checkpoint(self._final_state(stage, score), self.run_dir / f"stage{stage}_final.pt")
-                else:  # e.g. its stop_score was reached before learning started: not a trained actor
-                    self._save_actor(f"stage{stage}_untrained_actor.pt", score)
-                    print(f"WARNING: stage {stage} ended after {self.c['stage_env_steps']} env steps without a single "
-                          f"gradient update; its actor is saved as stage{stage}_untrained_actor.pt, and no "
-                          f"stage{stage}_final files are written", file=sys.stderr, flush=True)
-                rest = [s for s in self.stages if s > stage]
-                if rest:  # next stage: same agent, fresh counters and score window
-                    self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0, stage_updates=0)
-                    self.scores.clear()
-                    self.best_score = -math.inf
-                    self._carry_buffer(stage, rest[0])
-                else:
-                    self.c["finished"] = True
-                self.save()
+            with self._stop:
+                self._run_stages()
         finally:
             self.close()
         return {**self.c, "updates": self.agent.updates, "buffer_size": len(self.rb),
                 "window_mean_score": float(np.mean(self.scores)) if self.scores else math.nan}
+
+    def _stop_if_asked(self, saved: Path | None = None) -> None:
+        """At a safe point: if a stop signal came, write the checkpoint (unless `saved` just was) and stop."""
+        if self._stop.signum is not None:
+            raise TrainingInterrupted(self._stop.signum, self.c["env_steps"], saved or self.save())
+
+    def _run_stages(self) -> None:
+        """Each stage from where the counters stand, with its final files, then the next."""
+        while not self.c["finished"]:
+            stage = self.c["stage"]
+            self._run_stage(stage)
+            score = self.scores[-1] if self.scores else math.nan
+            if self.c["stage_updates"] > 0:
+                self._save_actor(f"stage{stage}_final_actor.pt", score)
+                save_checkpoint(self._final_state(stage, score), self.run_dir / f"stage{stage}_final.pt")
+            else:  # e.g. its stop_score was reached before learning started: not a trained actor
+                self._save_actor(f"stage{stage}_untrained_actor.pt", score)
+                print(f"WARNING: stage {stage} ended after {self.c['stage_env_steps']} env steps without a single "
+                      f"gradient update; its actor is saved as stage{stage}_untrained_actor.pt, and no "
+                      f"stage{stage}_final files are written", file=sys.stderr, flush=True)
+            rest = [s for s in self.stages if s > stage]
+            if rest:  # next stage: same agent, fresh counters and score window
+                self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0, stage_updates=0)
+                self.scores.clear()
+                self.best_score = -math.inf
+                self._carry_buffer(stage, rest[0])
+            else:
+                self.c["finished"] = True
+            saved = self.save()
+            if not self.c["finished"]:
+                self._stop_if_asked(saved)
 
     def _carry_buffer(self, old: int, new: int) -> None:
         """The replay buffer at the switch from stage `old` to stage `new` (`train.buffer_between_stages`)."""
@@ -327,6 +345,7 @@ class Trainer:
                                 upd_s=f"{rates['updates_per_s']:.0f}", refresh=False)
                 if c["env_steps"] - c["last_checkpoint"] >= tc.checkpoint_every:
                     self.save()
+                self._stop_if_asked()  # the batch is stored, learned from and logged: a safe point
                 if self._stage_done(sc):
                     break
                 t0 = time.perf_counter()

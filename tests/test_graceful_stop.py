@@ -1,0 +1,70 @@
+"""SIGINT and SIGTERM stop a training at its next safe point with a checkpoint that holds every env step
+logged; the resume continues from it and ends with the counters of a run never stopped."""
+import csv
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import torch
+
+ROOT = Path(__file__).resolve().parents[1]
+SETS = ["train.stage1.max_env_steps=2000", "train.stage2.max_env_steps=200", "train.checkpoint_every=1000000"]
+COUNTERS = ("stage", "env_steps", "stage_env_steps", "stage_updates")
+
+
+def train(run_dir: Path, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, str(ROOT / "train.py"), "--config", "configs/tiny.yaml", "--run-dir",
+                             str(run_dir), "--no-progress", *extra], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+
+
+def logged(run_dir: Path) -> list[dict]:
+    path = run_dir / "metrics.csv"
+    if not path.is_file():
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def counters(run_dir: Path) -> dict:
+    state = torch.load(run_dir / "checkpoint.pt", weights_only=True)
+    return {k: state["counters"][k] for k in COUNTERS} | {"updates": state["agent"]["updates"]}
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory) -> dict:
+    run_dir = tmp_path_factory.mktemp("whole") / "run"
+    proc = train(run_dir, "--set", *SETS)
+    assert proc.wait(timeout=600) == 0, proc.stdout.read()
+    return counters(run_dir)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+def test_a_stop_signal_checkpoints_every_logged_step_and_the_resume_loses_nothing(signum, code, tmp_path,
+                                                                                   uninterrupted):
+    run_dir = tmp_path / "run"
+    proc = train(run_dir, "--set", *SETS)
+    deadline = time.time() + 300
+    while len(logged(run_dir)) < 10 and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.2)  # mid-stage 1: episodes are being logged
+    assert proc.poll() is None, "the run ended before the signal"
+    proc.send_signal(signum)
+    out = proc.communicate(timeout=300)[0]
+    assert proc.returncode == code, out
+    assert f"continue with: python train.py --resume {run_dir}" in out
+    stopped = counters(run_dir)
+    rows = logged(run_dir)
+    assert stopped["stage"] == 1 and 0 < stopped["env_steps"] < 2000
+    assert max(int(r["env_steps"]) for r in rows) <= stopped["env_steps"]  # every logged step is in it
+    state = torch.load(run_dir / "checkpoint.pt", weights_only=True)
+    assert state["counters"]["csv_rows"] == len(rows)  # the resume keeps every logged row
+
+    proc = subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(run_dir), "--no-progress"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert logged(run_dir)[:len(rows)] == rows  # nothing logged before the stop was cut back
+    assert counters(run_dir) == uninterrupted
