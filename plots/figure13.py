@@ -1,5 +1,6 @@
-"""Figure 13: energy against speed, by foot trajectory. (a) E by Eq. (7) over the comparison walk (the
-paper's protocol; learned: mean ± 95 % CI over seeds); (b) battery used per 100 m, Eq. (13), in the
+"""Figure 13: energy against speed, by foot trajectory. (a) E by Eq. (7) over the comparison walk: the learned
+paths (mean ± 95 % CI over seeds), the baselines at each learned path's own lift height (matched, Table 5's
+headline) and at the paper's H (hatched, the paper's protocol); (b) battery used per 100 m, Eq. (13), in the
 prototype experiment on the ideal (plain) and hardware-like (dotted) robot.
 
 Drawn from `comparison.json` and `prototype.json`. A bar counts only if its walk neither fell nor missed the
@@ -47,18 +48,20 @@ def bars(ax, speeds, groups: dict[str, list[Bar]], ylabel: str, title: str,
 
 
 def simulation_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar]], dict[str, tuple]]:
-    """Panel (a) from the paper set's comparison rows: per trajectory one bar per speed, in kJ."""
-    paper = [r for r in rows if r["set"] == "paper"]
-    speeds = sorted(dict.fromkeys(r["speed_command_mps"] for r in paper))
+    """Panel (a): per speed the learned paths (mean ± 95 % CI over seeds), the baselines at matched lift (each
+    seed's own H, as Table 5's headline: mean ± CI of the seeds' baseline walks; solid) and at the paper's H
+    (hatched), in kJ. Rows of the paper set alone (no matched walks) give the paper's bars only."""
+    speeds = sorted(dict.fromkeys(r["speed_command_mps"] for r in rows if r["set"] == "paper"))
     groups: dict[str, list[Bar]] = {}
     styles: dict[str, tuple] = {}
-    for key in ("learned", "cycloid", "straight"):
-        mine = [r for r in paper if r["trajectory"] == key]
-        if not mine:
-            continue
+    matched_set = any(r["set"] == "same_lift" for r in rows)
+    learned = [r for r in rows if r["set"] == "paper" and r["trajectory"] == "learned"]
+    n_seeds = len(dict.fromkeys(r["seed"] for r in learned))
+
+    def per_speed(sel_rows: list[dict]) -> list[Bar]:
         vals: list[Bar] = []
         for v in speeds:
-            sel = [r for r in mine if r["speed_command_mps"] == v]
+            sel = [r for r in sel_rows if r["speed_command_mps"] == v]
             ok = [r["energy_kJ"] for r in sel if r["valid"]]  # valid = did not fall, kept the speed band
             if ok:
                 vals.append((*mean_ci(ok), True))
@@ -66,14 +69,22 @@ def simulation_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar
                 vals.append((float(np.mean([r["energy_kJ"] for r in sel])), math.nan, False))
             else:
                 vals.append((math.nan, math.nan, False))
-        n_seeds = len(dict.fromkeys(r["seed"] for r in mine))
-        if n_seeds > 1:
-            label = f"{NAMES['learned']}, mean ± 95 % CI of {n_seeds} seeds (own H)"
-        else:
-            label = ((mine[0]["label"] if key != "learned" else NAMES["learned"])
-                     + f" (H = {mine[0]['lift_height_m']:.3f} m)")
-        groups[label] = vals
-        styles[label] = (COLORS[key], None)
+        return vals
+
+    if learned:
+        label = (f"{NAMES['learned']}, mean ± 95 % CI of {n_seeds} seeds (own H)" if n_seeds > 1
+                 else f"{NAMES['learned']} (H = {learned[0]['lift_height_m']:.3f} m)")
+        groups[label], styles[label] = per_speed(learned), (COLORS["learned"], None)
+    for key in ("cycloid", "straight"):
+        if matched_set:  # the baseline walk each learned walk was compared with (same set, same lift)
+            mine = [r for r in rows if r["set"] == "same_lift" and r["trajectory"] == key]
+            if mine:
+                label = f"{mine[0]['label']} at matched lift (each seed's H: the headline)"
+                groups[label], styles[label] = per_speed(mine), (COLORS[key], None)
+        paper = [r for r in rows if r["set"] == "paper" and r["trajectory"] == key]
+        if paper:
+            label = f"{paper[0]['label']} at H = {paper[0]['lift_height_m']:.2f} m (the paper's protocol)"
+            groups[label], styles[label] = per_speed(paper), (COLORS[key], "//")
     return speeds, groups, styles
 
 

@@ -52,7 +52,7 @@ def export_inputs(results_dir: str | Path, dst: str | Path, cycles: int = 2) -> 
         shutil.copyfile(src / "config.yaml", paths[0])
     else:
         paths = []
-    rows = [r for r in results.rows if r["set"] == "paper"]  # the rows Figure 13 draws
+    rows = [r for r in results.rows if r["trajectory"] in ("learned", "cycloid", "straight")]  # Figure 13's
     shown = [w for by_key in chosen_walks(results.walks, results.gait.lift_height).values()
              for w in by_key.values()]
     power = {}

@@ -15,7 +15,7 @@ from cyberdog.config.paper import SPEED_BAND, speed_within_band
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.metrics_csv import read_rows, read_stages
-from plots import figure6, figure10, figure13
+from plots import figure6, figure7, figure10, figure13, results
 from plots.learning_curves import NUMBER_COLUMNS, read_curves
 from plots.shipped import README_FIGURES, SHIPPED_INPUTS, SHIPPED_PNG, export_inputs
 from plots.style import COLORS, FADED_ALPHA
@@ -99,7 +99,7 @@ def test_readme_figures_regenerate_from_the_shipped_inputs(tmp_path):
     assert len(shipped) == len(README_FIGURES)
     assert sorted(p.name for p in tmp_path.iterdir()) == [p.name for p in shipped]  # PNG only
     for path in shipped:
-        assert path.stat().st_size < 150_000, path.name  # small enough to commit
+        assert path.stat().st_size < 200_000, path.name  # small enough to commit (Figure 10: five traces a panel)
         new, old = pixels(tmp_path / path.name), pixels(path)
         assert new.shape == old.shape, path.name
         # the same figure: anti-aliasing may differ between matplotlib builds, a changed figure does not pass
@@ -131,9 +131,34 @@ def test_figure10_draws_the_learned_trace_on_top(tmp_path):
     fig = figure10.draw(walks, power)
     for ax in fig.axes:
         traces = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]  # not the cycle boundary line
-        assert len(traces) == 3
+        assert len(traces) == 4  # the cycloid at the learned path's lift (matched), both baselines at the paper's
         top = max(traces, key=lambda ln: ln.get_zorder())
         assert top is traces[-1] and top.get_color() == COLORS["learned"]
+        styles = {ln.get_label().split(",")[0]: ln.get_linestyle() for ln in traces}
+        assert styles["cycloid (matched)"] == "-" and styles["cycloid (paper)"] == ":"  # the headline is solid
+
+
+def test_figure13_draws_the_matched_baselines_beside_the_papers_protocol(tmp_path):
+    rows = json.loads((fake_results(tmp_path / "r") / "comparison.json").read_text())
+    _, groups, styles = figure13.simulation_groups(rows)
+    matched = [k for k in groups if "matched lift" in k]
+    paper = [k for k in groups if "paper's protocol" in k]
+    assert len(matched) == 1 and matched[0].startswith("cycloid") and len(paper) == 2
+    assert styles[matched[0]][1] is None and all(styles[k][1] == "//" for k in paper)  # paper: hatched
+    _, paper_only, _ = figure13.simulation_groups([r for r in rows if r["set"] == "paper"])
+    assert not any("matched" in k for k in paper_only)
+
+
+def test_figure7_matches_the_baselines_at_table5s_lift_height(tmp_path):
+    """Figure 7's solid baselines stand at the lift height Table 5 matches (a commanded path's mean over its
+    legs), and each learned entry names it beside the LF leg's own peak."""
+    learned = results.load_learned(sorted((fake_results(tmp_path / "r") / "learned").glob("*.json")))
+    first = next(iter(learned.values()))
+    own = first.provenance["own_lift_height_m"]
+    fig = figure7.draw(learned)
+    labels = [ln.get_label() for ln in fig.axes[0].get_lines()]
+    assert any(lab.startswith("composite cycloid") and f"H = {own:.3f} m (matched" in lab for lab in labels)
+    assert any(f"H = {own:.3f} m" in lab for lab in labels if "learned" in lab)
 
 
 def test_figure13_fades_every_prototype_walk_off_the_speed_band_and_says_it_scales(tmp_path):

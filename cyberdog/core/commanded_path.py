@@ -93,7 +93,8 @@ class CommandedPath:
         z = z - np.median(z[phase >= beta])
         lift = float(z.max())
         return SampledTrajectory(phase, x, z, self.step_length, lift,
-                                 {**self.provenance, "kind": "commanded path of one leg", "leg": leg})
+                                 {**self.provenance, "kind": "commanded path of one leg", "leg": leg,
+                                  "own_lift_height_m": self.own_lift_height()})  # the H Table 5 matches
 
     # ---- files -------------------------------------------------------------------------------------------
     def to_dict(self) -> dict:
