@@ -41,3 +41,15 @@ def test_compare_at_a_speed_without_a_learned_path_fails_before_any_walk(tmp_pat
     err = capsys.readouterr().err
     assert "no learned path at 0.8 m/s" in err and "1, 1.2, 1.4 m/s" in err and "--policy-speed" in err
     assert not out.exists()
+
+
+def test_extraction_outside_the_training_speeds_names_policy_speed_and_warns_when_it_is_used():
+    from cyberdog.evaluation.cli import UsageError
+    from cyberdog.evaluation.learned import extraction_speeds
+    env = C.EnvConfig(target_speed_range=(1.0, 1.4))
+    with pytest.raises(UsageError, match="--policy-speed"):
+        extraction_speeds(env, [0.8, 1.0], None)
+    said = []
+    assert extraction_speeds(env, [0.8], 0.8, log=said.append) == [0.8]
+    assert len(said) == 1 and "extrapolation" in said[0]
+    assert extraction_speeds(env, [1.2], 1.2, log=said.append) == [1.2] and len(said) == 1  # inside: no warning
