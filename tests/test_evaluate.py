@@ -10,8 +10,7 @@ import evaluate
 from cyberdog import config as C
 from cyberdog.analysis import compare as cmp
 from cyberdog.analysis import table5 as t5
-from cyberdog.core.commanded_path import CommandedPath
-from cyberdog.core.foot_offsets import FootOffsetPath
+from conftest import commanded
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
 from plots.figure10 import last_cycles_window
 from cyberdog.evaluation import learned as learned_module
@@ -161,13 +160,6 @@ def test_decrement_uses_the_cheaper_valid_baseline_of_the_same_set():
     assert means["paper"]["energy_kJ_ci95"] > 0
     md = t5.table5_markdown(rows, cmp.seed_means(rows))
     assert "mean ± 95 % CI over 2 seeds" in md and "(miss: 1.00 m/s)" in md
-
-
-def commanded(speed, dz, seed):
-    """A commanded path: the env's cycloid (H = 0.10 m) with every foot target shifted by dz (m)."""
-    table = np.zeros((4, 40, 3))
-    table[:, :20, 2] = dz * np.sin(np.pi * np.arange(20) / 20)  # swing only: the own lift height is H + dz
-    return CommandedPath(speed, C.GaitConfig(lift_height=0.10), FootOffsetPath(table, 0.4), {"seed": seed})
 
 
 def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_lift():

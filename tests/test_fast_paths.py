@@ -19,15 +19,10 @@ from cyberdog.core.pid import JointPID
 from cyberdog.core.trajectories import (CompositeCycloid, SampledTrajectory, StraightLine, make_trajectory,
                                         point_evaluator)
 
+from conftest import walk_config
+
 ROBOT = C.RobotConfig()
 SIDES = (np.array([0, 2]), np.array([1, 3]))
-
-
-def walk_cfg(trajectory="cycloid", shape="rectangle", **controller) -> C.WalkConfig:
-    cfg = C.WalkConfig()
-    return dataclasses.replace(
-        cfg, gait=dataclasses.replace(cfg.gait, trajectory=trajectory, straight_shape=shape, speed=1.2),
-        controller=dataclasses.replace(cfg.controller, **controller))
 
 
 def sampled_trajectory() -> SampledTrajectory:
@@ -109,7 +104,8 @@ def random_states(seed, n):
     ("cycloid", "rectangle", {"speed_ramp_time": 0.0, "speed_gain": 0.0}),
 ])
 def test_controller_torque_and_targets_match_the_array_reference(trajectory, shape, options):
-    cfg = walk_cfg("cycloid" if trajectory == "sampled" else trajectory, shape, **options)
+    cfg = walk_config("cycloid" if trajectory == "sampled" else trajectory, speed=1.2, straight_shape=shape,
+                      **options)
     traj = sampled_trajectory() if trajectory == "sampled" else None
     fast, ref = TrotController(cfg, traj), ReferenceTrot(cfg, traj)
     for t, q, dq, body in random_states(0, 300):
@@ -124,7 +120,7 @@ def test_controller_torque_and_targets_match_the_array_reference(trajectory, sha
 
 
 def test_controller_with_integral_gain_matches_reference():
-    cfg = walk_cfg()
+    cfg = walk_config(speed=1.2)
     cfg = dataclasses.replace(cfg, pid=dataclasses.replace(cfg.pid, ki=(50.0, 80.0, 80.0)))
     fast, ref = TrotController(cfg), ReferenceTrot(cfg)
     for t, q, dq, body in random_states(1, 200):
@@ -134,12 +130,12 @@ def test_controller_with_integral_gain_matches_reference():
 
 
 def test_controller_errors_are_those_of_the_array_code():
-    ctrl = TrotController(walk_cfg())
+    ctrl = TrotController(walk_config(speed=1.2))
     with pytest.raises(ValueError, match="shape"):
         ctrl.torque(0.1, np.zeros(11), np.zeros(12))
     with pytest.raises(ValueError, match="finite"):
         ctrl.torque(float("nan"), np.zeros(12), np.zeros(12))
-    tall = dataclasses.replace(walk_cfg(), robot=dataclasses.replace(ROBOT, body_height=0.5))
+    tall = dataclasses.replace(walk_config(speed=1.2), robot=dataclasses.replace(ROBOT, body_height=0.5))
     with pytest.raises(ValueError, match="unreachable foot target"):
         TrotController(tall).torque(0.1, np.zeros(12), np.zeros(12))
 
@@ -208,7 +204,7 @@ def test_point_evaluator_only_for_trajectories_it_reproduces():
     assert point_evaluator(Lower()) is None
     assert point_evaluator(sampled_trajectory()) is None
     # the controller falls back to the array method for such a trajectory
-    cfg = walk_cfg()
+    cfg = walk_config(speed=1.2)
     fast, ref = TrotController(cfg, Lower()), ReferenceTrot(cfg, Lower())
     for t, q, dq, body in random_states(5, 50):
         np.testing.assert_allclose(fast.torque(t, q, dq, body), ref.torque(t, q, dq, body), rtol=1e-9, atol=1e-9)

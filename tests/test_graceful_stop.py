@@ -1,6 +1,5 @@
 """SIGINT and SIGTERM stop a training at its next safe point with a checkpoint that holds every env step
 logged; the resume continues from it and ends with the counters of a run never stopped."""
-import csv
 import signal
 import subprocess
 import sys
@@ -9,6 +8,8 @@ from pathlib import Path
 
 import pytest
 import torch
+
+from conftest import metrics_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 SETS = ["train.stage1.max_env_steps=2000", "train.stage2.max_env_steps=200", "train.checkpoint_every=1000000"]
@@ -19,14 +20,6 @@ def train(run_dir: Path, *extra: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, str(ROOT / "train.py"), "--config", "configs/tiny.yaml", "--run-dir",
                              str(run_dir), "--no-progress", *extra], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
-
-
-def logged(run_dir: Path) -> list[dict]:
-    path = run_dir / "metrics.csv"
-    if not path.is_file():
-        return []
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 def counters(run_dir: Path) -> dict:
@@ -49,7 +42,7 @@ def test_a_stop_signal_checkpoints_every_logged_step_and_the_resume_loses_nothin
     run_dir = tmp_path / "run"
     proc = train(run_dir, "--set", *SETS)
     deadline = time.time() + 300
-    while len(logged(run_dir)) < 10 and time.time() < deadline and proc.poll() is None:
+    while len(metrics_rows(run_dir)) < 10 and time.time() < deadline and proc.poll() is None:
         time.sleep(0.2)  # mid-stage 1: episodes are being logged
     assert proc.poll() is None, "the run ended before the signal"
     proc.send_signal(signum)
@@ -57,7 +50,7 @@ def test_a_stop_signal_checkpoints_every_logged_step_and_the_resume_loses_nothin
     assert proc.returncode == code, out
     assert f"continue with: python train.py --resume {run_dir}" in out
     stopped = counters(run_dir)
-    rows = logged(run_dir)
+    rows = metrics_rows(run_dir)
     assert stopped["stage"] == 1 and 0 < stopped["env_steps"] < 2000
     assert max(int(r["env_steps"]) for r in rows) <= stopped["env_steps"]  # every logged step is in it
     state = torch.load(run_dir / "checkpoint.pt", weights_only=True)
@@ -66,5 +59,5 @@ def test_a_stop_signal_checkpoints_every_logged_step_and_the_resume_loses_nothin
     proc = subprocess.run([sys.executable, str(ROOT / "train.py"), "--resume", str(run_dir), "--no-progress"],
                           cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert logged(run_dir)[:len(rows)] == rows  # nothing logged before the stop was cut back
+    assert metrics_rows(run_dir)[:len(rows)] == rows  # nothing logged before the stop was cut back
     assert counters(run_dir) == uninterrupted

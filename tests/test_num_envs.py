@@ -2,7 +2,6 @@
 (configs/tiny.yaml: 20-step episodes, batches of 50 env steps, 0.5 updates per env step)."""
 from __future__ import annotations
 
-import csv
 import multiprocessing as mp
 import os
 from pathlib import Path
@@ -13,21 +12,11 @@ import torch
 from cyberdog import config as C
 from cyberdog.rl.checkpoint import load_checkpoint
 from cyberdog.rl.env import worker_seed
-from cyberdog.rl.logger import TIMING_COLUMNS
 from cyberdog.rl.trainer import Trainer
-from test_train_cli import stop_after
+from conftest import metrics_rows, stop_after, tiny
 
 ROOT = Path(__file__).resolve().parents[1]
 TWO_ENVS = ["train.num_envs=2", "train.stage1.max_env_steps=300", "train.checkpoint_every=100"]
-
-
-def tiny(extra=()) -> C.ExperimentConfig:
-    return C.override(C.load(C.ExperimentConfig, ROOT / "configs/tiny.yaml"), TWO_ENVS + list(extra))
-
-
-def rows(run_dir: Path) -> list[dict]:
-    with open(run_dir / "metrics.csv") as f:
-        return [{k: v for k, v in r.items() if k not in TIMING_COLUMNS} for r in csv.DictReader(f)]
 
 
 def test_num_envs_is_an_integer_of_at_least_one_that_divides_the_batch():
@@ -37,8 +26,8 @@ def test_num_envs_is_an_integer_of_at_least_one_that_divides_the_batch():
     with pytest.raises(ValueError, match=r"TrainConfig\.frames_per_batch must be a multiple of num_envs \(3\)"):
         C.TrainConfig(num_envs=3, frames_per_batch=200)
     with pytest.raises(ValueError, match="num_envs"):
-        tiny(["train.num_envs=0"])
-    assert tiny(["train.num_envs=5"]).train.num_envs == 5 and C.TrainConfig().num_envs == 1
+        tiny(TWO_ENVS, ["train.num_envs=0"])
+    assert tiny(TWO_ENVS, ["train.num_envs=5"]).train.num_envs == 5 and C.TrainConfig().num_envs == 1
 
 
 def test_worker_seeds_are_distinct_per_worker_and_per_run_and_repeat():
@@ -54,7 +43,7 @@ def two_env_run(tmp_path_factory):
     the frames it was given, the batch shape and the live child processes."""
     torch.set_num_threads(1)
     run_dir = tmp_path_factory.mktemp("two_envs")
-    trainer = Trainer(tiny(), run_dir, stages=(1,), progress=False)
+    trainer = Trainer(tiny(TWO_ENVS), run_dir, stages=(1,), progress=False)
     seen = {"frames": [], "shapes": [], "children": [], "updates": []}
     updates, bookkeep = trainer._updates, trainer._bookkeep
 
@@ -83,9 +72,9 @@ def test_two_env_processes_collect_and_each_episode_is_logged_once(two_env_run):
     # random frames are collected, as the update plan of the config (and a run with one env) says
     assert summary["env_steps"] == summary["stage_env_steps"] == summary["buffer_size"] == 300
     assert seen["frames"] == [50] * 6 and seen["updates"] == [0] + [25] * 5
-    assert summary["updates"] == 125 == C.planned_updates(tiny(), (1,))[1]
+    assert summary["updates"] == 125 == C.planned_updates(tiny(TWO_ENVS), (1,))[1]
     # each env ran 150 steps: 7 whole 20-step episodes each, logged once, in the order they ended
-    table = rows(run_dir)
+    table = metrics_rows(run_dir)
     assert len(table) == summary["episodes"] == 14
     assert [int(r["episode"]) for r in table] == list(range(1, 15))
     assert {r["length"] for r in table} == {"20"}
@@ -104,7 +93,7 @@ def test_two_env_runs_repeat_bit_for_bit_and_resume_to_the_same_counters(two_env
     ref_dir, ref, _ = two_env_run
     ref_state = load_checkpoint(ref_dir / "checkpoint.pt")
 
-    stop_after(Trainer(tiny(), tmp_path, stages=(1,), progress=False), 200)  # after its checkpoint at 200
+    stop_after(Trainer(tiny(TWO_ENVS), tmp_path, stages=(1,), progress=False), 200)  # after its checkpoint at 200
     state = load_checkpoint(tmp_path / "checkpoint.pt")
     assert state["counters"]["env_steps"] == 200 and state["replay"]["size"] == 200
     ref_data, data = ref_state["replay"]["data"], state["replay"]["data"]
@@ -113,16 +102,16 @@ def test_two_env_runs_repeat_bit_for_bit_and_resume_to_the_same_counters(two_env
     for key in ("observation", "reward", "done", "energy_J"):
         assert torch.equal(data["next"][key], ref_data["next"][key][:200]), key
     logged = state["counters"]["episodes"]
-    assert logged == 10 and rows(tmp_path)[:logged] == rows(ref_dir)[:logged]
+    assert logged == 10 and metrics_rows(tmp_path)[:logged] == metrics_rows(ref_dir)[:logged]
 
-    resumed = Trainer(tiny(), tmp_path, resume=True, progress=False).run()
+    resumed = Trainer(tiny(TWO_ENVS), tmp_path, resume=True, progress=False).run()
     state = load_checkpoint(tmp_path / "checkpoint.pt")
     for k in ("env_steps", "stage_env_steps", "finished"):
         assert state["counters"][k] == ref_state["counters"][k], k
     assert resumed["updates"] == ref["updates"] and resumed["buffer_size"] == ref["buffer_size"]
-    table = rows(tmp_path)  # every logged episode once; the two episodes running at the interruption are not
+    table = metrics_rows(tmp_path)  # every logged episode once; the two episodes running at the interruption are not
     assert [int(r["episode"]) for r in table] == list(range(1, state["counters"]["episodes"] + 1))
-    assert table[:logged] == rows(ref_dir)[:logged]
+    assert table[:logged] == metrics_rows(ref_dir)[:logged]
 
 
 @pytest.mark.slow
@@ -130,13 +119,13 @@ def test_async_collection_with_two_envs_runs_the_same_schedule_reproducibly(two_
     """train.collection=async with two envs (a ParallelEnv inside the collector process): the counters of the
     synchronous run, and a rerun with the seed sees the same data."""
     _, ref, _ = two_env_run
-    cfg = tiny(["train.collection=async"])
+    cfg = tiny(TWO_ENVS, ["train.collection=async"])
     first = Trainer(cfg, tmp_path / "a", stages=(1,), progress=False).run()
     for k in ("env_steps", "stage_env_steps", "episodes", "updates", "buffer_size"):
         assert first[k] == ref[k], k
-    Trainer(tiny(["train.collection=async", "train.stage1.max_env_steps=100"]), tmp_path / "b", stages=(1,),
+    Trainer(tiny(TWO_ENVS, ["train.collection=async", "train.stage1.max_env_steps=100"]), tmp_path / "b", stages=(1,),
             progress=False).run()
-    rerun, table = rows(tmp_path / "b"), rows(tmp_path / "a")
+    rerun, table = metrics_rows(tmp_path / "b"), metrics_rows(tmp_path / "a")
     assert len(rerun) == 4 and rerun == table[:4]
     a = load_checkpoint(tmp_path / "a" / "checkpoint.pt")["replay"]["data"]["action"]
     b = load_checkpoint(tmp_path / "b" / "checkpoint.pt")["replay"]["data"]["action"]

@@ -1,5 +1,4 @@
 """tools/offset_authority.py: a searched shape as foot offsets from the composite cycloid (no walking here)."""
-import dataclasses
 import importlib.util
 from pathlib import Path
 
@@ -7,8 +6,8 @@ import numpy as np
 import pytest
 
 from cyberdog.analysis import shape_optimization as so
-from cyberdog.config import WalkConfig
 from cyberdog.core.trajectories import CompositeCycloid
+from conftest import walk_config
 
 ROOT = Path(__file__).resolve().parents[1]
 spec = importlib.util.spec_from_file_location("offset_authority", ROOT / "tools" / "offset_authority.py")
@@ -16,14 +15,8 @@ tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)
 
 
-def walk_cfg(speed=1.2, lift=0.095):
-    base = WalkConfig()
-    return dataclasses.replace(base, gait=dataclasses.replace(base.gait, speed=speed, lift_height=lift,
-                                                              trajectory="cycloid"))
-
-
 def test_cycloid_plus_the_offsets_is_the_shape_and_clipping_bounds_them():
-    cfg = walk_cfg()
+    cfg = walk_config(speed=1.2, lift_height=0.095)
     shape = so.shape_trajectory(so.ShapeParams(x_law=1.0, x_skew=0.3, stance_law=0.3), cfg.gait)
     delta = tool.shape_offsets(shape, cfg)
     g = cfg.gait
@@ -42,5 +35,5 @@ def test_cycloid_plus_the_offsets_is_the_shape_and_clipping_bounds_them():
 
 
 def test_the_cycloid_itself_needs_no_offset():
-    cfg = walk_cfg(1.0, 0.10)
+    cfg = walk_config(speed=1.0, lift_height=0.10)
     assert np.abs(tool.shape_offsets(so.shape_trajectory(so.CYCLOID_PARAMS, cfg.gait), cfg)).max() < 1e-9

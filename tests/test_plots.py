@@ -12,8 +12,7 @@ from matplotlib.image import imread
 import plots
 from cyberdog import config as C
 from cyberdog.config.paper import SPEED_BAND, speed_within_band
-from cyberdog.core.commanded_path import CommandedPath
-from cyberdog.core.foot_offsets import FootOffsetPath
+from conftest import commanded
 from cyberdog.metrics_csv import read_rows, read_stages
 from plots import figure6, figure7, figure10, figure13, results
 from plots.learning_curves import NUMBER_COLUMNS, read_curves
@@ -27,12 +26,6 @@ README_COMMAND = "python -m plots --from results/figures_input --out plots/png -
 
 
 # ---- a small results folder, shaped like what evaluate.py writes ----------------------------------------------
-def commanded(speed: float, seed: int, dz: float) -> CommandedPath:
-    table = np.zeros((4, 40, 3))
-    table[:, :20, 2] = dz * np.sin(np.pi * np.arange(20) / 20)  # a lower swing: own lift H + dz
-    return CommandedPath(speed, C.GaitConfig(lift_height=0.10), FootOffsetPath(table, 0.4), {"seed": seed})
-
-
 def fake_results(folder: Path, seed: int = 0) -> Path:
     """Two speeds; learned (two seeds), cycloid and straight walks of 2.3 s at 1 kHz with random power."""
     rng = np.random.default_rng(seed)
@@ -58,7 +51,7 @@ def fake_results(folder: Path, seed: int = 0) -> Path:
     (folder / "prototype.json").write_text(json.dumps(proto))
     for s in (0, 1):
         for v in (1.0, 1.2):
-            commanded(v, s, -0.005 * (s + 1)).save(folder / "learned" / f"seed{s}_{v:g}mps.json")
+            commanded(v, -0.005 * (s + 1), s).save(folder / "learned" / f"seed{s}_{v:g}mps.json")
     return folder
 
 

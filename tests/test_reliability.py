@@ -22,14 +22,11 @@ from cyberdog.output_folder import MANIFEST
 from cyberdog.rl.checkpoint import CheckpointError, load_checkpoint
 from cyberdog.rl.trainer import Trainer
 from cyberdog.runlock import LOCK_FILE, RunLock, RunLockedError, break_lock, read_lock
+from conftest import tiny
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "configs" / "tiny.yaml"
 PY = sys.executable
-
-
-def tiny(extra=()) -> C.ExperimentConfig:
-    return C.override(C.load(C.ExperimentConfig, TINY), list(extra))
 
 
 def run(args, timeout=120, env=None, **kw) -> subprocess.CompletedProcess:

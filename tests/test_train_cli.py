@@ -13,38 +13,11 @@ import torch
 
 from cyberdog import config as C
 from cyberdog.rl.checkpoint import load_checkpoint
-from cyberdog.rl.logger import TIMING_COLUMNS
 from cyberdog.rl.trainer import Trainer
+from conftest import metrics_rows, stop_after, tiny
 
 ROOT = Path(__file__).resolve().parents[1]
 STAGE1 = ["train.stage1.max_env_steps=300", "train.checkpoint_every=100"]
-
-
-def stop_after(trainer: Trainer, env_steps: int) -> None:
-    """Run `trainer` and stop it, as a crash would, once its env-step counter passes `env_steps` (set that to a
-    checkpoint's step count: the run folder then holds the checkpoint written there)."""
-    class Interrupt(Exception):
-        pass
-
-    bookkeep = trainer._bookkeep
-
-    def interrupted(*args):
-        if trainer.c["env_steps"] > env_steps:
-            raise Interrupt
-        bookkeep(*args)
-
-    trainer._bookkeep = interrupted
-    with pytest.raises(Interrupt):
-        trainer.run()
-
-
-def tiny(extra=()) -> C.ExperimentConfig:
-    return C.override(C.load(C.ExperimentConfig, ROOT / "configs/tiny.yaml"), STAGE1 + list(extra))
-
-
-def rows(run_dir: Path) -> list[dict]:
-    with open(run_dir / "metrics.csv") as f:
-        return [{k: v for k, v in r.items() if k not in TIMING_COLUMNS} for r in csv.DictReader(f)]
 
 
 @pytest.fixture(scope="module")
@@ -52,14 +25,14 @@ def reference_run(tmp_path_factory):
     """One uninterrupted stage-1 run of 300 env steps."""
     torch.set_num_threads(1)
     run_dir = tmp_path_factory.mktemp("ref")
-    summary = Trainer(tiny(), run_dir, stages=(1,), progress=False).run()
+    summary = Trainer(tiny(STAGE1), run_dir, stages=(1,), progress=False).run()
     return run_dir, summary
 
 
 def test_short_run_writes_csv_tensorboard_and_checkpoint(reference_run):
     run_dir, summary = reference_run
     assert summary["env_steps"] == 300 and summary["updates"] > 0
-    table = rows(run_dir)
+    table = metrics_rows(run_dir)
     assert len(table) == summary["episodes"] >= 10
     assert {"score", "reward_speed", "reward_energy", "energy_J", "mean_speed", "actor_loss", "critic_loss",
             "q_mean"} <= set(table[0])
@@ -67,7 +40,7 @@ def test_short_run_writes_csv_tensorboard_and_checkpoint(reference_run):
     assert list((run_dir / "tb").glob("events.out.tfevents.*"))
     state = load_checkpoint(run_dir / "checkpoint.pt")
     assert state["counters"]["env_steps"] == 300 and state["replay"]["size"] == 300
-    assert C.load(C.ExperimentConfig, run_dir / "config.yaml") == tiny()
+    assert C.load(C.ExperimentConfig, run_dir / "config.yaml") == tiny(STAGE1)
     assert (run_dir / "stage1_best_actor.pt").is_file() and (run_dir / "stage1_final.pt").is_file()
 
 
@@ -80,16 +53,16 @@ def test_same_seed_gives_identical_metrics_for_1000_steps(tmp_path):
     same weights at the end, bit for bit; another seed differs."""
     thousand = ["train.stage1.max_env_steps=1000", "train.checkpoint_every=500"]
     for name in ("a", "b"):
-        summary = Trainer(tiny(thousand), tmp_path / name, stages=(1,), progress=False).run()
+        summary = Trainer(tiny(STAGE1, thousand), tmp_path / name, stages=(1,), progress=False).run()
         assert summary["env_steps"] == 1000 and summary["updates"] >= 400
-    table = rows(tmp_path / "a")
+    table = metrics_rows(tmp_path / "a")
     assert len(table) >= 40 and table[-1]["env_steps"] == "1000"
-    assert rows(tmp_path / "b") == table
+    assert metrics_rows(tmp_path / "b") == table
     a, b = agent_state(tmp_path / "a"), agent_state(tmp_path / "b")
     assert all(torch.equal(a[k], b[k]) for k in a)
     other = tmp_path / "other_seed"
-    Trainer(tiny(["train.seed=1", "train.stage1.max_env_steps=100"]), other, stages=(1,), progress=False).run()
-    assert rows(other)[:3] != table[:3]
+    Trainer(tiny(STAGE1, ["train.seed=1", "train.stage1.max_env_steps=100"]), other, stages=(1,), progress=False).run()
+    assert metrics_rows(other)[:3] != table[:3]
 
 
 def test_async_collection_runs_the_same_schedule_reproducibly_and_resumes(reference_run, tmp_path):
@@ -97,11 +70,11 @@ def test_async_collection_runs_the_same_schedule_reproducibly_and_resumes(refere
     interrupted run resumes (in a new collector process) to the same counters."""
     ref_dir, ref = reference_run
     ref_state = load_checkpoint(ref_dir / "checkpoint.pt")
-    cfg = tiny(["train.collection=async"])
+    cfg = tiny(STAGE1, ["train.collection=async"])
     first = Trainer(cfg, tmp_path / "a", stages=(1,), progress=False).run()
     for k in ("env_steps", "stage_env_steps", "updates", "buffer_size"):
         assert first[k] == ref[k], k
-    table = rows(tmp_path / "a")
+    table = metrics_rows(tmp_path / "a")
     assert len(table) == first["episodes"] and table[-1]["critic_loss"] != "nan"
 
     stop_after(Trainer(cfg, tmp_path / "b", stages=(1,), progress=False), 200)
@@ -110,11 +83,11 @@ def test_async_collection_runs_the_same_schedule_reproducibly_and_resumes(refere
     state = load_checkpoint(tmp_path / "b" / "checkpoint.pt")
     for k in ("env_steps", "stage_env_steps", "finished"):
         assert state["counters"][k] == ref_state["counters"][k], k
-    assert resumed["updates"] == ref["updates"] and len(rows(tmp_path / "b")) == state["counters"]["episodes"]
+    assert resumed["updates"] == ref["updates"] and len(metrics_rows(tmp_path / "b")) == state["counters"]["episodes"]
     # a rerun from scratch sees the same data: identical to the first run (here its first 100 env steps)
-    Trainer(tiny(["train.collection=async", "train.stage1.max_env_steps=100"]), tmp_path / "c", stages=(1,),
+    Trainer(tiny(STAGE1, ["train.collection=async", "train.stage1.max_env_steps=100"]), tmp_path / "c", stages=(1,),
             progress=False).run()
-    rerun = rows(tmp_path / "c")
+    rerun = metrics_rows(tmp_path / "c")
     assert len(rerun) >= 4 and rerun == table[:len(rerun)]
 
 
@@ -145,7 +118,7 @@ def test_killed_run_resumes_to_the_same_counters(reference_run, tmp_path):
         assert state["counters"][k] == ref_state["counters"][k], k
     assert state["agent"]["updates"] == ref_state["agent"]["updates"] == ref["updates"]
     assert state["replay"]["size"] == ref_state["replay"]["size"] == ref["buffer_size"]
-    assert len(rows(run_dir)) == state["counters"]["episodes"]  # every logged episode exactly once
+    assert len(metrics_rows(run_dir)) == state["counters"]["episodes"]  # every logged episode exactly once
 
 
 def test_cli_errors_are_clear(tmp_path):
@@ -177,7 +150,7 @@ def test_a_foot_mode_run_trains_and_its_actor_moves_the_feet(tmp_path):
     budget): it updates, and the trained actor's actions move the foot targets (a rollout differs from the
     zero-action trot)."""
     from cyberdog.rl.rollout import load_actor, rollout
-    cfg = tiny(["env.action_mode=foot", "agent.exploration_sigma=0.5", "agent.exploration_sigma_end=0.5",
+    cfg = tiny(STAGE1, ["env.action_mode=foot", "agent.exploration_sigma=0.5", "agent.exploration_sigma_end=0.5",
                 "env.observe_last_action=true"])
     summary = Trainer(cfg, tmp_path, stages=(1,), progress=False).run()
     assert summary["updates"] > 0
@@ -219,7 +192,7 @@ def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earl
         assert (run_dir / name.replace(".pt", "_300steps.pt")).read_bytes() == data
     actor = torch.load(run_dir / "stage1_final_actor.pt", weights_only=True)
     assert actor["env_steps"] >= 500 and state["agent"]["updates"] > reference_run[1]["updates"]
-    assert len(rows(run_dir)) == state["counters"]["episodes"]  # the log continues, no episode twice
+    assert len(metrics_rows(run_dir)) == state["counters"]["episodes"]  # the log continues, no episode twice
     with open(run_dir / "metrics.csv") as f:
         log = list(csv.DictReader(f))
     before_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) <= 300]
