@@ -328,7 +328,7 @@ def extract_commanded(traces: dict, dt: float, speed_command: float, gait: GaitC
     """The policy's commanded foot path (see the module docstring) from a rollout's traces: t, tau, dq
     (n, 12), base_position (n, 3) and foot_offsets (n, 4, 3) m at the physics rate dt (s), with the trot the
     policy's controller ran (`gait`: base trajectory, period, swing time, lift height). The offset table has
-    one sample per physics step of a cycle. Raises ExtractionError when no settled cycle is in the band."""
+    one sample per controller period of a cycle. Raises ExtractionError when no settled cycle is in the band."""
     if cycle not in CYCLE_CHOICES:
         raise ValueError(f"cycle must be one of {CYCLE_CHOICES}, got {cycle!r}")
     if not (np.isfinite(speed_command) and speed_command > 0):

@@ -73,7 +73,7 @@ PARAM_BOUNDS = {  # (low, high), all dimensionless
     "z_fullness_log2": (-1.0, 1.5),  # log2 k, g = 1 − (1 − c)^k: k = 0.5 … 2.8 (≥ 0.5: z C¹ at the apex)
     "stance_law": (0.0, 1.0),  # stance x timing: 0 constant speed, 1 the cycloid law (slow ends)
 }
-DEFAULT_POINTS = 400  # samples per gait cycle: 1 ms apart at the 0.4 s cycle (the physics step)
+DEFAULT_POINTS = 400  # samples per gait cycle: 1 ms apart at the 0.4 s cycle
 MIN_POINTS = 40
 FALL_PENALTY_J = 1.0e4  # J, objective of a fallen walk (about 10× a valid walk's window energy) …
 SPEED_MISS_PENALTY_J = 100.0  # J per % of speed miss beyond the 5 % band (a valid walk's window: ~300–900 J)

@@ -144,7 +144,7 @@ class GaitConfig:
 
 @dataclass(frozen=True)
 class PIDConfig:
-    """Per-joint PID gains (abad, hip, knee), run at every physics step."""
+    """Per-joint PID gains (abad, hip, knee), run at every controller period (SimConfig.controller_dt)."""
 
     kp: Tuple[float, float, float] = (60.0, 60.0, 60.0)  # N·m/rad
     ki: Tuple[float, float, float] = (0.0, 0.0, 0.0)  # N·m/(rad·s)

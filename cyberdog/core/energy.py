@@ -18,9 +18,10 @@ Beyond the paper (its own omissions, Section 4.2: "thermal power and joint frict
 Constants: gear ratio N, K_T, R, b, f_c from ActuatorConfig (Xiaomi's controller files; K_T and R are Mini
 Cheetah values, low confidence); η, idle power, pack capacity from EnergyConfig (assumptions [G] there).
 
-Integration: the rectangle rule at the physics step dt, E += P_k·dt with τ_k the torque applied during step k
-and ω_k the joint speed read at the same step; exact for torques held constant over a step (how the
-simulation applies them) and first-order accurate otherwise.
+Integration: the rectangle rule at the sample step dt, E += P_k·dt with τ_k the torque applied during step k
+and ω_k the joint's speed over it. The simulation loop (`cyberdog.loop.walker`) passes the mean speed over the
+controller period, ω̄_k = Δq_k / dt, under a torque held over the period: then τ_k·ω̄_k·dt = τ_k·Δq_k is the
+joint's work exactly, and |·| counts net rather than total rotation only where a joint turns inside a period.
 """
 from __future__ import annotations
 

@@ -14,7 +14,7 @@ interpolation. Each leg keeps its own path, because the four feet of a trot do n
 policy shifts the hind feet differently from the front ones); `reference_leg` picks one for plots.
 
 Pure numpy; the evaluation at one set of phases (`at`) works on Python floats, since the trot controller
-calls it at every physics step (1 kHz).
+calls it at every controller period (400 Hz by default).
 """
 from __future__ import annotations
 

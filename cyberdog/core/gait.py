@@ -83,7 +83,7 @@ class GaitScheduler:
         return np.where(phase >= 1.0, 0.0, phase)
 
     def leg_phase_list(self, t: float) -> list[float]:
-        """`leg_phases` for one scalar time, as 4 Python floats (the controller's 1 kHz path: no arrays).
+        """`leg_phases` for one scalar time, as 4 Python floats (the controller's per-period path: no arrays).
 
         Same arithmetic as the array method: Python's float % is numpy's mod, and round(x · 1e12) / 1e12 is
         np.round(x, 12) (both round half to even)."""

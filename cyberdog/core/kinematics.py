@@ -167,7 +167,7 @@ def jacobian(q: np.ndarray, robot: RobotConfig, side: np.ndarray | None = None) 
 
 
 # ---------------------------------------------------------------------------------------------------------
-# One leg in plain Python floats: the same formulas as above, for the controller's 1 kHz inner loop, where
+# One leg in plain Python floats: the same formulas as above, for the controller's per-period inner loop, where
 # numpy's per-call overhead on (4, 3) arrays cost more than the arithmetic (about 10x). Tested against the
 # array functions in tests/test_fast_paths.py.
 # ---------------------------------------------------------------------------------------------------------

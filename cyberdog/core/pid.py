@@ -71,7 +71,7 @@ class JointPID:
 
     @classmethod
     def from_config(cls, pid_cfg: PIDConfig, dt: float, torque_limit: float) -> "JointPID":
-        """Gains per joint type from `PIDConfig`, physics step dt (s), torque clip (N·m, ActuatorConfig)."""
+        """Gains per joint type from `PIDConfig`, controller period dt (s), torque clip (N·m, ActuatorConfig)."""
         return cls(pid_cfg.kp, pid_cfg.ki, pid_cfg.kd, pid_cfg.integral_limit, dt, torque_limit)
 
     def reset(self) -> None:
@@ -87,7 +87,7 @@ class JointPID:
         return self.torque_unchecked(*arrays)
 
     def torque_from_lists(self, q_target: list, q: list, dq_target: list, dq: list) -> list:
-        """`torque` for four lists of 12 Python floats, as a list (the trot controller's 1 kHz path).
+        """`torque` for four lists of 12 Python floats, as a list (the trot controller's per-period path).
 
         Without integral action (ki = 0, the default gains) and with finite errors
         this is τ = clamp(kp·e + kd·ė) joint by joint in floats, which beats numpy's call overhead at this
@@ -105,7 +105,7 @@ class JointPID:
 
     def torque_unchecked(self, q_target: np.ndarray, q: np.ndarray, dq_target: np.ndarray,
                          dq: np.ndarray) -> np.ndarray:
-        """`torque` for four float arrays of shape (12,) that the caller guarantees (the 1 kHz path)."""
+        """`torque` for four float arrays of shape (12,) that the caller guarantees (the per-period path)."""
         error = q_target - q  # rad
         error_rate = dq_target - dq  # rad/s
         pd = self.kp * error + self.kd * error_rate

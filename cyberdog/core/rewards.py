@@ -51,7 +51,7 @@ def energy_term(step_energy_J: float) -> float:
 
     The paper's text writes ∫τ·θ̇ dt over the 10 s episode; the absolute value of Eq. (7) is used so that
     negative (braking) work is not counted as a gain. The integral itself is computed by the caller over
-    the physics steps of the agent step (the energy layer), and passed in here.
+    the controller periods of the agent step (the energy layer), and passed in here.
     """
     if not (step_energy_J >= 0 and math.isfinite(step_energy_J)):
         raise ValueError(f"step_energy_J must be >= 0 and finite, got {step_energy_J!r}")

@@ -16,7 +16,7 @@ Implementations: `CompositeCycloid` (the paper's "composite pendulum", Figure 4a
 the paper does not define the shape, three are offered), `SampledTrajectory` (a recorded full-cycle curve,
 e.g. the trajectory extracted from the learned gait). `make_trajectory` builds one from a `GaitConfig`.
 The cycloid and the straight line also evaluate one phase in Python floats (`foot_point`, the trot
-controller's 1 kHz path); `point_evaluator` returns it where it reproduces `position_velocity`.
+controller's per-period path); `point_evaluator` returns it where it reproduces `position_velocity`.
 """
 from __future__ import annotations
 

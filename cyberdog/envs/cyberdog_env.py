@@ -33,7 +33,7 @@ OBSERVATION_LAYOUT = (
     ("body_angular_velocity", 3, -50.0, 50.0, 2.0),  # rad/s, body frame
     ("joint_angles", 12, -2 * np.pi, 2 * np.pi, 1.5),  # rad
     ("joint_velocities", 12, -100.0, 100.0, 10.0),  # rad/s
-    ("joint_torques", 12, -100.0, 100.0, 10.0),  # N·m, motor torque applied at the last physics step
+    ("joint_torques", 12, -100.0, 100.0, 10.0),  # N·m, motor torque applied over the last controller period
     ("target_speed", 1, 0.0, 10.0, 1.0),  # m/s
     ("gait_phase", 2, -1.0, 1.0, 1.0),  # sin, cos of the trot phase (LF leg)
 )

@@ -2,7 +2,7 @@
 
 This is how a policy is judged (does the stage-1 policy walk at 1.0 m/s, does the stage-2
 policy use less energy per metre) and where the learned foot trajectory is extracted from (paper Section 3,
-after Figure 6): the actor acts without exploration noise, and every physics step's joint angles, velocities,
+after Figure 6): the actor acts without exploration noise, and every controller period's joint angles, velocities,
 applied torques and foot contacts are kept, so that gait cycles can be cut at touch-down and their energy
 integrated by Eq. (7) exactly as in the scripted walks.
 
@@ -62,7 +62,7 @@ def load_actor(path: str | Path) -> LoadedActor:
 def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed: int = 0,
             env_config: C.EnvConfig | None = None, reward: str | C.RewardConfig = "stage2") -> WalkResult:
     """Run the actor deterministically for `duration` s at `speed` m/s in the env it was trained in
-    (or `env_config`), recording every physics step. Stops early if the robot falls. The result is the
+    (or `env_config`), recording every controller period. Stops early if the robot falls. The result is the
     same record as a scripted walk's, with the episode's score."""
     if not (np.isfinite(speed) and speed >= 0):
         raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
@@ -72,7 +72,7 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=())
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
-        # the env's simulation loop keeps every physics step: state, applied torque, contacts, and the trot
+        # the env's simulation loop keeps every controller period: state, applied torque, contacts, and the trot
         # controller's commanded foot targets and the policy's shift of them; and samples foot slip
         env.walker.record = env.walker.gait_metrics = True
         obs, _ = env.reset(seed=seed, options={"target_speed": float(speed)})
