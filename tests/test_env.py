@@ -13,8 +13,8 @@ from cyberdog.envs.cyberdog_env import CyberDogEnv
 @pytest.fixture(scope="module")
 def residual_episode():
     """One full 10 s episode at 1.0 m/s with zero residual action and the estimated, noisy velocity."""
-    env = gym.make("CyberDog-v0", observation_source="estimated", estimator=C.EstimatorConfig(noise=True),
-                   joint_noise=True)
+    env = gym.make("CyberDog-v0", hardware=C.HardwareConfig(estimated_velocity=True, imu_noise=True,
+                                                            joint_angle_noise_std=0.002, joint_velocity_noise_std=0.05))
     env.reset(seed=0)
     speeds, estimates, rewards, infos = [], [], [], []
     steps, terminated, truncated = 0, False, False
@@ -126,7 +126,7 @@ def test_same_seed_same_actions_identical_for_400_steps():
 
 
 def test_different_seed_differs_where_randomness_is_on():
-    opts = dict(target_speed_range=(0.8, 1.2), joint_noise=True)
+    opts = dict(target_speed_range=(0.8, 1.2), hardware=C.HardwareConfig(joint_angle_noise_std=0.002))
     o1, _ = _rollout(1, 5, **opts)
     o2, _ = _rollout(2, 5, **opts)
     assert not np.array_equal(o1, o2)

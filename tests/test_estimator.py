@@ -8,7 +8,7 @@ from cyberdog.core.estimator import ImuReading, SimulatedIMU, VelocityEstimator,
 from cyberdog.core.kinematics import abad_offsets, foot_position, jacobian, standing_joint_angles
 
 DT = 0.001  # s, 1 kHz IMU and filter
-NOISY = EstimatorConfig(noise=True)
+NOISY = EstimatorConfig()  # with the IMU's noise switched on (`noise=True` below)
 
 
 def body_motion(duration=4.0):
@@ -30,7 +30,7 @@ def run_filter(seed, cfg=NOISY, duration=4.0):
     """Returns truth, filter estimate and leg-odometry measurements (NaN rows where dropped)."""
     rng = np.random.default_rng(seed)
     t, v, a, R, omega = body_motion(duration)
-    imu = SimulatedIMU(cfg, rng, DT)
+    imu = SimulatedIMU(cfg, rng, DT, noise=True)
     est = VelocityEstimator(cfg, DT)
     est.reset(v[0])  # the robot starts from a known state (standing still on the real robot)
     estimates = np.empty_like(v)
@@ -90,8 +90,8 @@ def test_imu_without_noise_is_exact():
 
 
 def test_imu_noise_statistics():
-    cfg = EstimatorConfig(noise=True, accelerometer_bias_walk=0.0, gyroscope_bias_walk=0.0)
-    imu = SimulatedIMU(cfg, np.random.default_rng(1), DT)
+    cfg = EstimatorConfig(accelerometer_bias_walk=0.0, gyroscope_bias_walk=0.0)
+    imu = SimulatedIMU(cfg, np.random.default_rng(1), DT, noise=True)
     readings = [imu.measure(np.zeros(3), np.zeros(3), np.eye(3)) for _ in range(5000)]
     acc = np.array([r.accelerometer for r in readings])
     gyr = np.array([r.gyroscope for r in readings])

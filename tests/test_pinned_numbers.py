@@ -66,8 +66,9 @@ def test_env_rollout_40_steps_foot_mode_with_sensing_effects():
     # policy alone saw them, and this rollout gave 180.48155363490508 J, 0.09234614919905312 m/s. At 400 Hz
     # the latency is one controller period (2.5 ms; 2 ms at 1 kHz gave 179.9 J): with the hold, the delayed PD
     # tracks these random offset ramps with far more work (147.5 J without the latency).
-    got = _env_run(action_mode="foot", observation_source="estimated", joint_noise=True, latency=0.0025,
-                   mass_scale_range=(0.95, 1.05), observe_last_action=True)
+    got = _env_run(action_mode="foot", observe_last_action=True,
+                   hardware=C.HardwareConfig(estimated_velocity=True, joint_angle_noise_std=0.002,
+                                             joint_velocity_noise_std=0.05, latency_s=0.0025, mass_uncertainty=0.05))
     assert got == pytest.approx([460.83510658896586, 0.10237607598266238, -98.33778023938007,
                                  163.12924194335938], rel=REL)
 

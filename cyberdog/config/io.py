@@ -105,9 +105,6 @@ def from_dict(cls: type, data: dict | None, _path: str = "") -> Any:
         where = f"the {_path} section" if _path else f"a {cls.__name__}"
         raise ValueError(f"{where} must be a mapping of field: value ({cls.__name__} fields: "
                          f"{', '.join(f.name for f in fields(cls))}), {_got(data)}")
-    fold = getattr(cls, "fold_legacy_fields", None)  # fields renamed or folded since a file was written
-    if fold is not None:
-        data = fold(data)
     hints = get_type_hints(cls)
     known = [f.name for f in fields(cls)]
     unknown = sorted(set(data) - set(known), key=str)

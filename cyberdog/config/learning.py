@@ -8,7 +8,6 @@ from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
 
-from cyberdog.config.legacy import fold_legacy_env_fields
 from cyberdog.config.robot import GaitConfig, HardwareConfig, RandomizationConfig, WalkConfig
 
 
@@ -69,8 +68,6 @@ ACTION_MODES = ("torque", "residual", "foot")
 @dataclass(frozen=True)
 class EnvConfig:
     """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
-
-    fold_legacy_fields = staticmethod(fold_legacy_env_fields)  # earlier fields → `hardware` (config/legacy.py)
 
     # robot, actuator, sim, gait, PID, controller, energy; the lift height is 0.10 m (not the paper's 0.15 m)
     # so that the trot stays inside Table 4's ±45° joint range around the standing pose

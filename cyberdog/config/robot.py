@@ -1,7 +1,6 @@
 """Settings of one scripted walk: robot, actuator, simulator, gait, PID, trot controller, energy and battery."""
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Tuple
@@ -214,10 +213,9 @@ class EstimatorConfig:
 
     Sensor numbers are assumptions [G] typical of a MEMS IMU such as the Bosch BMI088 sampled at 1 kHz
     (accelerometer noise density ≈ 160 µg/√Hz, gyroscope ≈ 0.014 °/s/√Hz, times √(500 Hz bandwidth)), with
-    the turn-on bias left after a standstill calibration. `noise=False` gives ideal sensors.
+    the turn-on bias left after a standstill calibration; `HardwareConfig.imu_noise` switches them on.
     """
 
-    noise: bool = False  # add white noise and bias to the simulated IMU (False: ideal sensors)
     accelerometer_noise_std: float = 0.05  # m/s², white noise per sample [G: ≈ 0.035 for a BMI088]
     gyroscope_noise_std: float = 0.005  # rad/s, white noise per sample [G: ≈ 0.0055 for a BMI088]
     accelerometer_bias_std: float = 0.05  # m/s², constant bias drawn at each reset [G: after calibration]
@@ -277,11 +275,6 @@ class HardwareConfig:
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
 
     @property
-    def estimator_config(self) -> EstimatorConfig:
-        """The estimator's settings with the IMU noise switched by `imu_noise`."""
-        return dataclasses.replace(self.estimator, noise=self.imu_noise)
-
-    @property
     def ideal(self) -> bool:
         """True when no effect is on (the ideal robot, whatever the seed)."""
         return not (self.friction or self.latency_s > 0 or self.joint_angle_noise_std > 0
@@ -295,8 +288,6 @@ class HardwareConfig:
                self.mass_uncertainty)
         _check(isinstance(self.seed, int) and not isinstance(self.seed, bool) and self.seed >= 0,
                "HardwareConfig.seed", "an integer >= 0", self.seed)
-        _check(not self.estimator.noise, "HardwareConfig.estimator.noise",
-               "False (switch the IMU noise with HardwareConfig.imu_noise)", self.estimator.noise)
         _check(not self.imu_noise or self.estimated_velocity, "HardwareConfig.imu_noise",
                "False unless estimated_velocity is True (the IMU only feeds the estimator)", self.imu_noise)
 

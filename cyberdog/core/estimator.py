@@ -41,24 +41,24 @@ class SimulatedIMU:
     """MEMS IMU on the body: true motion in, noisy body-frame readings out.
 
     reading = truth + bias + white noise, each axis independent; bias = turn-on bias (drawn at `reset`,
-    std `*_bias_std`) + random walk (std `*_bias_walk`·√dt per sample). With `cfg.noise` False the readings
-    are exact and the generator is never used.
+    std `*_bias_std`) + random walk (std `*_bias_walk`·√dt per sample). With `noise` False the readings are
+    exact and the generator is never used.
     """
 
     def __init__(self, cfg: EstimatorConfig, rng: np.random.Generator, dt: float,
-                 gravity: float = STANDARD_GRAVITY) -> None:
+                 gravity: float = STANDARD_GRAVITY, noise: bool = False) -> None:
         if not (dt > 0 and np.isfinite(dt)):
             raise ValueError(f"SimulatedIMU dt must be > 0 s and finite, got {dt!r}")
         if not isinstance(rng, np.random.Generator):
             raise TypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-        self.cfg, self.rng, self.dt = cfg, rng, float(dt)
+        self.cfg, self.rng, self.dt, self.noise = cfg, rng, float(dt), bool(noise)
         self.gravity = np.array([0.0, 0.0, -float(gravity)])  # m/s², world frame
         self.reset()
 
     def reset(self) -> None:
         """Draw new turn-on biases (zero when noise is off)."""
         c = self.cfg
-        if c.noise:
+        if self.noise:
             self.accelerometer_bias = self.rng.normal(0.0, c.accelerometer_bias_std, 3)
             self.gyroscope_bias = self.rng.normal(0.0, c.gyroscope_bias_std, 3)
         else:
@@ -81,7 +81,7 @@ class SimulatedIMU:
         else:
             raise ValueError(f"frame must be 'world' or 'body', got {frame!r}")
         c = self.cfg
-        if not c.noise:
+        if not self.noise:
             return ImuReading(f_body, w_body)
         sqrt_dt = np.sqrt(self.dt)
         self.accelerometer_bias = self.accelerometer_bias + self.rng.normal(0.0, c.accelerometer_bias_walk * sqrt_dt, 3)

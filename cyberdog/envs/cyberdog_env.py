@@ -9,7 +9,6 @@ import gymnasium as gym
 import numpy as np
 
 from cyberdog import config as C
-from cyberdog.config.legacy import LEGACY_ENV_FIELDS, fold_legacy_env_fields
 from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import TrotController
 from cyberdog.core import rewards
@@ -168,9 +167,7 @@ class CyberDogEnv(gym.Env):
     latency, encoder noise, Kalman speed feedback (simulated IMU + leg odometry) and a mass draw, the same model
     the prototype walks use. The robot's software sees what its sensors read: with `estimated_velocity` the
     trot controller, the observation and the reward's v_x use the Kalman estimate; encoder noise reaches the
-    controller and the observation. The mass is drawn per episode. The earlier options `observation_source`,
-    `joint_noise`, `latency`, `mass_scale_range`, `estimator`, `estimator_dt` still work and map onto it
-    (`cyberdog.config.legacy`).
+    controller and the observation. The mass is drawn per episode.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 40}
@@ -186,9 +183,6 @@ class CyberDogEnv(gym.Env):
                                      f"got {reward!r}")
                 reward = REWARD_PRESETS[reward]
             overrides["reward"] = reward
-        if any(k in overrides for k in LEGACY_ENV_FIELDS):  # earlier options (latency=..., ...) still work
-            overrides = fold_legacy_env_fields({"hardware": cfg.hardware, **overrides})
-            overrides["hardware"] = C.from_dict(C.HardwareConfig, overrides["hardware"])
         unknown = sorted(set(overrides) - {f.name for f in dataclasses.fields(C.EnvConfig)})
         if unknown:
             raise ValueError(f"unknown CyberDog-v0 option(s) {unknown}")

@@ -131,8 +131,8 @@ class HardwareSensing:
         if self.estimator_every < 1:
             raise ValueError(f"HardwareConfig.estimator_dt must be >= SimConfig.controller_dt ({dt} s), "
                              f"got {hw.estimator_dt!r}")
-        est = hw.estimator_config
-        self.imu = SimulatedIMU(est, rng, hw.estimator_dt, cfg.sim.gravity)
+        est = hw.estimator
+        self.imu = SimulatedIMU(est, rng, hw.estimator_dt, cfg.sim.gravity, noise=hw.imu_noise)
         self.estimator = VelocityEstimator(est, hw.estimator_dt, cfg.sim.gravity)
         self.noisy = hw.joint_angle_noise_std > 0 or hw.joint_velocity_noise_std > 0
         self._prev_velocity_world = np.zeros(3)
