@@ -20,9 +20,9 @@ OUTPUT_OPTIONS = ("--run-dir", "--out")  # what a run writes to: moved into tmp_
 
 # the start of each README command that is not run here, and why (each is parsed instead)
 EXPENSIVE = {
-    "train.py --config configs/quick_speeds.yaml --seed 0": "one seed of the shipped preset: 26-39 min",
-    "train.py --config configs/quick_speeds.yaml --seeds 0-4": "the shipped five-seed sweep: about 80 min",
-    "train.py --resume runs/speeds/seed0 --set": "needs the sweep above; 120,000 stage-2 env steps: 29-37 min",
+    "train.py --config configs/quick_speeds.yaml --seed 0": "one seed of the shipped preset: about 5 min",
+    "train.py --config configs/quick_speeds.yaml --seeds 0-4": "the shipped five-seed sweep: about 20 min",
+    "train.py --resume runs/speeds/seed0 --set": "needs the sweep above; 120,000 stage-2 env steps: about 12 min",
     "evaluate.py extract --sweep runs/speeds": "needs the sweep above; rolls out 5 policies at 3 speeds",
     "evaluate.py compare --learned runs/extract/learned": "needs the extraction above; walks for minutes",
     "evaluate.py prototype --prototype-distance 100": "18 walks of 100 m: about 5x command 1's prototype part",
