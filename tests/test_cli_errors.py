@@ -1,4 +1,6 @@
 """Mistakes a new user makes end in one line naming the problem and what to do, exit 2, before any work."""
+from pathlib import Path
+
 import pytest
 
 import evaluate
@@ -98,3 +100,17 @@ def test_the_main_job_prints_a_short_summary_ending_with_the_headline_and_the_fo
     assert any(line.strip() == f"the headline table:  {out / 'table5.md'}" for line in lines)
     assert lines[-1] == f"output folder: {out}/"
     assert (out / "comparison.md").is_file() and (out / "prototype.md").is_file()
+
+
+def test_the_video_of_a_learned_path_names_its_seed(tmp_path, monkeypatch, capsys):
+    import cyberdog.analysis.video as video
+    recorded = {}
+
+    def record(cfg, trajectory, path, duration, label=""):
+        recorded.update(path=Path(path), label=label)
+        return Path(path)
+
+    monkeypatch.setattr(video, "record_video", record)
+    assert evaluate.main(["video", "--video-duration", "0.1", "--out", str(tmp_path / "v")]) == 0
+    assert recorded["label"] == "learned, seed0" and recorded["path"].name == "trot_learned_seed0_1mps.gif"
+    assert "the learned, seed0 trajectory" in capsys.readouterr().out
