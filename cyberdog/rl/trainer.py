@@ -12,7 +12,8 @@ With "relabel" it is kept and each stored reward is recomputed with stage 2's en
 stored energy) and keep-moving weight, so that stage 2's critics start from all of stage 1's experience under
 the right reward. A stage's first `critic_warmup_updates` updates train the critics only.
 
-Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage) hold
+Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage; written and
+read by `cyberdog.rl.run_state.RunState`) hold
 the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
 at any moment. SIGINT and SIGTERM do not kill it: the batch in hand is stored, learned from and logged, a
 checkpoint is written and `run()` raises `cyberdog.rl.stop.TrainingInterrupted`, so that the resume loses no
@@ -47,12 +48,11 @@ from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
 from cyberdog.envs.cyberdog_env import actor_observation_scale, observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
-from cyberdog.rl.checkpoint import (CheckpointError, budget_extension, check_shapes, load_checkpoint,
-                                    remove_stale_temporaries, rng_state, save_atomic, save_checkpoint, set_rng_state)
+from cyberdog.rl.checkpoint import load_checkpoint, remove_stale_temporaries, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
-from cyberdog.rl.replay import (buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches,
-                                transitions)
+from cyberdog.rl.replay import make_replay_buffer, relabel_rewards, sample_batches, transitions
+from cyberdog.rl.run_state import RunState
 from cyberdog.rl.stop import StopSignals, TrainingInterrupted
 from cyberdog.runlock import RunFolderError, RunLock
 
@@ -67,7 +67,7 @@ def resolve_device(name: str) -> str:
     return name
 
 
-class Trainer:
+class Trainer(RunState):
     """Runs `stages` (e.g. (1, 2)) of one experiment in `run_dir`, which it locks until `run()` ends (or
     `close()`): a second process (or a second Trainer) on the same folder raises `RunLockedError`."""
 
@@ -145,86 +145,6 @@ class Trainer:
             self.logger.close()
         if self.lock is not None:
             self.lock.release()
-
-    # ---- checkpoints -----------------------------------------------------------------------------------
-    def _state(self) -> dict:
-        return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": dict(self.c),
-                "agent": self.agent.state_dict(), "replay": buffer_state(self.rb), "rng": rng_state(),
-                "scores": list(self.scores), "best_score": self.best_score}
-
-    def save(self, name: str = "checkpoint.pt") -> Path:
-        self.logger.flush()
-        self.c["last_checkpoint"] = self.c["env_steps"]
-        return save_checkpoint(self._state(), self.run_dir / name)
-
-    def _load_agent(self, state: dict, path) -> None:
-        if "agent" not in state:
-            raise CheckpointError(f"{path} holds no agent (an actor file?); --init-from needs checkpoint.pt or "
-                                  f"stage<N>_final.pt of a run")
-        agent = state["agent"]
-        check_shapes(agent["loss"], self.agent.loss.state_dict(), "the agent", path)
-        if "actor_optimizer" in agent:  # checkpoint.pt: the whole agent
-            self.agent.load_state_dict(agent)
-        else:  # stage<N>_final.pt: networks, targets, exploration and counters; new Adam moments
-            self.agent.load_state_dict(agent, optimizers=False)
-            if set(agent["exploration"]) == set(self.agent.policy.state_dict()):
-                self.agent.policy.load_state_dict(agent["exploration"])
-            else:  # e.g. --set agent.exploration=gaussian after an OU stage: this run's noise starts afresh
-                print(f"{path}: its exploration noise is another kind than this run's "
-                      f"({self.cfg.agent.exploration}); the new noise starts afresh", file=sys.stderr)
-            self.agent.updates, self.agent.actor_updates = int(agent["updates"]), int(agent["actor_updates"])
-
-    def _final_state(self, stage: int, score: float) -> dict:
-        """stage<N>_final.pt: what `--init-from` needs (the agent's networks and their targets, exploration
-        state, counters) and what the evaluation reads (`actor` and `config`, as in the actor files); not the
-        replay buffer nor the Adam moments (half the agent's size), which only checkpoint.pt carries: a run
-        started `--init-from` a stage-final file begins with new optimizer moments."""
-        agent = {k: v for k, v in self.agent.state_dict().items() if not k.endswith("_optimizer")}
-        return {"kind": "stage_final", "config": C.to_dict(self.cfg), "stages": self.stages,
-                "counters": {**self.c, "finished": True}, "agent": agent,
-                "actor": self.agent.actor.state_dict(), "stage": stage, "score": score,
-                "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
-                "stage_updates": self.c["stage_updates"], "scores": list(self.scores), "best_score": self.best_score}
-
-    def _restore(self, state: dict, path) -> None:
-        try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
-            saved = C.to_dict(C.from_dict(C.ExperimentConfig, state.get("config")))
-        except (ValueError, TypeError) as e:
-            raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
-        extension = budget_extension(saved, C.to_dict(self.cfg), int(state["counters"]["stage"]), path)
-        self._load_agent(state, path)
-        try:
-            load_buffer_state(self.rb, state["replay"])
-        except (ValueError, KeyError, RuntimeError) as e:
-            raise CheckpointError(f"{path}: replay buffer cannot be restored: {e}") from e
-        self.stages = list(state["stages"])
-        self.c.update(state["counters"])
-        self.scores.extend(state["scores"])
-        self.best_score = float(state["best_score"])
-        set_rng_state(state["rng"])
-        if extension:
-            self._extend(extension)
-
-    def _extend(self, changes: dict) -> None:
-        """Continue the current stage under a raised budget. If the run had finished, its stage-final files
-        are kept under the stage's step count (`stage2_final_actor_40000steps.pt`): a longer run never
-        overwrites the result of the shorter one. config.yaml records the new budget."""
-        stage, c = self.c["stage"], self.c
-        if c["finished"]:
-            for name in (f"stage{stage}_final.pt", f"stage{stage}_final_actor.pt"):
-                src = self.run_dir / name
-                if src.is_file():
-                    src.rename(src.with_name(f"{src.stem}_{c['stage_env_steps']}steps.pt"))
-            c["finished"] = False
-        C.save(self.cfg, self.run_dir / "config.yaml")
-        print(f"stage {stage} continues past {c['stage_env_steps']} env steps / {c['stage_episodes']} episodes "
-              f"under a raised budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
-              file=sys.stderr, flush=True)
-
-    def _save_actor(self, name: str, score: float) -> None:
-        save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
-                     "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
-                     "stage_updates": self.c["stage_updates"]}, self.run_dir / name)
 
     # ---- the loop --------------------------------------------------------------------------------------
     def run(self) -> dict:

@@ -1,0 +1,99 @@
+"""What a training run saves and restores (`cyberdog.rl.trainer.Trainer`'s files): `checkpoint.pt` (the agent,
+optimizers, counters, RNG states and the replay buffer), the stage-final files (`stage<N>_final.pt`, without
+the buffer and the Adam moments), the actor files, and the resume of a stage under a raised budget."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from cyberdog import config as C
+from cyberdog.rl.checkpoint import (CheckpointError, budget_extension, check_shapes, rng_state, save_atomic,
+                                    save_checkpoint, set_rng_state)
+from cyberdog.rl.replay import buffer_state, load_buffer_state
+
+
+class RunState:
+    """The save and restore half of the trainer, on its attributes (cfg, run_dir, stages, c, agent, rb,
+    scores, best_score, logger)."""
+
+    def _state(self) -> dict:
+        return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": dict(self.c),
+                "agent": self.agent.state_dict(), "replay": buffer_state(self.rb), "rng": rng_state(),
+                "scores": list(self.scores), "best_score": self.best_score}
+
+    def save(self, name: str = "checkpoint.pt") -> Path:
+        self.logger.flush()
+        self.c["last_checkpoint"] = self.c["env_steps"]
+        return save_checkpoint(self._state(), self.run_dir / name)
+
+    def _load_agent(self, state: dict, path) -> None:
+        if "agent" not in state:
+            raise CheckpointError(f"{path} holds no agent (an actor file?); --init-from needs checkpoint.pt or "
+                                  f"stage<N>_final.pt of a run")
+        agent = state["agent"]
+        check_shapes(agent["loss"], self.agent.loss.state_dict(), "the agent", path)
+        if "actor_optimizer" in agent:  # checkpoint.pt: the whole agent
+            self.agent.load_state_dict(agent)
+        else:  # stage<N>_final.pt: networks, targets, exploration and counters; new Adam moments
+            self.agent.load_state_dict(agent, optimizers=False)
+            if set(agent["exploration"]) == set(self.agent.policy.state_dict()):
+                self.agent.policy.load_state_dict(agent["exploration"])
+            else:  # e.g. --set agent.exploration=gaussian after an OU stage: this run's noise starts afresh
+                print(f"{path}: its exploration noise is another kind than this run's "
+                      f"({self.cfg.agent.exploration}); the new noise starts afresh", file=sys.stderr)
+            self.agent.updates, self.agent.actor_updates = int(agent["updates"]), int(agent["actor_updates"])
+
+    def _final_state(self, stage: int, score: float) -> dict:
+        """stage<N>_final.pt: what `--init-from` needs (the agent's networks and their targets, exploration
+        state, counters) and what the evaluation reads (`actor` and `config`, as in the actor files); not the
+        replay buffer nor the Adam moments (half the agent's size), which only checkpoint.pt carries: a run
+        started `--init-from` a stage-final file begins with new optimizer moments."""
+        agent = {k: v for k, v in self.agent.state_dict().items() if not k.endswith("_optimizer")}
+        return {"kind": "stage_final", "config": C.to_dict(self.cfg), "stages": self.stages,
+                "counters": {**self.c, "finished": True}, "agent": agent,
+                "actor": self.agent.actor.state_dict(), "stage": stage, "score": score,
+                "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
+                "stage_updates": self.c["stage_updates"], "scores": list(self.scores), "best_score": self.best_score}
+
+    def _restore(self, state: dict, path) -> None:
+        try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
+            saved = C.to_dict(C.from_dict(C.ExperimentConfig, state.get("config")))
+        except (ValueError, TypeError) as e:
+            raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
+        extension = budget_extension(saved, C.to_dict(self.cfg), int(state["counters"]["stage"]), path)
+        self._load_agent(state, path)
+        try:
+            load_buffer_state(self.rb, state["replay"])
+        except (ValueError, KeyError, RuntimeError) as e:
+            raise CheckpointError(f"{path}: replay buffer cannot be restored: {e}") from e
+        self.stages = list(state["stages"])
+        self.c.update(state["counters"])
+        self.scores.extend(state["scores"])
+        self.best_score = float(state["best_score"])
+        set_rng_state(state["rng"])
+        if extension:
+            self._extend(extension)
+
+    def _extend(self, changes: dict) -> None:
+        """Continue the current stage under a raised budget. If the run had finished, its stage-final files
+        are kept under the stage's step count (`stage2_final_actor_40000steps.pt`): a longer run never
+        overwrites the result of the shorter one. config.yaml records the new budget."""
+        stage, c = self.c["stage"], self.c
+        if c["finished"]:
+            for name in (f"stage{stage}_final.pt", f"stage{stage}_final_actor.pt"):
+                src = self.run_dir / name
+                if src.is_file():
+                    src.rename(src.with_name(f"{src.stem}_{c['stage_env_steps']}steps.pt"))
+            c["finished"] = False
+        C.save(self.cfg, self.run_dir / "config.yaml")
+        print(f"stage {stage} continues past {c['stage_env_steps']} env steps / {c['stage_episodes']} episodes "
+              f"under a raised budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
+              file=sys.stderr, flush=True)
+
+    def _save_actor(self, name: str, score: float) -> None:
+        save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
+                     "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
+                     "stage_updates": self.c["stage_updates"]}, self.run_dir / name)
+
+
+__all__ = ["RunState"]
