@@ -13,9 +13,8 @@ stored energy) and keep-moving weight, so that stage 2's critics start from all 
 the right reward. A stage's first `critic_warmup_updates` updates train the critics only.
 
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage; written and
-read by `cyberdog.rl.run_state.RunState`) hold
-the agent, optimizers, counters, RNG states and the replay buffer, so `resume=True` continues a run killed
-at any moment. SIGINT and SIGTERM do not kill it: the batch in hand is stored, learned from and logged, a
+read by `cyberdog.rl.run_state.RunState`) hold the agent, optimizers, counters, RNG states and the replay
+buffer, so `resume=True` continues a run killed at any moment. SIGINT and SIGTERM do not kill it: the batch in hand is stored, learned from and logged, a
 checkpoint is written and `run()` raises `cyberdog.rl.stop.TrainingInterrupted`, so that the resume loses no
 step that was logged. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
 buffer but it is not logged as an episode. A resume may raise the current stage's budget (`max_env_steps`,
