@@ -66,14 +66,7 @@ def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration:
     (out / "walks.json").write_text(json.dumps(walks, indent=1))
     np.savez_compressed(out / "power_traces.npz", **{f"walk_{i}": p for i, p in power.items()})
     if brief:
-        matched = t5.summary_markdown(summary, "same_lift", brief=True)
-        paper = [r for r in summary if r["set"] == "paper"]
-        print("\nTable 5 at matched lift (mean ± 95 % CI over seeds; in full: table5.md):\n")
-        print(matched or t5.summary_markdown(summary, "paper", brief=True))
-        if matched and paper:
-            print("\nThe paper's protocol (baselines at H = " f"{cfg.gait.lift_height:g} m): D_t on E "
-                  + " / ".join(f"{r['D_t_pct_mean']:.1f} %" for r in paper)
-                  + " at " + " / ".join(f"{r['speed_command_mps']:g}" for r in paper) + " m/s")
+        _print_brief_table5(summary, cfg.gait.lift_height)
         return rows, walks, power
     print("\nTable 5: energy consumption of the foot trajectories over the walk\n")
     print(headline)
@@ -82,6 +75,18 @@ def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration:
     print("\nAll walks (energy per 100 m, cost of transport, mean speed over the last half):\n")
     print(markdown_table(rows, cmp.COLUMNS))
     return rows, walks, power
+
+
+def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
+    """The main job's Table 5: the matched-lift summary's main rows, and the paper's protocol in one line."""
+    matched = t5.summary_markdown(summary, "same_lift", brief=True)
+    paper = [r for r in summary if r["set"] == "paper"]
+    print("\nTable 5 at matched lift (mean ± 95 % CI over seeds; in full: table5.md):\n")
+    print(matched or t5.summary_markdown(summary, "paper", brief=True))
+    if matched and paper:
+        print(f"\nThe paper's protocol (baselines at H = {paper_lift:g} m): D_t on E "
+              + " / ".join(f"{r['D_t_pct_mean']:.1f} %" for r in paper)
+              + " at " + " / ".join(f"{r['speed_command_mps']:g}" for r in paper) + " m/s")
 
 
 def run_prototype_part(cfg: C.WalkConfig, learned: dict, speeds: list[float], distance_m: float, modes: list[str],
