@@ -15,8 +15,14 @@ import sys
 from cyberdog.evaluation.cli import parse_args
 
 # names scripts and tests import from evaluate.py; loaded on first use, so that --help stays light
-_LIBRARY = {"load_learned": "cyberdog.evaluation.learned", "DEFAULT_LEARNED": "cyberdog.evaluation.learned",
-            "run_figures": "cyberdog.evaluation.parts"}
+_LIBRARY = {"load_learned": "cyberdog.evaluation.learned", "DEFAULT_LEARNED": "cyberdog.evaluation.learned"}
+
+
+def draw_figures(results_dir, out_dir, metrics=None, only=None, learned=None) -> list:
+    """The figures of a results folder, drawn by the checkout's `plots/` (matplotlib: imported only here)."""
+    import plots
+
+    return plots.draw_all(results_dir, out_dir, metrics, only, learned=learned)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -24,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)  # --help and mistyped options end here, before the simulator is imported
     from cyberdog.evaluation.commands import run
 
-    return run(args, argv)
+    return run(args, argv, draw_figures=draw_figures)
 
 
 def __getattr__(name: str):

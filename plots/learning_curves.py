@@ -12,10 +12,11 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from cyberdog.sweeps.aggregate import CURVES_CSV
 from plots.style import save_figure, styled
 
 STEM = "learning_curves"
-CSV_NAME = "learning_curves.csv"
+CSV_NAME = CURVES_CSV  # written by cyberdog.sweeps.aggregate
 NUMBER_COLUMNS = ("env_steps", "n_seeds", "score_mean", "score_ci95", "window_score_mean", "window_score_ci95")
 
 

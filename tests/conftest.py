@@ -14,6 +14,7 @@ import pytest
 
 from cyberdog import config as C
 from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.core.learned_set import LearnedPath, LearnedSet
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.metrics_csv import read_rows
 from cyberdog.rl.logger import TIMING_COLUMNS
@@ -59,6 +60,11 @@ def walk_config(trajectory: str = "cycloid", speed: float = 1.0, lift_height: fl
     gait = dataclasses.replace(base.gait, trajectory=trajectory, speed=speed, straight_shape=straight_shape,
                                **({} if lift_height is None else {"lift_height": lift_height}))
     return dataclasses.replace(base, gait=gait, controller=dataclasses.replace(base.controller, **controller))
+
+
+def learned_set(**paths_by_label) -> LearnedSet:
+    """A LearnedSet from label=[paths] (CommandedPath or SampledTrajectory)."""
+    return LearnedSet(LearnedPath(label, p) for label, paths in paths_by_label.items() for p in paths)
 
 
 def commanded(speed: float, dz: float, seed: int) -> CommandedPath:

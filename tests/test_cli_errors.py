@@ -4,7 +4,7 @@ from pathlib import Path
 import pytest
 
 import evaluate
-import train
+from cyberdog import train
 
 
 @pytest.mark.parametrize("out", ["/proc/x", "README.md/sub"])

@@ -9,7 +9,8 @@ import pytest
 from cyberdog import config as C
 from cyberdog.analysis.extract import ExtractionError, extract_commanded
 from cyberdog.control.trot import BodyFeedback, TrotController
-from cyberdog.core.commanded_path import CommandedPath, load_foot_path
+from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.core.learned_set import read_path
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler
 from cyberdog.core.trajectories import SampledTrajectory
@@ -88,14 +89,14 @@ def test_commanded_path_lift_height_and_file_round_trip(tmp_path):
     lowered = CommandedPath(1.2, GAIT, FootOffsetPath(table, 0.4), {"seed": 3})
     assert lowered.own_lift_height() == pytest.approx(GAIT.lift_height - 0.02, abs=2e-4)
     assert lowered.step_length == pytest.approx(1.2 * GAIT.stance_time)
-    back = load_foot_path(lowered.save(tmp_path / "p.json"))
+    back = read_path(lowered.save(tmp_path / "p.json"))
     assert isinstance(back, CommandedPath) and back.speed == 1.2
     assert np.allclose(back.offsets.offsets, lowered.offsets.offsets, atol=1e-6)  # stored in 1 µm steps
     assert back.provenance == {"seed": 3} and back.gait == lowered.gait
     ref = lowered.as_sampled("LF")  # the paper's single reference foot, for figures
     assert isinstance(ref, SampledTrajectory) and ref.lift_height == pytest.approx(lowered.leg_lift_heights()[0])
     sampled = SampledTrajectory(ref.phase, ref.x, ref.z, ref.step_length, ref.lift_height)
-    assert isinstance(load_foot_path(sampled.save(tmp_path / "s.json")), SampledTrajectory)
+    assert isinstance(read_path(sampled.save(tmp_path / "s.json")), SampledTrajectory)
 
 
 def test_commanded_path_rejects_a_period_mismatch_and_a_sampled_base():
@@ -197,11 +198,10 @@ def test_the_shipped_learned_paths_cover_five_seeds_at_the_papers_speeds():
     import evaluate
 
     learned = evaluate.load_learned([evaluate.DEFAULT_LEARNED])
-    assert sorted(learned) == [f"seed{s}" for s in range(5)]
-    for label, by_speed in learned.items():
-        assert sorted(by_speed) == [1.0, 1.2, 1.4]
-        for v, path in by_speed.items():
-            p = path.provenance
+    assert learned.labels == [f"seed{s}" for s in range(5)] and learned.speeds() == [1.0, 1.2, 1.4]
+    for v in learned.speeds():
+        for label, learned_path in learned.at(v).items():
+            path, p = learned_path.path, learned_path.provenance
             assert isinstance(path, CommandedPath) and path.speed == v == p["speed_command_mps"]
             assert p["path"] == "commanded" and p["cycle"] == "mean" and not p["rollout_fell"]
             assert len(p["cycles_used"]) >= 10 and abs(p["cycle_speed_mps"] - v) <= 0.05 * v

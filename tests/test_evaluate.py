@@ -10,7 +10,8 @@ import evaluate
 from cyberdog import config as C
 from cyberdog.analysis import compare as cmp
 from cyberdog.analysis import table5 as t5
-from conftest import commanded
+from conftest import commanded, learned_set
+from cyberdog.core.learned_set import LearnedSetError
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
 from plots.figure10 import last_cycles_window
 from cyberdog.evaluation import learned as learned_module
@@ -163,13 +164,16 @@ def test_decrement_uses_the_cheaper_valid_baseline_of_the_same_set():
 
 
 def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_lift():
-    learned = {"seed0": {1.0: commanded(1.0, -0.01, 0), 1.2: commanded(1.2, -0.02, 0)}}
-    jobs = cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.2, 1.4))
+    learned = learned_set(seed0=[commanded(1.0, -0.01, 0), commanded(1.2, -0.02, 0)])
+    jobs = cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.2))
     mine = [j for j in jobs if j.trajectory == "learned"]
     assert [(j.speed, round(j.lift_height, 3)) for j in mine] == [(1.0, 0.09), (1.2, 0.08)]
     assert all(j.cfg.gait.lift_height == 0.10 and j.cfg.gait.trajectory == "cycloid" for j in mine)
+    assert all(j.foot_offsets is j.learned.path.offsets and j.foot_trajectory is None for j in mine)
     base_lifts = {(j.speed, round(j.lift_height, 3)) for j in jobs if j.trajectory == "cycloid"}
-    assert base_lifts == {(1.0, 0.15), (1.0, 0.09), (1.2, 0.15), (1.2, 0.08), (1.4, 0.15)}
+    assert base_lifts == {(1.0, 0.15), (1.0, 0.09), (1.2, 0.15), (1.2, 0.08)}
+    with pytest.raises(LearnedSetError, match="seed0 has no learned path at 1.4 m/s"):  # never a table without it
+        cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.4))
 
 
 def two_seeds_at_their_own_lift() -> list[dict]:
@@ -222,16 +226,16 @@ def test_the_reference_shape_walks_once_per_speed_at_its_own_lift():
     phase = np.arange(100) / 100
     pos, _ = CompositeCycloid().position_velocity(phase, 0.2, 0.095, 0.2, 0.2)
     ref = SampledTrajectory.from_points(phase, pos[:, 0], pos[:, 1], 0.2, 0.095, {})
-    learned = {"seed0": {1.0: commanded(1.0, -0.01, 0), 1.2: commanded(1.2, -0.02, 0)}}
+    learned = learned_set(seed0=[commanded(1.0, -0.01, 0), commanded(1.2, -0.02, 0)])
     jobs = cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.2), reference=ref)
     mine = [j for j in jobs if j.trajectory == cmp.REFERENCE]
     assert [(j.speed, j.lift_height, j.cfg.gait.lift_height) for j in mine] == [(1.0, 0.095, 0.095),
                                                                                 (1.2, 0.095, 0.095)]
-    assert all(j.path is ref for j in mine)
+    assert all(j.foot_trajectory is ref and j.learned is None for j in mine)
     assert not [j for j in cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0,), same_lift=False,
                                                 reference=ref) if j.trajectory == cmp.REFERENCE]
-    with pytest.raises(TypeError, match="SampledTrajectory"):
-        cmp.comparison_jobs(C.WalkConfig(), learned, reference=learned["seed0"][1.0])
+    with pytest.raises(TypeError, match="foot trajectory"):
+        cmp.comparison_jobs(C.WalkConfig(), learned, reference=commanded(1.0, -0.01, 0))
 
 
 # ---- the command line: each sub-command has its own options and help ----------------------------------------

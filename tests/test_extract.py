@@ -159,12 +159,12 @@ def test_evaluate_extract_from_a_policy(tmp_path, capsys):
     # 2.6 s: a few cycles after the 1 s speed ramp, while the speed integral still overshoots by 10-20 %
     assert evaluate.main(["extract", "--policy", str(tmp_path), "--rollout-duration", "2.6",
                           "--speed-tolerance", "0.3", "--out", str(out)]) == 0
-    traj = SampledTrajectory.load(out / "learned" / "seed0_1mps.json")
+    traj = SampledTrajectory.load(out / "learned" / "seed0.json")
     p = traj.provenance
     assert p["policy"] == str(actor) and p["seed"] == 0 and p["speed_command_mps"] == 1.0
     assert abs(p["cycle_speed_mps"] - 1.0) <= 0.3 and p["speed_tolerance"] == 0.3
     assert 0.07 < traj.lift_height < 0.13  # the env's trot lifts 0.10 m
-    rows = json.loads((out / "learned" / "seed0_1mps_cycles.json").read_text())
+    rows = json.loads((out / "learned" / "seed0_cycles.json").read_text())
     chosen = [r for r in rows if r["chosen"]]
     assert len(chosen) == 1 and chosen[0]["energy_J"] == pytest.approx(p["cycle_energy_J"])
     assert min(r["energy_J"] for r in rows if r["valid"] and r["speed_ok"]) == pytest.approx(p["cycle_energy_J"])

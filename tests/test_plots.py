@@ -145,7 +145,7 @@ def test_figure13_draws_the_matched_baselines_beside_the_papers_protocol(tmp_pat
 def test_figure7_matches_the_baselines_at_table5s_lift_height(tmp_path):
     """Figure 7's solid baselines stand at the lift height Table 5 matches (a commanded path's mean over its
     legs), and each learned entry names it beside the LF leg's own peak."""
-    learned = results.load_learned(sorted((fake_results(tmp_path / "r") / "learned").glob("*.json")))
+    learned = results.load_results(fake_results(tmp_path / "r")).learned
     first = next(iter(learned.values()))
     own = first.provenance["own_lift_height_m"]
     fig = figure7.draw(learned)

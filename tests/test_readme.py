@@ -4,7 +4,6 @@ a temporary folder); commands that train or walk for minutes are parsed by their
 reason they are not run listed in EXPENSIVE; the TensorBoard server is checked to be installed."""
 from __future__ import annotations
 
-import importlib.util
 import re
 import shlex
 import subprocess
@@ -66,13 +65,6 @@ def kind(command: str) -> str:
             ([k for k in RUN if rest.startswith(k)] and ["run"])
     assert len(kinds) == 1, f"README command not classified (or twice) in tests/test_readme.py: {command}"
     return kinds[0]
-
-
-def load_script(name: str):
-    spec = importlib.util.spec_from_file_location(f"readme_{name}", ROOT / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 # ---- the two set-up commands ------------------------------------------------------------------------------------
@@ -143,7 +135,9 @@ def test_expensive_next_commands_parse(command):
 
     args = python_args(command)
     if args[0] == "train.py":
-        parsed = load_script("train").parse_args(args[1:])
+        from cyberdog import train  # train.py's command line
+
+        parsed = train.parse_args(args[1:])
         # a resume's --set applies to the run's saved config: in the README, a seed of the quick_speeds sweep
         C.override(C.load(C.ExperimentConfig, ROOT / (parsed.config or "configs/quick_speeds.yaml")),
                    parsed.overrides)

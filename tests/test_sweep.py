@@ -27,6 +27,7 @@ from cyberdog.rl.checkpoint import load_checkpoint
 from cyberdog.sweeps import (STATUS_FILE, SweepError, create_sweep, load_sweep, parse_seeds, run_sweep,
                              stage_budget)
 from cyberdog.sweeps.aggregate import aggregate_sweep, learning_curves, stage_curves
+from plots.learning_curves import learning_curves as draw_learning_curves
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "cyberdog"
@@ -70,7 +71,7 @@ def kill_after_first_checkpoint(run_dir: Path, still_running, timeout: float = 2
             info = {}
         if info and (run_dir / "checkpoint.pt").is_file():
             cmdline = Path(f"/proc/{info['pid']}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-            assert "train.py" in cmdline and str(run_dir) in cmdline, cmdline
+            assert "-m cyberdog.train" in cmdline and str(run_dir) in cmdline, cmdline
             os.kill(info["pid"], signal.SIGKILL)
             return load_checkpoint(run_dir / "checkpoint.pt")["counters"]["env_steps"]
         time.sleep(0.05)
@@ -161,8 +162,9 @@ def test_sweep_finishes_a_killed_seed_through_resume(backend, request, tmp_path,
     thread.start()
     evaluated = backend == "local"  # the rollouts do not depend on the backend: once is enough
     try:
-        result["rc"] = train_cli.main(sweep_args(sweep_dir, "--backend", backend,
-                                                 "--eval-duration", "0.3" if evaluated else "0"))
+        result["rc"] = train_cli.main(sweep_args(sweep_dir, "--backend", backend,  # as train.py runs it
+                                                 "--eval-duration", "0.3" if evaluated else "0"),
+                                      draw_learning_curves=train_cli.draw_learning_curves)
     finally:
         result.setdefault("rc", None)
         thread.join(timeout=10)
@@ -191,9 +193,10 @@ def test_missing_ray_is_a_clear_error(tmp_path, monkeypatch):
     assert json.loads((tmp_path / "s" / STATUS_FILE).read_text())["seeds"][0]["state"] == "pending"
 
 
-def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_path):
-    """A stand-in for train.py (fast): seed 0 trains fine, seed 1 always fails with an error message."""
+def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_path, monkeypatch):
+    """A stand-in for the training entry point (fast): seed 0 trains fine, seed 1 always fails with an error."""
     fake = tmp_path / "fake_train.py"
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))  # after the package's own folder: `-m fake_train` finds it
     fake.write_text("import pathlib, sys\n"
                     "run = sys.argv[sys.argv.index('--run-dir') + 1]\n"
                     "if run.endswith('seed1'):\n"
@@ -201,7 +204,7 @@ def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_pat
                     "pathlib.Path(run, 'stage2_final_actor.pt').write_bytes(b'')\n")
     sweep = tmp_path / "s"
     create_sweep(sweep, C.load(C.ExperimentConfig, TINY), [0, 1])
-    status = run_sweep(sweep, backend="local", workers=2, max_retries=2, progress=False, train_script=fake,
+    status = run_sweep(sweep, backend="local", workers=2, max_retries=2, progress=False, entry_point="fake_train",
                        poll_s=0.05)
     by_seed = {s["seed"]: s for s in status["seeds"]}
     assert by_seed[0]["state"] == "done" and by_seed[0]["attempts"] == 1
@@ -211,7 +214,7 @@ def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_pat
     assert status["counts"] == {"pending": 0, "running": 0, "retrying": 0, "done": 1, "failed": 1, "interrupted": 0}
     assert json.loads((sweep / STATUS_FILE).read_text()) == status
     # a resumed sweep leaves the done seed alone and gives the failed one a fresh retry budget
-    status = run_sweep(sweep, backend="local", max_retries=0, progress=False, train_script=fake, poll_s=0.05)
+    status = run_sweep(sweep, backend="local", max_retries=0, progress=False, entry_point="fake_train", poll_s=0.05)
     assert [s["attempts"] for s in status["seeds"]] == [1, 4] and status["seeds"][1]["state"] == "failed"
 
 
@@ -303,6 +306,9 @@ def test_aggregate_bands_and_tables_from_metrics(tmp_path):
     curves = stage_curves(tmp_path / "seed1")
     assert curves[2]["env_steps"].tolist() == [20, 40, 60, 80]  # steps counted from the start of stage 2
     result = aggregate_sweep(tmp_path, eval_duration=0, progress=False)
+    assert (tmp_path / "learning_curves.csv").is_file() and not (tmp_path / "learning_curves.png").exists()
+    result = aggregate_sweep(tmp_path, eval_duration=0, progress=False,  # as train.py: the figure by plots/
+                             draw_learning_curves=lambda folder: draw_learning_curves(folder, pdf=False))
     band = result["curves"]
     assert band[1]["env_steps"][0] == 20 and band[1]["env_steps"][-1] == 120
     x = band[1]["env_steps"][50]
@@ -342,10 +348,10 @@ def imported_modules(path: Path) -> set[str]:
 
 def test_no_layer_below_sweeps_imports_them():
     """Sweeps are the orchestration on top of the package (DESIGN.md layers): analysis, rl and everything
-    else below never import them."""
+    else below never import them; only the training command line (cyberdog/train.py) does."""
     offenders = {}
     for path in PACKAGE.rglob("*.py"):
-        if (PACKAGE / "sweeps") in path.parents:
+        if (PACKAGE / "sweeps") in path.parents or path == PACKAGE / "train.py":  # the command line: on top
             continue
         bad = sorted(m for m in imported_modules(path) if m == "cyberdog.sweeps" or m.startswith("cyberdog.sweeps."))
         if bad:

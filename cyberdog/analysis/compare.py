@@ -12,11 +12,10 @@ Two sets of baselines, because the lift height H alone changes the energy a lot:
   saving when only the shape differs).
 The learned trajectory is always replayed at its own recorded H (its provenance says which).
 
-A learned trajectory is either a `CommandedPath` (what a foot-mode policy commanded: the base trot path plus
-the policy's per-leg shift, recorded at one speed and replayed only at that speed, with no policy in the
-loop) or a `SampledTrajectory` (a single x–z path, e.g. the measured one, replayed at every speed by
-rescaling S). `learned` maps a label (the policy's seed) to one trajectory, or to {speed: trajectory}.
-Its "own H" is a CommandedPath's `own_lift_height` (mean over the legs) or a SampledTrajectory's peak z.
+The learned paths come as a `LearnedSet` (`cyberdog.core.learned_set`): per label (the policy's seed) a
+commanded path per speed, replayed only at its speed with no policy in the loop, or one sampled x-z path
+replayed at every speed; `LearnedSet.at(v)` picks each label's path at speed v by the set's one rule, and a
+path's "own H" is its `lift_height`.
 
 A reference row (optional, `reference`): the best hand-designed shape that the project's direct search finds
 at the learned paths' lift height (`tools/optimize_trajectory.py`, a `SampledTrajectory`), walked once per
@@ -39,18 +38,15 @@ import math
 import time
 from dataclasses import dataclass
 
-import numpy as np
-
 from cyberdog.analysis.parallel import map_in_processes, milestone
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.analysis.walk import walk
 from cyberdog.config import WalkConfig
 from cyberdog.config.paper import PAPER_SPEEDS, PAPER_WALK_DURATION
 from cyberdog.core import energy as en
-from cyberdog.core.commanded_path import CommandedPath
-from cyberdog.core.trajectories import SampledTrajectory
-
-LearnedPath = SampledTrajectory | CommandedPath
+from cyberdog.core.foot_offsets import FootOffsetPath
+from cyberdog.core.learned_set import LearnedPath, LearnedSet
+from cyberdog.core.trajectories import FootTrajectory, SampledTrajectory
 
 BASELINES = ("cycloid", "straight")
 REFERENCE = "searched"  # the direct search's shape (trajectory name of its walks)
@@ -73,33 +69,9 @@ class WalkJob:
     lift_height: float  # m
     cfg: WalkConfig
     duration: float  # s
-    path: LearnedPath | None = None  # the learned or reference path (None: the baseline named by cfg.gait)
-
-
-def learned_lift_height(traj: LearnedPath) -> float:
-    """m, the learned trajectory's own lift height: a commanded path's mean over its legs, a sampled
-    trajectory's recorded peak z."""
-    if isinstance(traj, CommandedPath):
-        return traj.own_lift_height()
-    return float(traj.lift_height)
-
-
-def learned_at(entry, speed: float) -> LearnedPath | None:
-    """The learned trajectory of one label to replay at `speed`: a {speed: path} entry's path for that speed,
-    a commanded path only at its own speed, a sampled trajectory at any speed; None = no walk."""
-    if isinstance(entry, dict):
-        return next((t for v, t in entry.items() if abs(float(v) - speed) < 1e-6), None)
-    if isinstance(entry, CommandedPath):
-        return entry if abs(entry.speed - speed) < 1e-6 else None
-    return entry
-
-
-def pinned_lift(traj: SampledTrajectory, lift_height: float) -> SampledTrajectory:
-    """The same recorded path, renormalised so that a trot configured with `lift_height` replays it at its
-    recorded height (for experiments that share one gait config between trajectories, e.g. the prototype)."""
-    return SampledTrajectory(traj.phase, traj.x, traj.z, traj.step_length, lift_height,
-                             {**traj.provenance, "replayed_lift_height_m": float(np.max(traj.z)),
-                              "pinned_to_config_lift_height_m": float(lift_height)})
+    foot_trajectory: SampledTrajectory | None = None  # a sampled learned or the reference path (None: cfg.gait's)
+    foot_offsets: FootOffsetPath | None = None  # a commanded learned path's shift of the foot targets
+    learned: LearnedPath | None = None  # the learned path walked (None for the other rows)
 
 
 def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: float) -> WalkConfig:
@@ -108,26 +80,28 @@ def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: fl
     return dataclasses.replace(base, gait=gait)
 
 
-def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duration: float = PAPER_WALK_DURATION,
-                    same_lift: bool = True, reference: SampledTrajectory | None = None) -> list[WalkJob]:
-    """Every walk of the comparison, each baseline walk once per speed and distinct lift height, and the
-    `reference` shape (if given, with `same_lift`) once per speed at its own lift height."""
-    if reference is not None and not isinstance(reference, SampledTrajectory):
-        raise TypeError(f"reference must be a SampledTrajectory or None, got {type(reference).__name__}")
+def comparison_jobs(cfg: WalkConfig, learned: LearnedSet, speeds=PAPER_SPEEDS,
+                    duration: float = PAPER_WALK_DURATION, same_lift: bool = True,
+                    reference: SampledTrajectory | None = None) -> list[WalkJob]:
+    """Every walk of the comparison: each label's learned path at each speed (`LearnedSet.at`: an error if a
+    label has none there), each baseline walk once per speed and distinct lift height, and the `reference`
+    shape (if given, with `same_lift`) once per speed at its own lift height."""
+    if not isinstance(learned, LearnedSet):
+        raise TypeError(f"learned must be a LearnedSet, got {type(learned).__name__}")
+    if reference is not None and not isinstance(reference, FootTrajectory):
+        raise TypeError(f"reference must be a foot trajectory (a saved SampledTrajectory) or None, got "
+                        f"{type(reference).__name__}")
     jobs: list[WalkJob] = []
     for v in speeds:
-        here = {label: t for label, e in learned.items() if (t := learned_at(e, v)) is not None}
+        here = learned.at(v)
         lifts = [round(cfg.gait.lift_height, LIFT_DECIMALS)]
         if same_lift:
-            lifts += [round(learned_lift_height(t), LIFT_DECIMALS) for t in here.values()]
+            lifts += [round(p.lift_height, LIFT_DECIMALS) for p in here.values()]
         lifts = list(dict.fromkeys(lifts))
-        for label, traj in here.items():
-            h = learned_lift_height(traj)
-            if isinstance(traj, CommandedPath):  # the base path at its own H; the offsets come with the walk
-                job_cfg = dataclasses.replace(cfg, gait=dataclasses.replace(traj.gait, speed=float(v)))
-            else:
-                job_cfg = walk_config(cfg, "learned", v, h)
-            jobs.append(WalkJob(len(jobs), "learned", label, float(v), h, job_cfg, duration, traj))
+        for label, path in here.items():
+            job_cfg, foot_trajectory, offsets = path.walk_args(cfg, v)
+            jobs.append(WalkJob(len(jobs), "learned", label, float(v), path.lift_height, job_cfg, duration,
+                                foot_trajectory, offsets, path))
         for name in BASELINES:
             for h in lifts:
                 jobs.append(WalkJob(len(jobs), name, "", float(v), h, walk_config(cfg, name, v, h), duration))
@@ -141,10 +115,7 @@ def comparison_jobs(cfg: WalkConfig, learned: dict, speeds=PAPER_SPEEDS, duratio
 def run_walk_job(job: WalkJob) -> dict:
     """One walk → a row with its metrics and total joint power trace (runs in a worker process)."""
     t0 = time.perf_counter()
-    if isinstance(job.path, CommandedPath):
-        r = walk(job.cfg, job.duration, None, record=True, foot_offsets=job.path.offsets)
-    else:
-        r = walk(job.cfg, job.duration, job.path, record=True)
+    r = walk(job.cfg, job.duration, job.foot_trajectory, record=True, foot_offsets=job.foot_offsets)
     total_power = r.traces["power"].sum(axis=1)  # W, Σ_ij |τ_ij·θ̇_ij|, Eq. (7)'s integrand
     if r.fell:
         status = f"fell at {r.duration:.2f} s"
@@ -292,6 +263,6 @@ def seed_means(rows: list[dict]) -> list[dict]:
     return out
 
 
-__all__ = ["BASELINES", "COLUMNS", "REFERENCE", "LearnedPath", "PAPER_SPEEDS", "SETS", "WalkJob", "comparison_jobs",
-           "comparison_rows", "learned_at", "learned_lift_height", "pinned_lift", "reduction", "run_jobs",
+__all__ = ["BASELINES", "COLUMNS", "REFERENCE", "PAPER_SPEEDS", "SETS", "WalkJob", "comparison_jobs",
+           "comparison_rows", "reduction", "run_jobs",
            "run_walk_job", "seed_means", "walk_config"]

@@ -190,6 +190,42 @@ def find_cycles(traces: dict, dt: float, speed_command: float, leg: int = 0, spe
     return cycles
 
 
+def _check_extraction_args(leg: str, speed_command: float, speed_tolerance: float, n_points: int) -> None:
+    if leg not in LEG_NAMES:
+        raise ValueError(f"leg must be one of {LEG_NAMES}, got {leg!r}")
+    if not (np.isfinite(speed_command) and speed_command > 0):
+        raise ValueError(f"speed_command must be > 0 m/s, got {speed_command!r}")
+    if not 0 < speed_tolerance < 1:
+        raise ValueError(f"speed_tolerance must be in (0, 1), got {speed_tolerance!r}")
+    if n_points < SampledTrajectory.MIN_POINTS:
+        raise ValueError(f"n_points must be >= {SampledTrajectory.MIN_POINTS}, got {n_points!r}")
+
+
+def _cycle_path(xz: np.ndarray, contacts: np.ndarray, chosen: Cycle, n_points: int) -> dict:
+    """One leg's foot path (xz (n, 2), m; debounced contacts (n,)) over the chosen cycle, re-ordered to start
+    at its lift-off, the contact level at z = 0 and the loop closed; resampled onto `n_points` phases.
+    Keys: phase, x, z (the cycle's own samples), grid, xs, zs (resampled), z_ground, gap, swing_share."""
+    n = len(xz)
+    a, b, lo = chosen.start, chosen.end, chosen.lift_off
+    stance = contacts[a:b]
+    z_ground = float(np.median(xz[a:b, 1][stance])) if stance.any() else 0.0
+    # the cycle's own samples re-ordered to start at its lift-off: the swing [lo, b) first, then the stance
+    # [a, lo) placed after it (as the next cycle's stance would be), phases 0 … 1 over the cycle's length
+    idx = np.concatenate([np.arange(lo, b), np.arange(a, lo)])
+    length = b - a
+    phase = np.concatenate([np.arange(b - lo), np.arange(lo - a) + (b - lo)]) / length
+    x = xz[idx, 0]
+    z = xz[idx, 1] - z_ground
+    # close the loop: the foot at the next touch-down (sample b) should equal the one at this touch-down (a);
+    # the gap (drift, slip) is spread linearly over the samples from touch-down a onward in time order
+    gap = xz[min(b, n - 1)] - xz[a]
+    t_from_a = (idx - a) / length  # 0 at touch-down a, → 1 at touch-down b
+    grid, xs = resample_closed(phase, x - gap[0] * t_from_a, n_points)
+    _, zs = resample_closed(phase, z - gap[1] * t_from_a, n_points)
+    return {"phase": phase, "x": x, "z": z, "grid": grid, "xs": xs, "zs": zs, "z_ground": z_ground, "gap": gap,
+            "swing_share": float(np.count_nonzero(~stance) / length)}
+
+
 def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: RobotConfig | None = None,
                        gait: GaitConfig | None = None, leg: str = "LF", speed_tolerance: float = SPEED_TOLERANCE,
                        settle_time: float = 1.0, n_points: int = 100, min_run_s: float = 0.01,
@@ -204,14 +240,7 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
     """
     robot = robot or RobotConfig()
     gait = gait or GaitConfig()
-    if leg not in LEG_NAMES:
-        raise ValueError(f"leg must be one of {LEG_NAMES}, got {leg!r}")
-    if not (np.isfinite(speed_command) and speed_command > 0):
-        raise ValueError(f"speed_command must be > 0 m/s, got {speed_command!r}")
-    if not 0 < speed_tolerance < 1:
-        raise ValueError(f"speed_tolerance must be in (0, 1), got {speed_tolerance!r}")
-    if n_points < SampledTrajectory.MIN_POINTS:
-        raise ValueError(f"n_points must be >= {SampledTrajectory.MIN_POINTS}, got {n_points!r}")
+    _check_extraction_args(leg, speed_command, speed_tolerance, n_points)
     n = len(traces["tau"])
     if n < 2:
         raise ExtractionError(f"the rollout has {n} samples: nothing to extract")
@@ -226,33 +255,14 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
             f"in {n * dt:.2f} s, {len(valid)} valid (after {settle_time:g} s, one lift-off, plausible duration); "
             f"their speeds (m/s): {speeds}")
     chosen = min(usable, key=lambda c: c.energy)
-
-    xz = foot_paths(traces["q"], robot)[:, li, :]  # (n, 2)
-    a, b, lo = chosen.start, chosen.end, chosen.lift_off
     contacts = debounce(np.asarray(traces["contacts"], dtype=bool)[:, li], max(1, int(round(min_run_s / dt))))
-    stance = contacts[a:b]
-    z_ground = float(np.median(xz[a:b, 1][stance])) if stance.any() else 0.0
-    # the cycle's own samples re-ordered to start at its lift-off: the swing [lo, b) first, then the stance
-    # [a, lo) placed after it (as the next cycle's stance would be), phases 0 … 1 over the cycle's length
-    idx = np.concatenate([np.arange(lo, b), np.arange(a, lo)])
-    length = b - a
-    phase = np.concatenate([np.arange(b - lo), np.arange(lo - a) + (b - lo)]) / length
-    x = xz[idx, 0]
-    z = xz[idx, 1] - z_ground
-    # close the loop: the foot at the next touch-down (sample b) should equal the one at this touch-down (a);
-    # the gap (drift, slip) is spread linearly over the samples from touch-down a onward in time order
-    end = min(b, n - 1)
-    gap = xz[end] - xz[a]
-    t_from_a = (idx - a) / length  # 0 at touch-down a, → 1 at touch-down b
-    x_closed = x - gap[0] * t_from_a
-    z_closed = z - gap[1] * t_from_a
-    grid, xs = resample_closed(phase, x_closed, n_points)
-    _, zs = resample_closed(phase, z_closed, n_points)
+    cp = _cycle_path(foot_paths(traces["q"], robot)[:, li, :], contacts, chosen, n_points)
+    phase, x, z, grid, xs, zs = cp["phase"], cp["x"], cp["z"], cp["grid"], cp["xs"], cp["zs"]
+    z_ground, gap, swing_share = cp["z_ground"], cp["gap"], cp["swing_share"]
     step_length = speed_command * gait.stance_time  # m, the S the policy's controller was commanded
     lift_height = float(np.max(zs))
     if not lift_height > 1e-3:
         raise ExtractionError(f"the chosen cycle's foot hardly lifts (peak {lift_height * 1e3:.2f} mm)")
-    swing_share = float(np.count_nonzero(~stance) / length)
     prov = {
         "source": "cyberdog.analysis.extract.extract_trajectory", "leg": leg,
         "speed_command_mps": float(speed_command), "cycle_index": chosen.index,

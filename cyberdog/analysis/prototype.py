@@ -35,8 +35,8 @@ from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
 from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS
 from cyberdog.core import energy as en
-from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
+from cyberdog.core.learned_set import LearnedSet
 from cyberdog.core.trajectories import FootTrajectory
 
 PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
@@ -112,14 +112,16 @@ def run_prototype(trajectories: dict | None = None,
                   speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
-                  every_walk: bool = True) -> list[dict]:
+                  every_walk: bool = True, learned: LearnedSet | None = None) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
 
     trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
-        ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own, or {speed: CommandedPath} (a
-        learned path per speed, replayed with its own base trot). Default: cycloid and straight.
-    lift_heights: {speed: m}, the lift height of the FootTrajectory and named walks at that speed (e.g. the
-        learned path's own, for a matched comparison); default `base_cfg.gait.lift_height`.
+        ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own. Default: cycloid and straight.
+    learned: one label's learned paths (a `LearnedSet` of one label), walked first as "learned", each speed's
+        path by the set's rule (`LearnedSet.at`); the named trajectories then walk at its lift height at that
+        speed (matched), unless `lift_heights` says otherwise.
+    lift_heights: {speed: m}, the lift height of the named walks at that speed; default: the learned path's
+        own, else `base_cfg.gait.lift_height`.
     modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them).
@@ -128,41 +130,22 @@ def run_prototype(trajectories: dict | None = None,
     """
     base_cfg = base_cfg or WalkConfig()
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
-    if not trajectories:
-        raise ValueError("trajectories must name at least one trajectory")
-    speeds = tuple(float(v) for v in speeds)
-    if not speeds or not all(math.isfinite(v) and v > 0 for v in speeds):
-        raise ValueError(f"speeds must be one or more finite speeds > 0 m/s, got {speeds!r}")
-    if not (math.isfinite(distance_m) and distance_m > 0):
-        raise ValueError(f"distance_m must be > 0 and finite, got {distance_m!r}")
-    modes = tuple(modes)
-    if not modes or any(m not in MODES for m in modes) or len(set(modes)) != len(modes):
-        raise ValueError(f"modes must be distinct values of {MODES}, got {modes!r}")
-    if not isinstance(hardware, HardwareConfig):
-        raise TypeError(f"hardware must be a HardwareConfig, got {type(hardware).__name__}")
+    speeds, modes = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned)
+    jobs = []
+    if learned is not None:
+        paths = {v: next(iter(learned.at(v).values())) for v in speeds}
+        if lift_heights is None:
+            lift_heights = {v: p.lift_height for v, p in paths.items()}
+        for v, path in paths.items():
+            cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
+            jobs += [_Job("learned", foot_trajectory, v, mode, cfg, hardware, float(distance_m), offsets)
+                     for mode in modes]
     for name, traj in trajectories.items():
-        if isinstance(traj, dict):
-            missing = [v for v in speeds if not any(abs(v - u) < 1e-6 for u in traj)]
-            if missing or not all(isinstance(t, CommandedPath) for t in traj.values()):
-                raise ValueError(f"trajectory {name!r}: a {{speed: CommandedPath}} entry needs a path for every "
-                                 f"speed (missing {missing})")
-            continue
-        if traj is not None and not isinstance(traj, FootTrajectory):
-            raise TypeError(f"trajectory {name!r} must be a FootTrajectory, None or {{speed: CommandedPath}}, "
-                            f"got {type(traj).__name__}")
-        _check_picklable(name, traj)
-
-    def job(name, traj, v: float, mode: str) -> _Job:
-        if isinstance(traj, dict):
-            path = next(t for u, t in traj.items() if abs(v - u) < 1e-6)
-            cfg = dataclasses.replace(base_cfg, gait=dataclasses.replace(path.gait, speed=v))
-            return _Job(name, None, v, mode, cfg, hardware, float(distance_m), path.offsets)
-        cfg = _job_config(base_cfg, name, traj, v)
-        if lift_heights is not None and v in lift_heights:
-            cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lift_heights[v])))
-        return _Job(name, traj, v, mode, cfg, hardware, float(distance_m))
-
-    jobs = [job(name, traj, v, mode) for name, traj in trajectories.items() for v in speeds for mode in modes]
+        for v in speeds:
+            cfg = _job_config(base_cfg, name, traj, v)
+            if lift_heights is not None and v in lift_heights:
+                cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lift_heights[v])))
+            jobs += [_Job(name, traj, v, mode, cfg, hardware, float(distance_m)) for mode in modes]
     t0 = time.perf_counter()
 
     def progress(i: int, row: dict, done: int) -> None:
@@ -178,6 +161,33 @@ def run_prototype(trajectories: dict | None = None,
     rows = map_in_processes(_run_job, jobs, workers, on_result=progress,
                             describe=lambda j: f"{j.trajectory_name} at {j.speed:g} m/s, {j.mode}, {j.distance_m:g} m")
     return add_gaps(rows)
+
+
+def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardware, learned
+                    ) -> tuple[tuple[float, ...], tuple[str, ...]]:
+    """(speeds, modes) as tuples, after checking every argument of `run_prototype`."""
+    if not trajectories and learned is None:
+        raise ValueError("trajectories must name at least one trajectory")
+    speeds = tuple(float(v) for v in speeds)
+    if not speeds or not all(math.isfinite(v) and v > 0 for v in speeds):
+        raise ValueError(f"speeds must be one or more finite speeds > 0 m/s, got {speeds!r}")
+    if not (math.isfinite(distance_m) and distance_m > 0):
+        raise ValueError(f"distance_m must be > 0 and finite, got {distance_m!r}")
+    modes = tuple(modes)
+    if not modes or any(m not in MODES for m in modes) or len(set(modes)) != len(modes):
+        raise ValueError(f"modes must be distinct values of {MODES}, got {modes!r}")
+    if not isinstance(hardware, HardwareConfig):
+        raise TypeError(f"hardware must be a HardwareConfig, got {type(hardware).__name__}")
+    if learned is not None:
+        if not isinstance(learned, LearnedSet) or len(learned) != 1:
+            raise ValueError(f"learned must be a LearnedSet of one label (LearnedSet.subset), got {learned!r}")
+        for v in speeds:
+            learned.at(v)  # LearnedSetError now, before any walk, if a speed has no path
+    for name, traj in trajectories.items():
+        if traj is not None and not isinstance(traj, FootTrajectory):
+            raise TypeError(f"trajectory {name!r} must be a FootTrajectory or None, got {type(traj).__name__}")
+        _check_picklable(name, traj)
+    return speeds, modes
 
 
 def _per_m(row: dict, key: str) -> float:

@@ -61,14 +61,6 @@ def table5_markdown(rows: list[dict], means: list[dict] | None = None) -> str:
              "|---|" + "---|" * len(speeds)]
     means = means or []
     all_seeds = list(dict.fromkeys(r["seed"] for r in rows if r["trajectory"] == "learned"))
-
-    def line(label: str, cells: list[str]) -> None:
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-
-    def pick(group: list[dict], traj: str, seed: str, v: float) -> dict | None:
-        return next((r for r in group if r["trajectory"] == traj and r["speed_command_mps"] == v
-                     and (traj != "learned" or r["seed"] == seed)), None)
-
     for set_name in SETS:
         set_rows = [r for r in rows if r["set"] == set_name]
         if not set_rows:
@@ -77,53 +69,75 @@ def table5_markdown(rows: list[dict], means: list[dict] | None = None) -> str:
         lifts = list(dict.fromkeys(round(r["lift_height_m"], LIFT_DECIMALS) for r in set_rows
                                    if r["trajectory"] in BASELINES))
         for lift in lifts:
-            seeds = [s for s in all_seeds if any(r["trajectory"] == "learned" and r["seed"] == s
-                                                 for r in set_rows)]
-            if set_name == "same_lift":
-                seeds = [s for s in seeds if any(r["trajectory"] == "learned" and r["seed"] == s
-                                                 and _same(r["lift_height_m"], lift) for r in set_rows)]
-                line(f"*control: baselines at the learned lift height H = {lift:.3f} m*", [""] * len(speeds))
-            base = [r for r in set_rows if r["trajectory"] in BASELINES and _same(r["lift_height_m"], lift)]
-            learned = [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds]
-            group = base + learned
-            for s in seeds:
-                lr = [pick(group, "learned", s, v) for v in speeds]
-                h = next(r["lift_height_m"] for r in lr if r)
-                tag = f" [{s}]" if s else ""
-                line(f"Learned trajectory (H = {h:.3f} m){tag}", [_cell(r) if r else "" for r in lr])
-            for name in BASELINES:
-                br = [pick(group, name, "", v) for v in speeds]
-                first = next((r for r in br if r), None)
-                if first is None:
-                    continue
-                shape = first["label"].partition("(")[2].rstrip(")")
-                nice = "Composite cycloid" if name == "cycloid" else "Straight line" + (f", {shape}" if shape else "")
-                line(f"{nice} (H = {first['lift_height_m']:.3f} m)", [_cell(r) if r else "" for r in br])
-            for s in seeds:
-                lr = [pick(group, "learned", s, v) for v in speeds]
-                tag = f" [{s}]" if len(seeds) > 1 else ""
-                line(f"Decrement D_t, Eq. (12){tag}", [_pct(r["D_t_pct"]) if r else "" for r in lr])
-            if len(seeds) > 1 and set_name == "paper":
-                ms = [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None)
-                      for v in speeds]
-                line(f"Learned, mean ± 95 % CI over {len(seeds)} seeds",
-                     [_mean_cell(m) if m else "" for m in ms])
-                line("Decrement D_t, mean ± 95 % CI", [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else ""
-                                                       for m in ms])
+            lines += _lift_group_lines(set_name, set_rows, lift, all_seeds, speeds, means)
         if len(all_seeds) > 1 and set_name == "same_lift":
-            ms = [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None)
-                  for v in speeds]
-            line("Decrement D_t at the same lift, mean ± 95 % CI",
-                 [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else "" for m in ms])
+            ms = _means_at(means, set_name, speeds)
+            lines.append(_line("Decrement D_t at the same lift, mean ± 95 % CI",
+                               [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else "" for m in ms]))
+    return "\n".join(lines + _paper_lines(speeds))
+
+
+def _line(label: str, cells: list[str]) -> str:
+    return f"| {label} | " + " | ".join(cells) + " |"
+
+
+def _pick(group: list[dict], traj: str, seed: str, v: float) -> dict | None:
+    return next((r for r in group if r["trajectory"] == traj and r["speed_command_mps"] == v
+                 and (traj != "learned" or r["seed"] == seed)), None)
+
+
+def _means_at(means: list[dict], set_name: str, speeds: list[float]) -> list[dict | None]:
+    return [next((m for m in means if m["set"] == set_name and m["speed_command_mps"] == v), None) for v in speeds]
+
+
+def _lift_group_lines(set_name: str, set_rows: list[dict], lift: float, all_seeds: list[str], speeds: list[float],
+                      means: list[dict]) -> list[str]:
+    """The rows of one set sharing the baselines' lift height `lift`: learned, baselines, D_t (and in the paper
+    set the across-seed means)."""
+    lines = []
+    seeds = [s for s in all_seeds if any(r["trajectory"] == "learned" and r["seed"] == s for r in set_rows)]
+    if set_name == "same_lift":
+        seeds = [s for s in seeds if any(r["trajectory"] == "learned" and r["seed"] == s
+                                         and _same(r["lift_height_m"], lift) for r in set_rows)]
+        lines.append(_line(f"*control: baselines at the learned lift height H = {lift:.3f} m*", [""] * len(speeds)))
+    base = [r for r in set_rows if r["trajectory"] in BASELINES and _same(r["lift_height_m"], lift)]
+    group = base + [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds]
+    for s in seeds:
+        lr = [_pick(group, "learned", s, v) for v in speeds]
+        h = next(r["lift_height_m"] for r in lr if r)
+        tag = f" [{s}]" if s else ""
+        lines.append(_line(f"Learned trajectory (H = {h:.3f} m){tag}", [_cell(r) if r else "" for r in lr]))
+    for name in BASELINES:
+        br = [_pick(group, name, "", v) for v in speeds]
+        first = next((r for r in br if r), None)
+        if first is None:
+            continue
+        shape = first["label"].partition("(")[2].rstrip(")")
+        nice = "Composite cycloid" if name == "cycloid" else "Straight line" + (f", {shape}" if shape else "")
+        lines.append(_line(f"{nice} (H = {first['lift_height_m']:.3f} m)", [_cell(r) if r else "" for r in br]))
+    for s in seeds:
+        lr = [_pick(group, "learned", s, v) for v in speeds]
+        tag = f" [{s}]" if len(seeds) > 1 else ""
+        lines.append(_line(f"Decrement D_t, Eq. (12){tag}", [_pct(r["D_t_pct"]) if r else "" for r in lr]))
+    if len(seeds) > 1 and set_name == "paper":
+        ms = _means_at(means, set_name, speeds)
+        lines.append(_line(f"Learned, mean ± 95 % CI over {len(seeds)} seeds", [_mean_cell(m) if m else "" for m in ms]))
+        lines.append(_line("Decrement D_t, mean ± 95 % CI",
+                           [_pct(m["D_t_pct_mean"], m["D_t_pct_ci95"]) if m else "" for m in ms]))
+    return lines
+
+
+def _paper_lines(speeds: list[float]) -> list[str]:
+    """The paper's own Table 5 at the speeds it has (none if it has none of them)."""
     p = PAPER_TABLE5_KJ
     idx = [PAPER_SPEEDS.index(v) if v in PAPER_SPEEDS else None for v in speeds]
-    if any(i is not None for i in idx):
-        for key, label in (("learned", "simulation trajectory"), ("cycloid", "composite cycloid"),
-                           ("straight", "straight line")):
-            line(f"*paper, Table 5: {label}*", [f"{p[key][i]:.4f}" if i is not None else "" for i in idx])
-        line("*paper, Table 5: decrement*", [f"{p['decrement_pct'][i]:.0f} %" if i is not None else ""
-                                             for i in idx])
-    return "\n".join(lines)
+    if all(i is None for i in idx):
+        return []
+    lines = [_line(f"*paper, Table 5: {label}*", [f"{p[key][i]:.4f}" if i is not None else "" for i in idx])
+             for key, label in (("learned", "simulation trajectory"), ("cycloid", "composite cycloid"),
+                                ("straight", "straight line"))]
+    return lines + [_line("*paper, Table 5: decrement*", [f"{p['decrement_pct'][i]:.0f} %" if i is not None else ""
+                                                          for i in idx])]
 
 
 # ---------------------------------------------------------------------------------------------------------

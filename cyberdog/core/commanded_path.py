@@ -139,14 +139,4 @@ class CommandedPath:
         return cls.from_dict(json.loads(path.read_text()))
 
 
-def load_foot_path(path: str | Path) -> CommandedPath | SampledTrajectory:
-    """A learned trajectory file: a `CommandedPath` (JSON with its format tag) or a `SampledTrajectory`."""
-    path = Path(path)
-    if path.suffix.lower() == ".json" and path.is_file():
-        d = json.loads(path.read_text())
-        if isinstance(d, dict) and d.get("format") == FORMAT:
-            return CommandedPath.from_dict(d)
-    return SampledTrajectory.load(path)
-
-
-__all__ = ["CommandedPath", "FORMAT", "load_foot_path"]
+__all__ = ["CommandedPath", "FORMAT"]

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from cyberdog import config as C
+from cyberdog.core.learned_set import LearnedSetError
 from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
 
@@ -106,7 +107,7 @@ def cmd_extract(args, cfg: C.WalkConfig) -> int:
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
     L.learned_trajectories(args, run.out, args.speeds)  # extracted and saved in run.out/learned/
-    run_figures(run.out, only=("figure7",))
+    run_figures(args.draw_figures, run.out, only=("figure7",))
     return run.finish()
 
 
@@ -119,7 +120,7 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     learned = L.learned_trajectories(args, run.out, args.speeds)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference)
-    run_figures(run.out, only=("figure10", "figure13"))  # drawn from the files just written
+    run_figures(args.draw_figures, run.out, only=("figure10", "figure13"))  # drawn from the files just written
     return run.finish()
 
 
@@ -149,7 +150,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     if not args.no_prototype:
         run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                            run.out, brief=True)
-    run_figures(run.out, metrics=metrics)  # drawn from the files just written
+    run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)
     return run.finish(headline="table5.md")
@@ -158,12 +159,14 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
 def cmd_figures(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_figures
 
+    if args.draw_figures is None:
+        raise UsageError("figures need the figure code of a checkout: python evaluate.py figures, or python -m plots")
     src = args.from_dir or args.out
     if src is None or not src.is_dir():
         raise UsageError("figures needs --from DIR (a folder written by `evaluate.py` all/compare)")
     out = args.out or src
     run = Run(args, out, append=out.resolve() == src.resolve())  # figures beside the results they draw
-    run_figures(src, out, metrics=L.metrics_files(args.metrics), learned=args.learned)
+    run_figures(args.draw_figures, src, out, metrics=L.metrics_files(args.metrics), learned=args.learned)
     return run.finish()
 
 
@@ -195,14 +198,16 @@ COMMAND_FUNCTIONS = {"all": cmd_all, "baselines": cmd_baselines, "extract": cmd_
                      "prototype": cmd_prototype, "figures": cmd_figures, "video": cmd_video}
 
 
-def run(args, argv: list[str]) -> int:
+def run(args, argv: list[str], draw_figures=None) -> int:
     """Run the sub-command `args.command` (parsed by `cyberdog.evaluation.cli.parse_args` from `argv`);
-    returns the exit status."""
+    returns the exit status. draw_figures: `plots.draw_all` or the like (see `parts.run_figures`); None:
+    results without figures."""
     args.argv = list(argv)  # as typed, for outputs.json
     args.run = None
+    args.draw_figures = draw_figures
     try:
         return COMMAND_FUNCTIONS[args.command](args, walk_config(args))
-    except UsageError as err:
+    except (UsageError, LearnedSetError) as err:  # LearnedSetError: a learned path unreadable or missing
         _abandon(args, "failed")
         print(f"evaluate.py: error: {err}", file=sys.stderr)
         return 2

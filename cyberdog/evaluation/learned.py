@@ -1,8 +1,5 @@
-"""The learned trajectories `evaluate.py` walks: loaded from files, or extracted from trained policies first.
-
-A learned trajectory is either a commanded path per seed and speed (`CommandedPath`, grouped by label as
-{speed: path}) or one sampled x-z path per seed (`SampledTrajectory`, rescaled to every speed). Labels are
-the provenance's seed ("seed3"), else the file or run folder name.
+"""The learned paths `evaluate.py` walks (a `LearnedSet`): loaded from files, or extracted from trained policies
+first. Labels are the provenance's seed ("seed3"), else the file or run folder name.
 """
 from __future__ import annotations
 
@@ -13,7 +10,7 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import ExtractionError, commanded_from_rollout, cycle_rows, extract_from_rollout
 from cyberdog.analysis.report import write_rows
-from cyberdog.core.commanded_path import CommandedPath, load_foot_path
+from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
 
@@ -61,57 +58,15 @@ def unique_labels(labels: list[str]) -> list[str]:
     return out
 
 
-def learned_files(paths: list[Path]) -> list[Path]:
-    """The trajectory files named: files as given, folders expanded to their JSON files (no *_cycles)."""
-    files = []
-    for p in paths:
-        if p.is_dir():
-            found = sorted(f for f in p.glob("*.json") if not f.stem.endswith("_cycles"))
-            if not found:
-                raise UsageError(f"learned trajectory folder {p} holds no JSON file")
-            files += found
-        else:
-            files.append(p)
-    return files
-
-
-def load_learned(paths: list[Path]) -> dict:
-    """Learned trajectories by label (the provenance's seed, else the file name): a commanded path per seed
-    and speed is grouped as {speed: path}; a sampled trajectory stands alone (replayed at every speed)."""
-    learned: dict = {}
-    for f in learned_files(paths):
-        if not f.is_file():
-            hint = ("" if f != DEFAULT_LEARNED else
-                    " (train policies with train.py, then `evaluate.py extract --sweep RUNS` and pass its "
-                    "<out>/learned/ folder with --learned)")
-            raise UsageError(f"learned trajectory {f} does not exist{hint}")
-        try:
-            t = load_foot_path(f)
-        except (ValueError, KeyError, json.JSONDecodeError) as err:
-            raise UsageError(f"learned trajectory {f} is unreadable: {err}") from None
-        seed = t.provenance.get("seed")
-        label = f"seed{seed}" if seed is not None else f.stem
-        if isinstance(t, CommandedPath):
-            group = learned.setdefault(label, {})
-            if not isinstance(group, dict) or t.speed in group:
-                raise UsageError(f"two learned trajectories for {label} at {t.speed:g} m/s ({f})")
-            group[t.speed] = t
-        else:
-            learned[unique_labels(list(learned) + [label])[-1]] = t
-    return learned
-
-
-def flat_learned(learned: dict, speed: float = 1.0) -> dict[str, SampledTrajectory]:
-    """One x-z path per label for the figures: a commanded path's reference leg (LF) at `speed` (or its
-    nearest speed), a sampled trajectory as it is."""
-    out = {}
-    for label, entry in learned.items():
-        if isinstance(entry, dict):
-            v = min(entry, key=lambda s: abs(s - speed))
-            out[label] = entry[v].as_sampled("LF")
-        else:
-            out[label] = entry
-    return out
+def load_learned(paths: list[Path]) -> LearnedSet:
+    """`LearnedSet.load` with evaluate.py's errors (a hint where the shipped default folder is missing)."""
+    if list(paths) == [DEFAULT_LEARNED] and not DEFAULT_LEARNED.is_dir():
+        raise UsageError(f"learned trajectory {DEFAULT_LEARNED} does not exist (train policies with train.py, then "
+                         "`evaluate.py extract --sweep RUNS` and pass its <out>/learned/ folder with --learned)")
+    try:
+        return LearnedSet.load(paths)
+    except LearnedSetError as err:
+        raise UsageError(str(err)) from None
 
 
 def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float | None, log=print) -> list[float]:
@@ -132,7 +87,7 @@ def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float
     return [env.target_speed]
 
 
-def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print) -> dict:
+def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print) -> LearnedSet:
     """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
     --path) and save it under out/learned/ with every cycle in <label>_cycles.csv."""
     from cyberdog.rl.rollout import load_actor, rollout  # torch: only here, only when asked
@@ -167,22 +122,22 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
         labels.append(f"seed{seed}")
     if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
         labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
-    learned: dict = {}
+    learned = LearnedSet()
     for label, (kind, found) in zip(unique_labels(labels), results):
         for speed, ex in found.items():
-            name = f"{label}_{speed:g}mps"
-            traj = ex.path if kind == "commanded" else ex.trajectory
-            path = traj.save(out / "learned" / f"{name}.json")
-            write_rows(cycle_rows(ex), out / "learned", f"{name}_cycles")
+            p = LearnedPath(label, ex.path if kind == "commanded" else ex.trajectory)
+            if kind != "commanded" and label in learned.labels:
+                continue  # a measured path is rescaled to every speed: the first one
+            learned.add(p)
+            file = p.save(out / "learned")
+            write_rows(cycle_rows(ex), out / "learned", f"{file.stem}_cycles")
             if kind == "commanded":
-                log(f"{name}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles ({args.cycle}), "
-                    f"{ex.energy:.1f} J per cycle, own H = {traj.own_lift_height():.4f} m -> {path}")
-                learned.setdefault(label, {})[speed] = traj
+                log(f"{file.stem}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles ({args.cycle}), "
+                    f"{ex.energy:.1f} J per cycle, own H = {p.lift_height:.4f} m -> {file}")
             else:
                 c = ex.chosen
-                log(f"{name}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
-                    f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {traj.lift_height:.3f} m -> {path}")
-                learned.setdefault(label, traj)  # a measured path is rescaled to every speed: the first one
+                log(f"{file.stem}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
+                    f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
     return learned
 
 
@@ -203,35 +158,28 @@ def check_learned_inputs(args) -> None:
             raise UsageError(f"--policies {path}: {err}") from None
 
 
-def check_speeds_covered(learned: dict, speeds: list[float]) -> None:
-    """UsageError unless every speed of `speeds` has a learned path in at least one entry of `learned` (by the
-    comparison's own rule, `cyberdog.analysis.compare.learned_at`): a table without its learned row is no
-    Table 5."""
-    from cyberdog.analysis.compare import learned_at
-
-    missing = [v for v in speeds if all(learned_at(e, v) is None for e in learned.values())]
+def check_speeds_covered(learned: LearnedSet, speeds: list[float]) -> None:
+    """UsageError unless every label of `learned` has a path at every speed of `speeds` (`LearnedSet.at`,
+    the comparison's own rule): a table without its learned row is no Table 5."""
+    missing = [v for v in speeds if not learned.covers(v)]
     if missing:
-        have = sorted({float(v) for e in learned.values() if isinstance(e, dict) for v in e})
+        have = ", ".join(f"{v:g}" for v in learned.speeds())
         raise UsageError(
-            f"no learned path at {', '.join(f'{v:g}' for v in missing)} m/s: the learned paths are at "
-            f"{', '.join(f'{v:g}' for v in have)} m/s. Ask for those --speeds, or extract paths at the speed "
-            f"from a policy (evaluate.py extract --policies results/policy_speeds --speeds V; a policy trained "
-            f"at other speeds needs --policy-speed V) and pass them with --learned")
+            f"no learned path at {', '.join(f'{v:g}' for v in missing)} m/s for every label: the learned paths are "
+            f"at {have} m/s. Ask for those --speeds, or extract paths at the speed from a policy (evaluate.py "
+            f"extract --policies results/policy_speeds --speeds V; a policy trained at other speeds needs "
+            f"--policy-speed V) and pass them with --learned")
 
 
-def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> dict:
+def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> LearnedSet:
     """Extract from --policies/--sweep when given, else load --learned (default results/learned/); the
-    trajectories used are copied to out/learned/ beside the results."""
+    paths used are copied to out/learned/ beside the results."""
     paths = policy_paths(args.policies, args.sweep)
     if paths:
         learned = extract_policies(paths, args, speeds, out, log)
     else:
         learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
-    for label, entry in learned.items():
-        for v, t in (entry.items() if isinstance(entry, dict) else [(None, entry)]):
-            name = label if v is None else f"{label}_{v:g}mps"
-            if not (out / "learned" / f"{name}.json").is_file():
-                t.save(out / "learned" / f"{name}.json")
+    learned.save(out / "learned", overwrite=False)
     return learned
 
 
@@ -268,5 +216,5 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
 
 
 __all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
-           "extract_policies", "flat_learned", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
+           "extract_policies", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
            "reference_shape"]

@@ -11,28 +11,24 @@ from cyberdog import config as C
 from cyberdog.analysis import compare as cmp
 from cyberdog.analysis import table5 as t5
 from cyberdog.analysis.report import markdown_table, write_rows
-from cyberdog.core.commanded_path import CommandedPath
+from cyberdog.core.learned_set import LearnedSet
 from cyberdog.evaluation.cli import UsageError
-from cyberdog.evaluation.learned import flat_learned
 
 FIGURES = ("figure4", "figure6", "figure7", "figure10", "figure13")
 
 
-def run_compare(cfg: C.WalkConfig, learned: dict, speeds: list[float], duration: float, same_lift: bool,
+def run_compare(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], duration: float, same_lift: bool,
                 workers: int | None, out: Path, log=print, reference=None, brief: bool = False) -> tuple[list, list, dict]:
     """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power).
     reference: the direct search's shape (a SampledTrajectory) for the matched-lift table's reference row.
     brief: print a progress line per quarter of the walks and the headline's main rows only (the full tables
     are in the files)."""
-    for label, entry in learned.items():
-        for t in (entry.values() if isinstance(entry, dict) else [entry]):
-            period = t.gait.period if isinstance(t, CommandedPath) else t.provenance.get("period_s")
-            if period is not None and abs(period - cfg.gait.period) > 1e-9:
-                log(f"warning: {label} was recorded with a {period} s gait period; the baselines walk "
-                    f"{cfg.gait.period} s")
+    for p in learned.paths():
+        if p.period is not None and abs(p.period - cfg.gait.period) > 1e-9:
+            log(f"warning: {p.label} was recorded with a {p.period} s gait period; the baselines walk "
+                f"{cfg.gait.period} s")
     if reference is not None:
-        lifts = [cmp.learned_lift_height(t) for e in learned.values()
-                 for t in (e.values() if isinstance(e, dict) else [e])]
+        lifts = [p.lift_height for p in learned.paths()]
         gap = abs(reference.lift_height - sum(lifts) / len(lifts))
         log(f"reference row: the direct search's best shape, searched at H = {reference.lift_height:.3f} m"
             + (f" ({1e3 * gap:.1f} mm from the learned paths' mean lift height: compare with care)"
@@ -89,33 +85,26 @@ def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
               + " at " + " / ".join(f"{r['speed_command_mps']:g}" for r in paper) + " m/s")
 
 
-def run_prototype_part(cfg: C.WalkConfig, learned: dict, speeds: list[float], distance_m: float, modes: list[str],
-                       workers: int | None, out: Path, log=print, brief: bool = False) -> list[dict]:
-    """Section 4.2 in simulation: the first learned trajectory and both baselines → prototype.*. `brief`: a
-    progress line per quarter of the walks and the battery use per 100 m only (the tables are in the files)."""
+def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], distance_m: float,
+                       modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False) -> list[dict]:
+    """Section 4.2 in simulation: the first learned label's paths and both baselines at their lift heights →
+    prototype.*. `brief`: a progress line per quarter of the walks and the battery use per 100 m only (the
+    tables are in the files)."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
 
-    label, entry = next(iter(learned.items()))
-    lifts = None
-    if isinstance(entry, dict):  # commanded paths: the baselines at each speed's own lift height (matched)
-        missing = [v for v in speeds if not any(abs(v - u) < 1e-6 for u in entry)]
-        if missing:
-            raise UsageError(f"prototype: the learned {label} has no path at {missing} m/s")
-        lifts = {v: t.own_lift_height() for v in speeds for u, t in entry.items() if abs(v - u) < 1e-6}
-        trajectories = {"learned": entry, "cycloid": None, "straight": None}
-    else:
-        trajectories = {"learned": cmp.pinned_lift(entry, cfg.gait.lift_height), "cycloid": None, "straight": None}
-    log(f"prototype: {len(trajectories) * len(speeds) * len(modes)} walks of {distance_m:g} m (learned = {label}"
-        + (", baselines at its own lift height)" if lifts else ")"))
+    label = learned.labels[0]
+    trajectories = {"cycloid": None, "straight": None}
+    log(f"prototype: {(len(trajectories) + 1) * len(speeds) * len(modes)} walks of {distance_m:g} m (learned = "
+        f"{label}, baselines at its own lift height)")
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
-                         base_cfg=cfg, lift_heights=lifts, log=log, every_walk=not brief)
+                         base_cfg=cfg, log=log, every_walk=not brief, learned=learned.subset([label]))
     write_prototype(rows, out)
     if brief:
         print(f"\nPrototype run, {label} (battery % per 100 m, Eq. 13; {distance_m:g} m walks; in full: "
               f"prototype.md):")
         for mode in modes:
             cells = {name: [f"{100 * r['battery_used_pct'] / r['distance_m']:.2f}" for r in rows
-                            if r["trajectory"] == name and r["robot"] == mode] for name in trajectories}
+                            if r["trajectory"] == name and r["robot"] == mode] for name in ("learned", *trajectories)}
             print(f"  {mode:8s} " + "   ".join(f"{name} {' / '.join(c)}" for name, c in cells.items())
                   + f"  at {' / '.join(f'{v:g}' for v in speeds)} m/s")
         return rows
@@ -125,19 +114,22 @@ def run_prototype_part(cfg: C.WalkConfig, learned: dict, speeds: list[float], di
     return rows
 
 
-def run_figures(results_dir: Path, out: Path | None = None, *, metrics: dict | None = None, learned=None,
-                only=None) -> list[Path]:
-    """The figures of `only` (default: all) that the results saved in `results_dir` have inputs for, drawn by
-    `plots` (from the saved files only, never running physics) into `out` (default: beside the results)."""
-    import plots  # matplotlib: only when drawing
-
+def run_figures(draw, results_dir: Path, out: Path | None = None, *, metrics: dict | None = None, learned=None,
+                only=None, log=print) -> list[Path]:
+    """The figures of `only` (default: all) that the results saved in `results_dir` have inputs for, drawn into
+    `out` (default: beside the results) by `draw(results_dir, out, metrics, only, learned=...)`: the checkout's
+    `plots.draw_all`, which `evaluate.py` passes in (from the saved files only, never running physics). Without
+    it (the package run on its own) the results are written and the figures left to `python -m plots`."""
+    if draw is None:
+        log(f"figures: not drawn here (no figure code given); from a checkout: python -m plots --from {results_dir}")
+        return []
     try:
-        return plots.draw_all(results_dir, out or results_dir, metrics, only, learned=learned)
+        return draw(results_dir, out or results_dir, metrics, only, learned=learned)
     except (OSError, ValueError) as err:  # a missing or unreadable input file: the user's to fix
         raise UsageError(f"figures: {err}") from None
 
 
-def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
+def run_video(cfg: C.WalkConfig, learned: LearnedSet | None, args, out: Path) -> Path:
     """A GIF/MP4 of the trot with --video-trajectory at --video-speed."""
     from cyberdog.analysis.video import record_video
 
@@ -145,8 +137,9 @@ def run_video(cfg: C.WalkConfig, learned: dict | None, args, out: Path) -> Path:
     traj = None
     lift = cfg.gait.lift_height
     if name == "learned":  # a commanded path is shown as its LF leg's x-z path on all four legs
-        seed, traj = next(iter(flat_learned(learned, args.video_speed).items()))
-        lift = cmp.learned_lift_height(traj)
+        seed, path = next(iter(learned.at(args.video_speed).items()))
+        traj = path.figure_path()
+        lift = traj.lift_height  # the reference leg's own peak: the drawn path replayed as recorded
         label = f"learned, {seed}"  # which of the learned paths the video walks
         name = f"learned_{seed}"
     vcfg = cmp.walk_config(cfg, args.video_trajectory, args.video_speed, lift)

@@ -223,15 +223,8 @@ class Trainer(RunState):
         self.agent.action_l2 = self.cfg.agent.action_l2 if sc.action_l2 is None else sc.action_l2
         self.agent.set_actor_lr(self.cfg.agent.actor_lr if sc.actor_lr is None else sc.actor_lr,
                                 fresh=sc.fresh_actor_optimizer and c["stage_env_steps"] == 0)
-        random_frames = self._random_frames_left(stage)
         threads = torch.get_num_threads()  # closing a ParallelEnv raises them by its worker count: restored below
-        if tc.collection == "async":  # env(s) in a worker process, one batch ahead of the updates
-            collector = ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
-                                         self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
-                                         tc.num_envs)
-        else:  # the policy runs here, on self.device, on the observations of all envs at once
-            collector = make_collector(make_env_for_collection(self.cfg.env, reward, seed, tc.num_envs),
-                                       self.agent.policy, tc.frames_per_batch, random_frames, self.device)
+        collector = self._collector(reward, seed, self._random_frames_left(stage))
         budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
         bar = tqdm(total=budget, initial=min(c["stage_env_steps"], budget), unit="step", desc=f"stage {stage}",
                    disable=not self.progress, dynamic_ncols=True)
@@ -275,6 +268,17 @@ class Trainer(RunState):
             bar.close()
             collector.shutdown()
             torch.set_num_threads(threads)
+
+    def _collector(self, reward, seed: int, random_frames: int):
+        """The stage's collector: the env(s) in a worker process one batch ahead of the updates ("async"), or
+        here, with the policy on self.device acting on the observations of all envs at once."""
+        tc = self.cfg.train
+        if tc.collection == "async":
+            return ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
+                                    self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
+                                    tc.num_envs)
+        return make_collector(make_env_for_collection(self.cfg.env, reward, seed, tc.num_envs), self.agent.policy,
+                              tc.frames_per_batch, random_frames, self.device)
 
     def _random_frames_left(self, stage: int) -> int:
         """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent)."""

@@ -173,34 +173,8 @@ class Robot:
         self.ground_friction = sim.ground_friction  # foot–ground coefficient now (set_ground_friction)
         self.body_id = c.loadURDF(str(urdf), [0.0, 0.0, robot.body_height], flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
 
-        # link and joint maps
-        self.link_names = {-1: c.getBodyInfo(self.body_id)[0].decode()}
-        joint_by_name = {}
-        for i in range(c.getNumJoints(self.body_id)):
-            info = c.getJointInfo(self.body_id, i)
-            joint_by_name[info[1].decode()] = i
-            self.link_names[i] = info[12].decode()
-        link_by_name = {name: i for i, name in self.link_names.items()}
-        try:
-            self.joint_ids = [joint_by_name[f"{leg}_{j}_joint"] for leg in LEG_NAMES for j in JOINT_NAMES]
-            self.foot_link_ids = [link_by_name[f"{leg}_foot"] for leg in LEG_NAMES]
-        except KeyError as err:
-            raise ValueError(f"{urdf}: missing joint or link {err}; expected the names of tools/make_urdf.py") from None
-        self.joint_names = [f"{leg}_{j}_joint" for leg in LEG_NAMES for j in JOINT_NAMES]
-
-        # no default velocity motors, no damping, unit link friction (see the module docstring)
-        c.setJointMotorControlArray(self.body_id, self.joint_ids, pybullet.VELOCITY_CONTROL, forces=[0.0] * N_JOINTS)
-        for link in self.link_names:
-            c.changeDynamics(self.body_id, link, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
-                             lateralFriction=1.0)
-        self._nominal_dynamics = {}  # link → (mass, principal inertia diagonal) as loaded
-        for link in self.link_names:
-            info = c.getDynamicsInfo(self.body_id, link)
-            self._nominal_dynamics[link] = (info[0], info[2])
-        self.mass_scale = 1.0
-        inertial_pos, inertial_orn = c.getDynamicsInfo(self.body_id, -1)[3:5]  # inertial frame in the link frame
-        self._link_to_inertial = (inertial_pos, inertial_orn)
-        self._inertial_to_link = c.invertTransform(inertial_pos, inertial_orn)
+        self._map_links(urdf)
+        self._prepare_dynamics()
 
         # bound functions for the per-step path (BulletClient's __getattr__ costs a lookup per call)
         self._set_motors = c.setJointMotorControlArray
@@ -215,6 +189,40 @@ class Robot:
         self.step_count = 0
         self._closed = False
         self.reset()
+
+    def _map_links(self, urdf: Path) -> None:
+        """Link names by index, the twelve joints and the four feet in leg-major order (names of make_urdf)."""
+        c = self.client
+        self.link_names = {-1: c.getBodyInfo(self.body_id)[0].decode()}
+        joint_by_name = {}
+        for i in range(c.getNumJoints(self.body_id)):
+            info = c.getJointInfo(self.body_id, i)
+            joint_by_name[info[1].decode()] = i
+            self.link_names[i] = info[12].decode()
+        link_by_name = {name: i for i, name in self.link_names.items()}
+        try:
+            self.joint_ids = [joint_by_name[f"{leg}_{j}_joint"] for leg in LEG_NAMES for j in JOINT_NAMES]
+            self.foot_link_ids = [link_by_name[f"{leg}_foot"] for leg in LEG_NAMES]
+        except KeyError as err:
+            raise ValueError(f"{urdf}: missing joint or link {err}; expected the names of tools/make_urdf.py") from None
+        self.joint_names = [f"{leg}_{j}_joint" for leg in LEG_NAMES for j in JOINT_NAMES]
+
+    def _prepare_dynamics(self) -> None:
+        """No default velocity motors, no damping, unit link friction (see the module docstring); the nominal
+        masses and the body's inertial frame."""
+        c = self.client
+        c.setJointMotorControlArray(self.body_id, self.joint_ids, pybullet.VELOCITY_CONTROL, forces=[0.0] * N_JOINTS)
+        for link in self.link_names:
+            c.changeDynamics(self.body_id, link, linearDamping=0.0, angularDamping=0.0, jointDamping=0.0,
+                             lateralFriction=1.0)
+        self._nominal_dynamics = {}  # link → (mass, principal inertia diagonal) as loaded
+        for link in self.link_names:
+            info = c.getDynamicsInfo(self.body_id, link)
+            self._nominal_dynamics[link] = (info[0], info[2])
+        self.mass_scale = 1.0
+        inertial_pos, inertial_orn = c.getDynamicsInfo(self.body_id, -1)[3:5]  # inertial frame in the link frame
+        self._link_to_inertial = (inertial_pos, inertial_orn)
+        self._inertial_to_link = c.invertTransform(inertial_pos, inertial_orn)
 
     # ------------------------------------------------------------------------------------------------------
     # reset and step

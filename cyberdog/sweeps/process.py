@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 LOG_FILE, ATTEMPT_FILE, SWEEP_FILE = "train.log", "sweep_attempt.json", "sweep.json"
+ENTRY_POINT = "cyberdog.train"  # the package's training command line: `python -m cyberdog.train`
 RAY_MISSING = ("--backend ray needs Ray, which is not installed: pip install -e '.[ray]' (or pip install 'ray>=2.9'),"
                " or use the default --backend local")
 
@@ -36,9 +37,10 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the child between 
         pass
 
 
-def _launch(cmd: list, cwd, run_dir: str, attempt: int) -> subprocess.Popen:
+def _launch(cmd: list, cwd, run_dir: str, attempt: int, code_root: str | None = None) -> subprocess.Popen:
     """Start one training attempt with its output appended to <run_dir>/train.log; record pid and host in
-    <run_dir>/sweep_attempt.json."""
+    <run_dir>/sweep_attempt.json. `code_root` (the folder holding the `cyberdog` package) leads PYTHONPATH, so
+    that the attempt imports the driver's own code, installed or not."""
     os.makedirs(run_dir, exist_ok=True)
     log_path = os.path.join(run_dir, LOG_FILE)
     with open(log_path, "ab") as log:
@@ -47,6 +49,8 @@ def _launch(cmd: list, cwd, run_dir: str, attempt: int) -> subprocess.Popen:
         log.write((header + " ".join(map(str, cmd)) + "\n").encode())
         log.flush()
         env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        if code_root:
+            env["PYTHONPATH"] = os.pathsep.join([code_root] + [p for p in [os.environ.get("PYTHONPATH")] if p])
         proc = subprocess.Popen([str(c) for c in cmd], cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL, env=env, start_new_session=True,
                                 preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None)
@@ -80,17 +84,16 @@ def _describe_exit(rc: int, run_dir: str, offset: int, lines: int = 4) -> str:
     return what + (": " + " | ".join(tail) if tail else "")
 
 
-def _ray_attempt(cmd: list, run_dir: str, sweep_file: str, attempt: int, script: str) -> dict:
+def _ray_attempt(cmd: list, run_dir: str, sweep_file: str, attempt: int, code_root: str, entry_point: str) -> dict:
     """Body of the Ray task: run one training attempt on whichever node Ray chose and wait for it."""
     if not os.path.isfile(sweep_file):
         return {"rc": None, "host": socket.gethostname(),
                 "error": f"the sweep folder {os.path.dirname(sweep_file)} is not visible on node "
                          f"{socket.gethostname()}: with a Ray cluster it must be on a file system shared by all "
                          f"nodes, at the same path"}
-    if script == "shipped":  # the code travelled as the Ray job's working_dir, the task's current folder
-        script = os.path.join(os.getcwd(), "train.py")
-    cmd = [sys.executable, script] + list(cmd)
-    proc = _launch(cmd, None, run_dir, attempt)
+    if code_root == "shipped":  # the code travelled as the Ray job's working_dir, the task's current folder
+        code_root = os.getcwd()
+    proc = _launch([sys.executable, "-m", entry_point] + list(cmd), None, run_dir, attempt, code_root)
     rc = proc.wait()
     return {"rc": rc, "host": socket.gethostname(), "pid": proc.pid,
             "error": None if rc == 0 else _describe_exit(rc, run_dir, proc.log_offset)}
@@ -102,12 +105,12 @@ class LocalBackend:
 
     name = "local"
 
-    def __init__(self, workers: int, script: Path):
-        self.capacity, self.script = workers, script
+    def __init__(self, workers: int, code_root: Path, entry_point: str = ENTRY_POINT):
+        self.capacity, self.code_root, self.entry_point = workers, str(code_root), entry_point
         self.procs: dict[int, tuple[subprocess.Popen, str]] = {}  # seed -> (process, run folder)
 
     def submit(self, seed: int, args: list, run_dir: Path, attempt: int) -> None:
-        proc = _launch([sys.executable, str(self.script)] + args, None, str(run_dir), attempt)
+        proc = _launch([sys.executable, "-m", self.entry_point] + args, None, str(run_dir), attempt, self.code_root)
         self.procs[seed] = (proc, str(run_dir))
 
     def wait(self, timeout: float) -> list[tuple[int, bool, str | None]]:
@@ -145,7 +148,8 @@ class RayBackend:
 
     name = "ray"
 
-    def __init__(self, workers: int | None, address: str | None, script: Path, local_cpus: int, echo=print):
+    def __init__(self, workers: int | None, address: str | None, code_root: Path, entry_point: str = ENTRY_POINT,
+                 local_cpus: int = 1, echo=print):
         """local_cpus: CPUs of a Ray instance started here when neither `workers` nor `address` is given."""
         try:
             import ray
@@ -156,8 +160,8 @@ class RayBackend:
         if not ray.is_initialized():
             kwargs = dict(include_dashboard=False, log_to_driver=False)
             if address:
-                root = script.resolve().parent
-                ship = (root / "cyberdog").is_dir()
+                root = Path(code_root).resolve()
+                ship = (root / "setup.cfg").is_file()  # a checkout; an installed package must be on every node
                 if ship:  # the nodes get this checkout's code; the runs themselves stay out of the upload
                     kwargs["runtime_env"] = {"working_dir": str(root), "excludes": [
                         ".venv", ".venv/**", "runs", "runs/**", ".git", ".git/**", "plots", "**/__pycache__",
@@ -169,7 +173,8 @@ class RayBackend:
             self.owns = True
         elif address:
             echo(f"sweep: Ray is already initialised in this process; --ray-address {address} is not used")
-        self.script = "shipped" if ship else str(script.resolve())
+        self.code_root = "shipped" if ship else str(Path(code_root).resolve())
+        self.entry_point = entry_point
         cpus = int(ray.cluster_resources().get("CPU", 1))
         self.capacity = max(1, min(workers, cpus) if workers else cpus)
         # ship this module's functions by value: Ray workers need neither torch nor the package on their path
@@ -179,7 +184,7 @@ class RayBackend:
 
     def submit(self, seed: int, args: list, run_dir: Path, attempt: int) -> None:
         sweep_file = str(run_dir.parent / SWEEP_FILE)
-        ref = self.task.remote(args, str(run_dir), sweep_file, attempt, self.script)
+        ref = self.task.remote(args, str(run_dir), sweep_file, attempt, self.code_root, self.entry_point)
         self.refs[ref] = seed
 
     def wait(self, timeout: float) -> list[tuple[int, bool, str | None]]:

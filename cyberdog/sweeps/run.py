@@ -18,7 +18,7 @@ from cyberdog.analysis.parallel import available_cores
 from cyberdog.runlock import break_lock
 from cyberdog.sweeps.folder import (CONFIG_FILE, LOCK_FILE, STATUS_FILE, SweepSpec, attempt_args, load_sweep,
                                     read_attempt, seed_dir, stage_budget)
-from cyberdog.sweeps.process import LOG_FILE, LocalBackend, RayBackend, SweepError
+from cyberdog.sweeps.process import ENTRY_POINT, LOG_FILE, LocalBackend, RayBackend, SweepError
 from cyberdog.sweeps.status import SweepStatus, seed_statuses
 
 BACKENDS = ("local", "ray")
@@ -27,22 +27,22 @@ PID_RECORD_SLACK_S = 30.0  # s: a sweep_attempt.json older than the attempt's st
 
 
 def run_sweep(sweep_dir, backend: str = "local", workers: int | None = None, max_retries: int = 2,
-              ray_address: str | None = None, progress: bool = True, train_script=None, poll_s: float = 0.5,
-              log_every_s: float = 30.0, echo=print) -> dict:
+              ray_address: str | None = None, progress: bool = True, poll_s: float = 0.5,
+              log_every_s: float = 30.0, echo=print, entry_point: str = ENTRY_POINT) -> dict:
     """Train every seed of the sweep in `sweep_dir` that is not done yet; returns the final status dict.
 
     A failed attempt (non-zero exit, killed, Ray task lost) is reported with its error and retried, from the
     seed's last checkpoint, up to `max_retries` times; then the seed is marked failed and the others go on.
     The status is kept in sweep_status.json (atomically rewritten) and shown as a progress bar, or with
-    `progress=False` as a log line every `log_every_s` seconds.
+    `progress=False` as a log line every `log_every_s` seconds. Each attempt is a process of the package's
+    entry point, `python -m cyberdog.train` (`entry_point`), importing this same `cyberdog` (its folder leads
+    PYTHONPATH).
     """
     sweep_dir = Path(sweep_dir)
     _check_options(backend, workers, max_retries, ray_address)
     spec = load_sweep(sweep_dir)
     cfg = C.load(C.ExperimentConfig, sweep_dir / CONFIG_FILE)
-    script = Path(train_script) if train_script else Path(__file__).resolve().parents[2] / "train.py"
-    if not script.is_file():
-        raise SweepError(f"cannot find train.py at {script}; pass train_script")
+    code_root = Path(__file__).resolve().parents[2]  # the folder holding this `cyberdog` package
     with _driver_lock(sweep_dir):
         budget = stage_budget(cfg, spec.stage)
         info = {"sweep_dir": str(sweep_dir.resolve()), "backend": backend, "max_retries": max_retries,
@@ -50,7 +50,7 @@ def run_sweep(sweep_dir, backend: str = "local", workers: int | None = None, max
         status = SweepStatus(sweep_dir, seed_statuses(sweep_dir, spec), budget, info)
         driver = SweepDriver(sweep_dir, spec, status, max_retries, poll_s, log_every_s, echo)
         with _sigterm_as_interrupt():
-            return driver.run(lambda queued: _make_backend(backend, workers, ray_address, script, queued, echo),
+            return driver.run(lambda queued: _make_backend(backend, workers, ray_address, (code_root, entry_point), queued, echo),
                               progress)
 
 
@@ -65,10 +65,12 @@ def _check_options(backend: str, workers: int | None, max_retries: int, ray_addr
         raise SweepError("--ray-address needs --backend ray")
 
 
-def _make_backend(backend: str, workers: int | None, ray_address: str | None, script: Path, queued: int, echo):
+def _make_backend(backend: str, workers: int | None, ray_address: str | None, code: tuple[Path, str], queued: int,
+                  echo):
+    """code: (the folder holding the package, the module each attempt runs)."""
     if backend == "local":
-        return LocalBackend(min(workers or available_cores(), queued), script)
-    return RayBackend(workers, ray_address, script, local_cpus=available_cores(), echo=echo)
+        return LocalBackend(min(workers or available_cores(), queued), *code)
+    return RayBackend(workers, ray_address, *code, local_cpus=available_cores(), echo=echo)
 
 
 @contextmanager
