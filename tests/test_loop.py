@@ -72,15 +72,17 @@ def _calls(tree: ast.AST, attribute: str) -> list[str]:
 
 
 def test_one_place_steps_the_robot_under_the_controller():
-    """Only the walker calls `Robot.step` and the trot controller's `torque`, and nothing replaces a
-    method of the robot at run time."""
+    """Only the walker calls `Robot.step` and the trot controller's `command` and `driver_torque` (its
+    `torque` is the two in one, for callers outside the loop), and nothing replaces a method of the robot at
+    run time."""
     steppers, torquers, patches = set(), set(), []
     for path in PACKAGE.rglob("*.py"):
         tree = ast.parse(path.read_text())
         rel = str(path.relative_to(PACKAGE))
         if any("robot" in c.lower() for c in _calls(tree, "step")):
             steppers.add(rel)
-        if any(c.endswith(("controller.torque", "ctrl.torque")) for c in _calls(tree, "torque")):
+        if any(c.endswith(("controller.torque", "ctrl.torque", "controller.command", "controller.driver_torque"))
+               for name in ("torque", "command", "driver_torque") for c in _calls(tree, name)):
             torquers.add(rel)
         for node in ast.walk(tree):
             if isinstance(node, ast.Assign):

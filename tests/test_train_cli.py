@@ -65,6 +65,7 @@ def test_same_seed_gives_identical_metrics_for_1000_steps(tmp_path):
     assert metrics_rows(other)[:3] != table[:3]
 
 
+@pytest.mark.slow  # about 20 s
 def test_async_collection_runs_the_same_schedule_reproducibly_and_resumes(reference_run, tmp_path):
     """train.collection=async: the same counters as the synchronous run, identical reruns with a seed, and an
     interrupted run resumes (in a new collector process) to the same counters."""
@@ -161,6 +162,7 @@ def test_a_foot_mode_run_trains_and_its_actor_moves_the_feet(tmp_path):
     assert abs(moved.energy - zero.energy) > 1e-6
 
 
+@pytest.mark.slow  # about 20 s
 def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earlier_result(reference_run, tmp_path):
     import shutil
     run_dir = tmp_path / "longer"

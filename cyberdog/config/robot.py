@@ -246,11 +246,12 @@ class HardwareConfig:
       dry_friction 0.246 N·m [X]) in the physics; the motors must overcome it (the paper's suspected cause of
       its 3 % sim-to-real gap). The torque–speed curve and copper loss are on in both cases (ActuatorConfig,
       cyberdog.core.energy).
-    - `latency_s`: a joint torque reaches the joint this long after the controller computed it (a FIFO of
-      whole controller periods). 2.5 ms [G]: one 400 Hz controller cycle. With the zero-order hold of the
-      drivers (half a period on average) the torque lags the state it was computed from by 3.75 ms on
-      average: about one 500 Hz cycle of Xiaomi's locomotion controller plus the motor bus, as the 3 ms FIFO
-      of the earlier 1 kHz loop did (3.5 ms with its hold).
+    - `latency_s`: the controller's command (joint targets, target speeds, feedforward torque) reaches the motor
+      drivers this long after it was computed (a FIFO of whole controller periods); the drivers close the
+      joint PD on the encoder readings they have then, as CyberDog's do (its motor command is q_des, qd_des,
+      kp, kd and tau_des; MiRoboticsLab cyberdog_motor_sdk). 2.5 ms [G]: one 400 Hz controller cycle, about
+      one 500 Hz cycle of Xiaomi's locomotion controller plus the motor bus. (A delay inside the PD loop, the
+      model before, made the PD fight itself: +40 % Eq. 7 on the hardware-like robot, docs/results.md.)
     - `joint_angle_noise_std`, `joint_velocity_noise_std`: white encoder noise on the q, q̇ the controller
       reads (the energy is computed from the true values) [G, as EnvConfig's defaults].
     - `estimated_velocity`: the controller's speed feedback is the Kalman estimate (simulated IMU + leg
@@ -263,7 +264,7 @@ class HardwareConfig:
     """
 
     friction: bool = False  # joint viscous + dry friction in the physics (values from ActuatorConfig [X])
-    latency_s: float = 0.0  # s, actuation delay, a whole multiple of SimConfig.controller_dt [G: 0.0025]
+    latency_s: float = 0.0  # s, command delay to the drivers, a whole multiple of SimConfig.controller_dt [G: 0.0025]
     joint_angle_noise_std: float = 0.0  # rad, encoder noise on the controller's q [G: 0.002]
     joint_velocity_noise_std: float = 0.0  # rad/s, noise on the controller's q̇ [G: 0.05]
     estimated_velocity: bool = False  # speed feedback from the IMU + leg-odometry Kalman filter, not the truth

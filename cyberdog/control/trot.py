@@ -59,6 +59,15 @@ class BodyFeedback:
 _NO_FEEDBACK = BodyFeedback()
 
 
+@dataclass(frozen=True)
+class JointCommand:
+    """One controller period's command to the twelve motor drivers (lists of 12 floats, joint order)."""
+
+    q_target: list  # rad
+    dq_target: list  # rad/s
+    feedforward: list  # N·m, added to the drivers' PID torque
+
+
 @dataclass
 class TrotTargets:
     """What the controller asked for at one instant (for logging and tests)."""
@@ -240,17 +249,30 @@ class TrotController:
         return TrotTargets(np.array(feet), np.array(foot_vels), np.array(q_t), np.array(dq_t), np.array(in_swing))
 
     def torque(self, t: float, q: np.ndarray, dq: np.ndarray, body: BodyFeedback | None = None) -> np.ndarray:
-        """Joint torque command (12,), N·m: PID on the IK targets plus the feedforward terms."""
-        _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
+        """Joint torque command (12,), N·m: PID on the IK targets plus the feedforward terms (`command` then
+        `driver_torque` on the same q, q̇: the controller without a delay between the two)."""
         q = np.asarray(q, dtype=float)
         dq = np.asarray(dq, dtype=float)
         if q.shape != (12,) or dq.shape != (12,):
+            _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
             return self._checked_torque(q_t, q, dq_t, dq, in_swing)
-        q_measured = q.tolist()
-        tau = self.pid.torque_from_lists(q_t, q_measured, dq_t, dq.tolist())
+        return self.driver_torque(self.command(t, q, body), q, dq)
+
+    def command(self, t: float, q: np.ndarray, body: BodyFeedback | None = None) -> JointCommand:
+        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,):
+        joint targets and speeds from the trajectory and IK, and the stance feedforward torque."""
+        _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
+        feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
-            self._add_stance_feedforward(tau, q_measured, [not swing for swing in in_swing])
-        return np.array(tau)
+            self._add_stance_feedforward(feedforward, q.tolist(), [not swing for swing in in_swing])
+        return JointCommand(q_t, dq_t, feedforward)
+
+    def driver_torque(self, command: JointCommand, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """The motor drivers' law, τ = PID(q_target − q, q̇_target − q̇) + τ_ff (12,), N·m, on the joint state
+        (q, q̇) they read now: as CyberDog's motor command (q_des, qd_des, kp, kd, tau_des; MiRoboticsLab
+        cyberdog_motor_sdk), with the trot's PID gains."""
+        tau = self.pid.torque_from_lists(command.q_target, q.tolist(), command.dq_target, dq.tolist())
+        return np.array([a + b for a, b in zip(tau, command.feedforward)])
 
     def _checked_torque(self, q_t, q, dq_t, dq, in_swing) -> np.ndarray:
         tau = self.pid.torque(np.array(q_t), q, np.array(dq_t), dq)  # raises on a bad shape

@@ -32,7 +32,7 @@ from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
 from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
-from cyberdog.sim.hardware import (HardwareSensing, RobotDraw, TorqueDelay, draw_mass_scale, hardware_walk_config,
+from cyberdog.sim.hardware import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
 from cyberdog.sim.robot import Robot
 
@@ -98,7 +98,7 @@ class Walker:
         self.slip_sample_every = max(1, int(round(SLIP_SAMPLE_PERIOD / self.dt)))  # steps
         self.latency_steps = (whole_steps(hardware.latency_s, self.dt, "HardwareConfig.latency_s")
                               if hardware is not None else 0)  # periods, of the configured hardware
-        self.delay = TorqueDelay(self.latency_steps)
+        self.delay = CommandDelay(self.latency_steps)
         self.sensing: HardwareSensing | None = None
         self.foot_link_names = set(self.robot.foot_link_names)
         self.reset()
@@ -179,21 +179,20 @@ class Walker:
         """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
         torque applied (12,)."""
         s, k = self.state, self.steps
+        q = dq = command = None
         if self.drive:
             if self.sensing is None:
-                tau = self.controller.torque(k * self.dt, s.q, s.dq, BodyFeedback.from_state(s, self.start))
+                q, dq, feedback = s.q, s.dq, BodyFeedback.from_state(s, self.start)
             else:
                 q, dq, v_world = self.sensing.read(k, s, self.robot.foot_contacts)
-                tau = self.controller.torque(k * self.dt, q, dq, self.body_feedback(s, v_world))
-            if extra_torque is not None:
-                tau = extra_torque + tau
-        else:
-            tau = extra_torque
-        if self.joint_stop is not None:
-            stop = self.joint_stop.torque(s.q, s.dq)
-            if stop is not None:
-                tau = tau + stop
-        applied = self.robot.step(self.delay.push(tau))
+                feedback = self.body_feedback(s, v_world)
+            command = self.controller.command(k * self.dt, q, feedback)
+        stop = self.joint_stop.torque(s.q, s.dq) if self.joint_stop is not None else None
+        # the latency holds the whole command (targets, feedforward, the added torques); the drivers' PD then
+        # acts on the joint state read now (q, dq of this period)
+        arrived = self.delay.push((command, extra_torque, stop))
+        tau = self._driver_torque(arrived, q, dq)
+        applied = self.robot.step(tau)
         self.tau.append(applied)
         rpy = s.base_rpy
         self.body.append((s.base_linear_velocity_world[0], rpy[0], rpy[1], rpy[2], s.base_position[2]))
@@ -209,6 +208,19 @@ class Walker:
         self.state = state = self.robot.read_state()
         self.dq.append((state.q - s.q) * (1.0 / self.dt))  # ω̄ over the period: τ·ω̄·dt = τ·Δq exactly
         return applied
+
+    def _driver_torque(self, arrived, q, dq) -> np.ndarray:
+        """The torque the motor drivers apply for the command that has arrived (None: none yet, zero torque):
+        the controller's PID + feedforward on the joint state (q, dq) read this period, then the added torques."""
+        if arrived is None:
+            return np.zeros(12)
+        command, extra, stop = arrived
+        tau = self.controller.driver_torque(command, q, dq) if command is not None else None
+        if extra is not None:
+            tau = extra if tau is None else extra + tau
+        if stop is not None:
+            tau = stop if tau is None else tau + stop
+        return np.zeros(12) if tau is None else tau
 
     def _record(self, s) -> None:
         traces = self._traces

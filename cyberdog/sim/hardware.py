@@ -5,7 +5,7 @@ learning environment and for the scripted walks alike (`cyberdog.loop.walker.Wal
 
 - `hardware_walk_config`: the walk config the simulator must be built with (joint friction on or off);
 - `draw_mass_scale`: the mass-scale draw in [1 − u, 1 + u];
-- `TorqueDelay`: actuation latency as a FIFO of whole controller periods;
+- `CommandDelay`: actuation latency, the controller's command held in a FIFO of whole controller periods;
 - `HardwareSensing`: what the robot's software reads: noisy joint encoders and the Kalman body velocity
   from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`);
 - `draw_robot`: one robot from the ranges of a `RandomizationConfig` (domain randomisation), a `RobotDraw`
@@ -88,30 +88,30 @@ def whole_steps(duration_s: float, dt: float, name: str) -> int:
     return n
 
 
-class TorqueDelay:
-    """Actuation latency: `push(τ)` returns the torque pushed `steps` calls earlier (zeros at first).
+class CommandDelay:
+    """Actuation latency: `push(x)` returns what was pushed `steps` calls earlier (None at first: no command
+    has arrived yet). With steps = 0 it returns its input.
 
-    With steps = 0 it returns its input. The delay sits between the controller and the actuator model, so
-    the torque–speed envelope acts on the joint speed at the time the torque arrives, as on the robot."""
+    The walker pushes the controller's command to the motor drivers (joint targets, target speeds, feedforward
+    and any torque added to it), and the drivers then close their PD on the joint state they read on arrival:
+    the latency sits on the command bus, not inside the PD loop, as on CyberDog, whose drivers take (q_des,
+    qd_des, kp, kd, tau_des) and compute τ from their own encoders (MiRoboticsLab cyberdog_motor_sdk)."""
 
-    def __init__(self, steps: int, size: int = 12) -> None:
-        if not (isinstance(steps, int) and steps >= 0):
-            raise ValueError(f"latency steps must be an integer >= 0, got {steps!r}")
-        self.steps, self.size = steps, size
-        self.reset()
+    def __init__(self, steps: int) -> None:
+        self.reset(steps)
 
     def reset(self, steps: int | None = None) -> None:
-        """Empty the queue (zeros), with a new delay of `steps` periods if given."""
+        """Empty the queue, with a new delay of `steps` periods if given."""
         if steps is not None:
             if not (isinstance(steps, int) and steps >= 0):
                 raise ValueError(f"latency steps must be an integer >= 0, got {steps!r}")
             self.steps = steps
-        self._queue: deque = deque([np.zeros(self.size)] * self.steps)
+        self._queue: deque = deque([None] * self.steps)
 
-    def push(self, torque: np.ndarray) -> np.ndarray:
+    def push(self, command):
         if self.steps == 0:
-            return torque
-        self._queue.append(np.array(torque, dtype=float))
+            return command
+        self._queue.append(command)
         return self._queue.popleft()
 
 
@@ -176,5 +176,5 @@ class HardwareSensing:
         return q, dq, (self.estimator.velocity if self.hw.estimated_velocity else None)
 
 
-__all__ = ["HardwareSensing", "RobotDraw", "TorqueDelay", "draw_mass_scale", "draw_robot", "hardware_walk_config",
+__all__ = ["CommandDelay", "HardwareSensing", "RobotDraw", "draw_mass_scale", "draw_robot", "hardware_walk_config",
            "seeded_streams", "whole_steps"]
