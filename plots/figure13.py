@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from cyberdog.analysis.prototype_summary import METRICS, summary_rows, walk_counts
 from cyberdog.analysis.stats import mean_ci
-from cyberdog.config.paper import PAPER_DISTANCE_M, SPEED_BAND, speed_within_band
+from cyberdog.config.paper import PAPER_DISTANCE_M, SPEED_BAND
 from plots.style import COLORS, FADED_ALPHA, NAMES, save_figure, styled
 
 STEM = "figure13_energy_vs_speed"
@@ -90,26 +91,31 @@ def simulation_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar
 
 def prototype_counts(row: dict) -> bool:
     """A prototype walk counts if it reached the distance, did not fall and kept the speed band."""
-    return (bool(row["reached"]) and not row["fell"]
-            and speed_within_band(row["mean_speed_mps"], row["speed_mps"], SPEED_BAND))
+    return walk_counts(row)
 
 
 def prototype_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar]], dict[str, tuple]]:
-    """Panel (b): per trajectory and robot, battery % per 100 m at each speed."""
+    """Panel (b): per trajectory and robot, battery % per 100 m at each speed: the mean and 95 % CI across seeds
+    of the summary (`cyberdog.analysis.prototype_summary`; a seed's value is its draws' mean). A bar is faded
+    where a walk of its group did not count, and drawn from the walks that did."""
     speeds = sorted(dict.fromkeys(r["speed_mps"] for r in rows))
+    summary = {(r["trajectory"], r["robot"], r["speed_mps"]): r for r in summary_rows(rows)}
     groups: dict[str, list[Bar]] = {}
     styles: dict[str, tuple] = {}
     for name in dict.fromkeys(r["trajectory"] for r in rows):
         for robot in ("ideal", "hardware"):
             vals: list[Bar] = []
             for v in speeds:
-                r = next((r for r in rows if r["trajectory"] == name and r["speed_mps"] == v
-                          and r["robot"] == robot), None)
-                if r is None or not r["distance_m"] > 0:
+                r = summary.get((name, robot, v))
+                if r is None:
                     vals.append((math.nan, math.nan, False))
-                    continue
-                per_100m = PAPER_DISTANCE_M * r["battery_used_pct"] / r["distance_m"]
-                vals.append((per_100m, math.nan, prototype_counts(r)))
+                elif r["counted"] == 0:  # none counted: the walks as they went, faded
+                    walked = [METRICS["battery_pct_per_100m"](w) for w in rows if w["trajectory"] == name
+                              and w["robot"] == robot and w["speed_mps"] == v and w["distance_m"] > 0]
+                    vals.append((float(np.mean(walked)) if walked else math.nan, math.nan, False))
+                else:
+                    vals.append((r["battery_pct_per_100m_mean"], r["battery_pct_per_100m_ci95"],
+                                 r["counted"] == r["walks"]))
             if any(math.isfinite(v[0]) for v in vals):
                 key = f"{name} ({robot} robot)"
                 groups[key] = vals

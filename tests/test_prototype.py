@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 from cyberdog import config as C
+from conftest import commanded, learned_set
 from cyberdog.analysis import prototype as proto
+from cyberdog.analysis import prototype_summary as summary
+from cyberdog.analysis.stats import mean_ci
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.loop.walker import Walker
 from cyberdog.sim.hardware import CommandDelay, draw_mass_scale, hardware_walk_config
@@ -185,3 +188,51 @@ def test_run_prototype_rejects_bad_input_before_walking():
         proto.run_prototype({"x": "cycloid"}, log=lambda _: None)
     assert math.isfinite(proto.time_cap(100.0, 1.0, CFG))
     assert dataclasses.replace(C.HARDWARE_LIKE, seed=3).seed == 3
+
+
+# ---- the prototype at scale: every learned seed, several hardware-like robots -------------------------------
+
+def test_every_seed_walks_with_the_common_trajectories_at_its_lift_on_each_draw():
+    learned = learned_set(seed0=[commanded(1.0, -0.01, 0)], seed1=[commanded(1.0, -0.03, 1)])
+    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.5, modes=("ideal", "hardware"), workers=2, draws=2,
+                               learned=learned, log=lambda _: None)
+    assert len(rows) == 2 * 3 * (1 + 2)  # seeds × trajectories × (ideal + 2 draws)
+    for seed, lift in (("seed0", 0.09), ("seed1", 0.07)):
+        mine = [r for r in rows if r["seed"] == seed]
+        assert {r["trajectory"] for r in mine} == {"learned", "cycloid", "straight"}
+        assert all(r["lift_height_m"] == pytest.approx(lift, abs=2e-3) for r in mine if r["trajectory"] != "learned")
+    hw = [r for r in rows if r["robot"] == "hardware"]
+    scales = {r["draw"]: r["mass_scale"] for r in hw}
+    assert sorted(scales) == [0, 1] and scales[0] != scales[1]  # two robots, each shared by every trajectory
+    assert all(r["mass_scale"] == scales[r["draw"]] for r in hw)
+    assert {r["draw"] for r in rows if r["robot"] == "ideal"} == {0}
+
+
+def proto_row(trajectory: str, seed: str, draw: int, battery_pct: float, **kw) -> dict:
+    """A synthetic 20 m hardware walk using `battery_pct` of the pack."""
+    row = {"trajectory": trajectory, "seed": seed, "draw": draw, "speed_mps": 1.0, "robot": "hardware",
+           "reached": True, "fell": False, "mean_speed_mps": 1.0, "distance_m": 20.0,
+           "battery_used_pct": battery_pct, "energy_J": 2000.0, "electrical_energy_J": 7000.0,
+           "electrical_cost_of_transport": 2.5, "range_full_charge_m": 20.0 * 95 / battery_pct}
+    return {**row, **kw}
+
+
+def test_the_summary_pairs_each_learned_walk_with_the_cheaper_common_one_on_the_same_robot():
+    rows = [proto_row("learned", "s0", 0, 0.9), proto_row("cycloid", "s0", 0, 1.0), proto_row("straight", "s0", 0, 1.2),
+            proto_row("learned", "s0", 1, 0.8), proto_row("cycloid", "s0", 1, 1.0), proto_row("straight", "s0", 1, 0.9),
+            proto_row("learned", "s1", 0, 1.1), proto_row("cycloid", "s1", 0, 1.0), proto_row("straight", "s1", 0, 1.3),
+            proto_row("learned", "s1", 1, 0.5, fell=True, reached=False, distance_m=3.0),
+            proto_row("cycloid", "s1", 1, 1.0), proto_row("straight", "s1", 1, 1.3)]
+    learned = next(r for r in summary.summary_rows(rows) if r["trajectory"] == "learned")
+    # s0: 10 % (draw 0, against the cycloid) and 100·(1 − 0.8/0.9) (draw 1, against the straight line);
+    # s1: −10 % (draw 0); its fallen walk of draw 1 does not count but is reported
+    s0 = (10.0 + 100 * (1 - 0.8 / 0.9)) / 2
+    assert summary.battery_savings(rows, "hardware", 1.0) == pytest.approx([s0, -10.0])
+    mean, half = mean_ci([s0, -10.0])
+    assert learned["battery_saving_pct_mean"] == pytest.approx(mean)
+    assert learned["battery_saving_pct_ci95"] == pytest.approx(half)
+    assert (learned["walks"], learned["counted"], learned["fell"], learned["seeds"]) == (4, 3, 1, 2)
+    per_100m = [(4.5 + 4.0) / 2, 5.5]  # battery % per 100 m, per seed (s1: its counting walk only)
+    assert learned["battery_pct_per_100m_mean"] == pytest.approx(np.mean(per_100m))
+    text = summary.summary_markdown(summary.summary_rows(rows), "hardware")
+    assert "3 of 4 / 1" in text and "(2 seeds)" in text

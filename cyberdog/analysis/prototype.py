@@ -30,6 +30,7 @@ import time
 from pathlib import Path
 
 from cyberdog.analysis.parallel import map_in_processes, milestone
+from cyberdog.analysis.prototype_summary import summary_markdown, summary_rows
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
@@ -45,7 +46,8 @@ MODES = ("ideal", "hardware")
 TIME_CAP_MARGIN_S = 10.0  # s added to 1.5 × distance / speed (+ the start-up ramp) before a walk is abandoned
 
 # the Markdown table's columns (rows carry more: J, wall time, peak torque, lateral drift, battery E_f, E_n)
-TABLE_COLUMNS = ["trajectory", "speed_mps", "robot", "fell", "reached", "mass_scale", "mean_speed_mps",
+TABLE_COLUMNS = ["trajectory", "seed", "draw", "speed_mps", "robot", "lift_height_m", "fell", "reached", "mass_scale",
+                 "mean_speed_mps",
                  "distance_m", "time_s", "energy_kJ", "electrical_energy_kJ", "battery_used_pct",
                  "range_full_charge_m", "electrical_gap_pct"]
 
@@ -60,6 +62,8 @@ class _Job:
     hardware: HardwareConfig
     distance_m: float
     foot_offsets: FootOffsetPath | None = None  # a commanded path's shift of the foot targets
+    seed: str = ""  # the learned path's label this walk belongs to (a baseline: the one whose lift it matches)
+    draw: int = 0  # which hardware-like robot: HardwareConfig.seed + draw (0 on the ideal robot)
 
 
 def time_cap(distance_m: float, speed: float, cfg: WalkConfig) -> float:
@@ -85,13 +89,15 @@ def _run_job(job: _Job) -> dict:
     pct = en.battery_percent_used(r.electrical_energy, e_cfg)
     start_pct = 100.0 * e_cfg.usable_fraction
     return {
-        "trajectory": job.trajectory_name, "speed_mps": job.speed, "robot": job.mode,
-        "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
+        "robot": job.mode, "lift_height_m": job.cfg.gait.lift_height, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
         "mean_speed_mps": r.mean_speed,  # last half of the walk
         "average_speed_mps": r.distance / r.duration if r.duration > 0 else float("nan"),
         "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
         "energy_J": r.energy,  # Eq. (7)
         "electrical_energy_J": r.electrical_energy,
+        "electrical_cost_of_transport": (en.cost_of_transport(r.electrical_energy, job.cfg.robot.total_mass,
+                                                              job.cfg.sim.gravity, r.distance) if ok else float("nan")),
         "battery_start_pct": start_pct,  # E_f
         "battery_end_pct": en.remaining_percent(r.electrical_energy, e_cfg),  # E_n
         "battery_used_pct": en.power_consumption(start_pct, en.remaining_percent(r.electrical_energy, e_cfg)),
@@ -112,16 +118,18 @@ def run_prototype(trajectories: dict | None = None,
                   speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
-                  every_walk: bool = True, learned: LearnedSet | None = None) -> list[dict]:
+                  every_walk: bool = True, learned: LearnedSet | None = None, draws: int = 1) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
 
     trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
         ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own. Default: cycloid and straight.
-    learned: one label's learned paths (a `LearnedSet` of one label), walked first as "learned", each speed's
-        path by the set's rule (`LearnedSet.at`); the named trajectories then walk at its lift height at that
-        speed (matched), unless `lift_heights` says otherwise.
+    learned: learned paths (a `LearnedSet`); per label, its path at each speed (the set's rule) walks first as
+        "learned", then the named trajectories at that path's lift height (matched; rows carry the label as
+        `seed`), unless `lift_heights` says otherwise.
     lift_heights: {speed: m}, the lift height of the named walks at that speed; default: the learned path's
         own, else `base_cfg.gait.lift_height`.
+    draws: hardware-like robots per walk: `hardware` with seed `hardware.seed + d` for d < draws (its mass
+        draw and sensor noise), the same robots for every trajectory; the ideal robot is walked once.
     modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them).
@@ -130,22 +138,23 @@ def run_prototype(trajectories: dict | None = None,
     """
     base_cfg = base_cfg or WalkConfig()
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
-    speeds, modes = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned)
+    speeds, modes = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws)
+    robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = []
-    if learned is not None:
-        paths = {v: next(iter(learned.at(v).values())) for v in speeds}
-        if lift_heights is None:
-            lift_heights = {v: p.lift_height for v, p in paths.items()}
+    for label in learned.labels if learned is not None else [""]:
+        paths = {v: learned.path(label, v) for v in speeds} if learned is not None else {}
+        lifts = dict(lift_heights) if lift_heights is not None else {v: p.lift_height for v, p in paths.items()}
         for v, path in paths.items():
             cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
-            jobs += [_Job("learned", foot_trajectory, v, mode, cfg, hardware, float(distance_m), offsets)
-                     for mode in modes]
-    for name, traj in trajectories.items():
-        for v in speeds:
-            cfg = _job_config(base_cfg, name, traj, v)
-            if lift_heights is not None and v in lift_heights:
-                cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lift_heights[v])))
-            jobs += [_Job(name, traj, v, mode, cfg, hardware, float(distance_m)) for mode in modes]
+            jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), float(distance_m), offsets,
+                          label, d) for mode, d in robots]
+        for name, traj in trajectories.items():
+            for v in speeds:
+                cfg = _job_config(base_cfg, name, traj, v)
+                if v in lifts:
+                    cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
+                jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d)
+                         for mode, d in robots]
     t0 = time.perf_counter()
 
     def progress(i: int, row: dict, done: int) -> None:
@@ -163,7 +172,12 @@ def run_prototype(trajectories: dict | None = None,
     return add_gaps(rows)
 
 
-def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardware, learned
+def _draw(hardware: HardwareConfig, d: int) -> HardwareConfig:
+    """The hardware-like robot of draw d: its own mass draw and sensor noise (seed + d)."""
+    return hardware if d == 0 else dataclasses.replace(hardware, seed=hardware.seed + d)
+
+
+def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardware, learned, draws: int
                     ) -> tuple[tuple[float, ...], tuple[str, ...]]:
     """(speeds, modes) as tuples, after checking every argument of `run_prototype`."""
     if not trajectories and learned is None:
@@ -178,9 +192,11 @@ def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardwa
         raise ValueError(f"modes must be distinct values of {MODES}, got {modes!r}")
     if not isinstance(hardware, HardwareConfig):
         raise TypeError(f"hardware must be a HardwareConfig, got {type(hardware).__name__}")
+    if not (isinstance(draws, int) and draws >= 1):
+        raise ValueError(f"draws must be an integer >= 1, got {draws!r}")
     if learned is not None:
-        if not isinstance(learned, LearnedSet) or len(learned) != 1:
-            raise ValueError(f"learned must be a LearnedSet of one label (LearnedSet.subset), got {learned!r}")
+        if not isinstance(learned, LearnedSet) or not learned:
+            raise ValueError(f"learned must be a non-empty LearnedSet, got {learned!r}")
         for v in speeds:
             learned.at(v)  # LearnedSetError now, before any walk, if a speed has no path
     for name, traj in trajectories.items():
@@ -196,63 +212,74 @@ def _per_m(row: dict, key: str) -> float:
 
 def add_gaps(rows: list[dict]) -> list[dict]:
     """Fill in each row's ideal-vs-hardware gaps (%, per metre, so the few mm past the goal do not count):
-    `electrical_gap_pct` = 100·(E_el,hw − E_el,ideal)/E_el,ideal, `mechanical_gap_pct` likewise for Eq. (7);
+    `electrical_gap_pct` = 100·(E_el,hw − E_el,ideal)/E_el,ideal, `mechanical_gap_pct` likewise for Eq. (7),
+    a hardware row against the ideal walk of its trajectory, seed and speed (an ideal row against draw 0);
     NaN where the row has no partner of the other robot. Returns the same rows."""
-    index = {(r["trajectory"], r["speed_mps"], r["robot"]): r for r in rows}
+    index = {(r["trajectory"], r.get("seed", ""), r["speed_mps"], r["robot"], r.get("draw", 0)): r for r in rows}
     for r in rows:
-        ideal = index.get((r["trajectory"], r["speed_mps"], "ideal"))
-        hw = index.get((r["trajectory"], r["speed_mps"], "hardware"))
-        for key, gap in (("electrical_energy_J", "electrical_gap_pct"), ("energy_J", "mechanical_gap_pct")):
-            r[gap] = (100.0 * (_per_m(hw, key) / _per_m(ideal, key) - 1.0)
+        key = (r["trajectory"], r.get("seed", ""), r["speed_mps"])
+        ideal = index.get((*key, "ideal", 0))
+        hw = index.get((*key, "hardware", r.get("draw", 0) if r["robot"] == "hardware" else 0))
+        for k, gap in (("electrical_energy_J", "electrical_gap_pct"), ("energy_J", "mechanical_gap_pct")):
+            r[gap] = (100.0 * (_per_m(hw, k) / _per_m(ideal, k) - 1.0)
                       if ideal is not None and hw is not None else float("nan"))
     return rows
 
 
 def gap_rows(rows: list[dict]) -> list[dict]:
-    """Per trajectory and speed: ideal against hardware-like, and Eq. (12) reductions as the paper measured them.
+    """Per trajectory, seed and speed: ideal against the first hardware-like robot (draw 0), and Eq. (12)
+    reductions as the paper measured them (one robot; the across-seed and across-draw means are in
+    `cyberdog.analysis.prototype_summary`).
 
     `reduction_sim_pct`: Eq. (12) on the ideal robot's Eq. (7) energy per metre (the paper's simulation, 12 %
     at 1 m/s); `reduction_proto_pct`: Eq. (12) on the hardware-like robot's battery % per metre (the paper's
-    prototype, 9 %); E_min is the cheapest OTHER trajectory at that speed (so the cheapest trajectory gets a
-    positive D_t). `sim_to_real_gap_pp` = their difference, the paper's "3 %".
+    prototype, 9 %); E_min is the cheapest OTHER trajectory of the same seed at that speed (so the cheapest
+    trajectory gets a positive D_t). `sim_to_real_gap_pp` = their difference, the paper's "3 %".
     """
-    index = {(r["trajectory"], r["speed_mps"], r["robot"]): r for r in rows}
+    index = {(r["trajectory"], r.get("seed", ""), r["speed_mps"], r["robot"]): r for r in rows if not r.get("draw")}
     names = list(dict.fromkeys(r["trajectory"] for r in rows))
+    seeds = list(dict.fromkeys(r.get("seed", "") for r in rows))
     speeds = list(dict.fromkeys(r["speed_mps"] for r in rows))
 
-    def reduction(name: str, v: float, robot: str, key: str) -> float:
-        own = index.get((name, v, robot))
-        others = [_per_m(index[(n, v, robot)], key) for n in names if n != name and (n, v, robot) in index]
+    def reduction(name: str, seed: str, v: float, robot: str, key: str) -> float:
+        own = index.get((name, seed, v, robot))
+        others = [_per_m(index[(n, seed, v, robot)], key) for n in names
+                  if n != name and (n, seed, v, robot) in index]
         if own is None or not others or not (min(others) > 0):
             return float("nan")
         return 100.0 * en.energy_reduction(min(others), _per_m(own, key))
 
     out = []
-    for name in names:
-        for v in speeds:
-            ideal, hw = index.get((name, v, "ideal")), index.get((name, v, "hardware"))
-            if ideal is None or hw is None:
-                continue
-            d_sim = reduction(name, v, "ideal", "energy_J")
-            d_proto = reduction(name, v, "hardware", "battery_used_pct")
-            out.append({
-                "trajectory": name, "speed_mps": v,
-                "ideal_energy_kJ_per_100m": 0.1 * _per_m(ideal, "energy_J"),  # Eq. (7)
-                "hardware_energy_kJ_per_100m": 0.1 * _per_m(hw, "energy_J"),
-                "ideal_electrical_kJ_per_100m": 0.1 * _per_m(ideal, "electrical_energy_J"),
-                "hardware_electrical_kJ_per_100m": 0.1 * _per_m(hw, "electrical_energy_J"),
-                "ideal_battery_pct_per_100m": 100 * _per_m(ideal, "battery_used_pct"),
-                "hardware_battery_pct_per_100m": 100 * _per_m(hw, "battery_used_pct"),
-                "mechanical_gap_pct": hw["mechanical_gap_pct"], "electrical_gap_pct": hw["electrical_gap_pct"],
-                "ideal_range_m": ideal["range_full_charge_m"], "hardware_range_m": hw["range_full_charge_m"],
-                "reduction_sim_pct": d_sim, "reduction_proto_pct": d_proto,
-                "sim_to_real_gap_pp": d_sim - d_proto,
-            })
+    for seed in seeds:
+        for name in names:
+            for v in speeds:
+                row = _gap_row(index, name, seed, v, reduction)
+                if row is not None:
+                    out.append(row)
     return out
 
 
+def _gap_row(index: dict, name: str, seed: str, v: float, reduction) -> dict | None:
+    ideal, hw = index.get((name, seed, v, "ideal")), index.get((name, seed, v, "hardware"))
+    if ideal is None or hw is None:
+        return None
+    d_sim = reduction(name, seed, v, "ideal", "energy_J")
+    d_proto = reduction(name, seed, v, "hardware", "battery_used_pct")
+    return {"trajectory": name, "seed": seed, "speed_mps": v,
+            "ideal_energy_kJ_per_100m": 0.1 * _per_m(ideal, "energy_J"),  # Eq. (7)
+            "hardware_energy_kJ_per_100m": 0.1 * _per_m(hw, "energy_J"),
+            "ideal_electrical_kJ_per_100m": 0.1 * _per_m(ideal, "electrical_energy_J"),
+            "hardware_electrical_kJ_per_100m": 0.1 * _per_m(hw, "electrical_energy_J"),
+            "ideal_battery_pct_per_100m": 100 * _per_m(ideal, "battery_used_pct"),
+            "hardware_battery_pct_per_100m": 100 * _per_m(hw, "battery_used_pct"),
+            "mechanical_gap_pct": hw["mechanical_gap_pct"], "electrical_gap_pct": hw["electrical_gap_pct"],
+            "ideal_range_m": ideal["range_full_charge_m"], "hardware_range_m": hw["range_full_charge_m"],
+            "reduction_sim_pct": d_sim, "reduction_proto_pct": d_proto, "sim_to_real_gap_pp": d_sim - d_proto}
+
+
 def prototype_table(rows: list[dict], energy_cfg=None) -> str:
-    """Markdown: the walks, then the ideal-vs-hardware gaps, with the battery assumption stated."""
+    """Markdown: per robot the summary across seeds and draws, then the walks and the ideal-vs-hardware gaps,
+    with the battery assumption stated."""
     e = energy_cfg or WalkConfig().energy
     note = (f"Battery (ASSUMPTION [G]): {e.battery_capacity_wh:.1f} Wh pack charged to {e.battery_voltage:g} V "
             f"(paper), walks start at E_f = {100 * e.usable_fraction:g} % (paper, Eq. 13), driver efficiency "
@@ -262,7 +289,12 @@ def prototype_table(rows: list[dict], energy_cfg=None) -> str:
             f"sim-to-real gap {PAPER_SIM_TO_REAL_GAP_PP:g} percentage points.")
     shown = [{**r, "energy_kJ": r["energy_J"] / 1e3, "electrical_energy_kJ": r["electrical_energy_J"] / 1e3}
              for r in rows]
-    parts = [markdown_table(shown, [c for c in TABLE_COLUMNS if c in shown[0]] if shown else None), "", note]
+    summary = summary_rows(rows)
+    parts = [f"{title}\n\n{summary_markdown(summary, robot)}\n" for robot, title in (
+        ("hardware", "The hardware-like robot (mean ± 95 % CI across seeds; a seed's value is the mean of its draws)"),
+        ("ideal", "The ideal robot (Section 4.1's simulation)")) if any(r["robot"] == robot for r in summary)]
+    parts += ["Every walk", "", markdown_table(shown, [c for c in TABLE_COLUMNS if c in shown[0]] if shown else None),
+              "", note]
     gaps = gap_rows(rows)
     if gaps:
         parts += ["", markdown_table(gaps)]
@@ -270,8 +302,10 @@ def prototype_table(rows: list[dict], energy_cfg=None) -> str:
 
 
 def write_prototype(rows: list[dict], folder: str | Path) -> None:
-    """`prototype.{csv,json,md}` (the walks, the Markdown with both tables) and `prototype_gaps.{csv,json,md}`."""
+    """`prototype.{csv,json,md}` (the walks; the Markdown with every table), `prototype_summary.{csv,json,md}`
+    (across seeds and draws) and `prototype_gaps.{csv,json,md}`."""
     folder = Path(folder)
     write_rows(rows, folder, "prototype")
+    write_rows(summary_rows(rows), folder, "prototype_summary")
     write_rows(gap_rows(rows), folder, "prototype_gaps")
     (folder / "prototype.md").write_text(prototype_table(rows) + "\n")

@@ -26,12 +26,13 @@ from pathlib import Path
 from typing import Iterable
 
 from cyberdog.config import WalkConfig
+from cyberdog.config.paper import SPEED_BAND as PAPER_SPEED_BAND
 from cyberdog.core.commanded_path import FORMAT as COMMANDED_FORMAT
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import SampledTrajectory
 
-SPEED_BAND = 0.05  # a commanded path serves speeds within ±5 % of the one it was recorded at
+SPEED_BAND = PAPER_SPEED_BAND  # a commanded path serves speeds within ±5 % of the one it was recorded at
 CYCLES_SUFFIX = "_cycles"  # extraction's per-cycle tables beside the paths (not paths)
 
 

@@ -17,6 +17,7 @@ from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS, PAPER_WALK_DUR
 BASELINE_CHOICES = ("cycloid", "straight")  # cyberdog.analysis.baselines.BASELINES
 CYCLE_CHOICES = ("mean", "cheapest")  # cyberdog.analysis.extract.CYCLE_CHOICES
 DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (the paper's 100 with --prototype-distance)
+DEFAULT_PROTOTYPE_DRAWS = 2  # hardware-like robots (mass draw, sensor noise) each path walks on
 DEFAULT_COMMAND = "all"
 
 
@@ -84,6 +85,10 @@ def _number(text: str, kind, ok, allowed: str):
 
 def positive(text: str) -> float:
     return _number(text, float, lambda v: math.isfinite(v) and v > 0, "a number > 0")
+
+
+def positive_int(text: str) -> int:
+    return _number(text, int, lambda v: v >= 1, "a whole number >= 1")
 
 
 def non_negative(text: str) -> float:
@@ -182,6 +187,10 @@ def _prototype_options() -> argparse.ArgumentParser:
     g.add_argument("--prototype-modes", nargs="+", default=["ideal", "hardware"], choices=["ideal", "hardware"],
                    help="the robots the prototype walks: ideal (the paper's simulation) and hardware (friction, "
                         "latency, sensor noise, Kalman speed, mass draw: HARDWARE_LIKE) (default both)")
+    g.add_argument("--prototype-draws", type=positive_int, default=DEFAULT_PROTOTYPE_DRAWS, metavar="N",
+                   help=f"hardware-like robots (each its own mass draw and sensor noise) every learned seed's path "
+                        f"and the common trajectories at its lift walk on (default {DEFAULT_PROTOTYPE_DRAWS}); every "
+                        f"learned seed walks, and the tables give mean ± 95 %% CI across seeds")
     return p
 
 
@@ -282,5 +291,6 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     return args
 
 
-__all__ = ["BASELINE_CHOICES", "COMMANDS", "CYCLE_CHOICES", "DEFAULT_PROTOTYPE_DISTANCE", "UsageError",
+__all__ = ["BASELINE_CHOICES", "COMMANDS", "CYCLE_CHOICES", "DEFAULT_PROTOTYPE_DISTANCE", "DEFAULT_PROTOTYPE_DRAWS",
+           "UsageError",
            "build_parser", "parse_args"]

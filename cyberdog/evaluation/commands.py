@@ -131,7 +131,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                       run.out)
+                       run.out, draws=args.prototype_draws)
     return run.finish()
 
 
@@ -149,7 +149,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
                 reference=reference, brief=True)
     if not args.no_prototype:
         run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                           run.out, brief=True)
+                           run.out, brief=True, draws=args.prototype_draws)
     run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)

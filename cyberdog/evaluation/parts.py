@@ -86,31 +86,40 @@ def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
 
 
 def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], distance_m: float,
-                       modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False) -> list[dict]:
-    """Section 4.2 in simulation: the first learned label's paths and both baselines at their lift heights →
-    prototype.*. `brief`: a progress line per quarter of the walks and the battery use per 100 m only (the
-    tables are in the files)."""
+                       modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False,
+                       draws: int = 1) -> list[dict]:
+    """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
+    lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
+    `brief`: a progress line per quarter of the walks and the summary's main numbers only."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
+    from cyberdog.analysis.prototype_summary import summary_rows
 
-    label = learned.labels[0]
     trajectories = {"cycloid": None, "straight": None}
-    log(f"prototype: {(len(trajectories) + 1) * len(speeds) * len(modes)} walks of {distance_m:g} m (learned = "
-        f"{label}, baselines at its own lift height)")
+    robots = sum(draws if m == "hardware" else 1 for m in modes)
+    log(f"prototype: {len(learned) * len(speeds) * (len(trajectories) + 1) * robots} walks of {distance_m:g} m "
+        f"({len(learned)} learned seeds, each with the common trajectories at its lift height; "
+        f"{draws} hardware-like robot{'s' * (draws > 1)})")
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
-                         base_cfg=cfg, log=log, every_walk=not brief, learned=learned.subset([label]))
+                         base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws)
     write_prototype(rows, out)
-    if brief:
-        print(f"\nPrototype run, {label} (battery % per 100 m, Eq. 13; {distance_m:g} m walks; in full: "
-              f"prototype.md):")
-        for mode in modes:
-            cells = {name: [f"{100 * r['battery_used_pct'] / r['distance_m']:.2f}" for r in rows
-                            if r["trajectory"] == name and r["robot"] == mode] for name in ("learned", *trajectories)}
-            print(f"  {mode:8s} " + "   ".join(f"{name} {' / '.join(c)}" for name, c in cells.items())
-                  + f"  at {' / '.join(f'{v:g}' for v in speeds)} m/s")
+    if not brief:
+        print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks (paper: 100 m)\n")
+        print(prototype_table(rows))
         return rows
-    print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks (paper: 100 m); "
-          f"learned = {label}\n")
-    print(prototype_table(rows))
+    summary = summary_rows(rows)
+    print(f"\nPrototype run, {len(learned)} seeds x {draws} hardware-like robots (battery % per 100 m, Eq. 13, "
+          f"mean ± 95 % CI across seeds; {distance_m:g} m walks; in full: prototype.md):")
+    for mode in modes:
+        cells = [f"{name} " + " / ".join(f"{r['battery_pct_per_100m_mean']:.2f}" for r in summary
+                                         if r["trajectory"] == name and r["robot"] == mode)
+                 for name in ("learned", *trajectories)]
+        print(f"  {mode:8s} " + "   ".join(cells) + f"  at {' / '.join(f'{v:g}' for v in speeds)} m/s")
+        saving = [r for r in summary if r["trajectory"] == "learned" and r["robot"] == mode]
+        print(f"  {'':8s} learned saves " + " / ".join(
+            f"{r['battery_saving_pct_mean']:.1f} ± {r['battery_saving_pct_ci95']:.1f} %" for r in saving)
+              + " of the battery against the cheaper common trajectory at its lift"
+              + "".join(f"; {r['walks'] - r['counted']} learned walk(s) at {r['speed_mps']:g} m/s did not count "
+                        f"({r['fell']} fell)" for r in saving if r["counted"] < r["walks"]))
     return rows
 
 
