@@ -187,3 +187,38 @@ def test_evaluate_extracts_the_commanded_path_of_a_speed_range_policy_at_each_sp
         assert path.own_lift_height() == pytest.approx(0.10, abs=1e-3)  # the env's trot lifts 0.10 m
     assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.6", "--out", str(tmp_path / "x")]) == 2
     assert "outside the policy's training range" in capsys.readouterr().err
+
+
+def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidate(tmp_path, capsys, monkeypatch):
+    """Extraction keeps the first candidate whose replay walks (here a stand-in check rejects the first), records
+    the rejected ones, and refuses to keep any path when none walks."""
+    import evaluate
+    from cyberdog.core.commanded_path import CommandedPath
+    from cyberdog.evaluation import learned as learned_module
+
+    _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
+    verdicts = iter(["speed miss (0.911 m/s)", "ok"])
+    monkeypatch.setattr(learned_module, "replay_status", lambda *a, **k: next(verdicts))
+    args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
+            "--speed-tolerance", "0.3"]
+    assert evaluate.main([*args, "--out", str(tmp_path / "ex")]) == 0
+    prov = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json").provenance
+    assert prov["cycle"] == "cheapest" and prov["rollout_seed"] == 0  # the other cycle choice of the same rollout
+    assert prov["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle": "mean", "status": "speed miss (0.911 m/s)"}]
+    assert "rejected: the mean path of env seed 0 does not replay" in capsys.readouterr().out
+    monkeypatch.setattr(learned_module, "replay_status", lambda *a, **k: "fell at 2.50 s")
+    assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "none")]) == 2
+    err = capsys.readouterr().err
+    assert "no candidate path replays" in err and "cheapest of env seed 1: fell at 2.50 s" in err
+    assert not (tmp_path / "none" / "learned" / "seed0_1mps.json").exists()
+
+
+def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles():
+    from conftest import commanded
+    from cyberdog.analysis.replay_check import replay_status
+    from cyberdog.core.learned_set import LearnedPath
+
+    assert replay_status(LearnedPath("seed0", commanded(1.0, 0.0, 0)), 1.0) == "ok"  # the comparison's 10 s walk
+    # swing feet lowered by 9 cm at mid-swing (a 1 cm lift): the feet scuff and the trot loses its speed
+    status = replay_status(LearnedPath("seed0", commanded(1.0, -0.09, 0)), 1.0)
+    assert status.startswith(("speed miss", "fell at")), status

@@ -171,6 +171,13 @@ def _extraction_options() -> argparse.ArgumentParser:
     g.add_argument("--rollout-duration", type=positive, default=10.0,
                    help="s of each extraction rollout (default 10)")
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
+    g.add_argument("--no-replay-check", dest="replay_check", action="store_false",
+                   help="keep a commanded path without replaying it first (by default a path that falls or misses "
+                        "the speed in a 10 s replay on the ideal robot is rejected for the next candidate: the "
+                        "other --cycle choice, then the rollout of the next env seed)")
+    g.add_argument("--replay-attempts", type=positive_int, default=3, metavar="N",
+                   help="extraction rollouts (env seeds --rollout-seed, +1, ...) tried per speed before giving up "
+                        "(default 3)")
     g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
                    help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
     g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the reference foot")

@@ -106,7 +106,7 @@ def cmd_extract(args, cfg: C.WalkConfig) -> int:
         raise UsageError("extract needs --policy PATH (actor file or run folder), --policies ... or --sweep DIR")
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
-    L.learned_trajectories(args, run.out, args.speeds)  # extracted and saved in run.out/learned/
+    L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)  # extracted and saved in run.out/learned/
     run_figures(args.draw_figures, run.out, only=("figure7",))
     return run.finish()
 
@@ -117,7 +117,7 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     L.check_learned_inputs(args)
     reference = L.reference_shape(args)
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds)
+    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference)
     run_figures(args.draw_figures, run.out, only=("figure10", "figure13"))  # drawn from the files just written
@@ -129,7 +129,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
 
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds)
+    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws)
     return run.finish()
@@ -144,7 +144,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     reference = L.reference_shape(args)
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds)
+    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference, brief=True)
     if not args.no_prototype:
@@ -189,7 +189,7 @@ def cmd_video(args, cfg: C.WalkConfig) -> int:
         L.check_learned_inputs(args)
     run = open_run(args, cfg)
     if args.video_trajectory == "learned":  # a policy is rolled out at the video's speed
-        learned = L.learned_trajectories(args, run.out, [args.video_speed])
+        learned = L.learned_trajectories(args, run.out, [args.video_speed], cfg=cfg)
     run_video(cfg, learned, args, run.out)
     return run.finish()
 

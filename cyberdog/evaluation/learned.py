@@ -8,7 +8,9 @@ import time
 from pathlib import Path
 
 from cyberdog import config as C
-from cyberdog.analysis.extract import ExtractionError, commanded_from_rollout, cycle_rows, extract_from_rollout
+from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
+                                      extract_from_rollout)
+from cyberdog.analysis.replay_check import REPLAY_CHECK_S, replay_status
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
@@ -87,10 +89,12 @@ def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float
     return [env.target_speed]
 
 
-def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print) -> LearnedSet:
+def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print,
+                     cfg: C.WalkConfig | None = None) -> LearnedSet:
     """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
-    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv."""
-    from cyberdog.rl.rollout import load_actor, rollout  # torch: only here, only when asked
+    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv. A commanded path must
+    replay (`_extract_commanded`); `cfg`: the walk config of that replay (default WalkConfig())."""
+    from cyberdog.rl.rollout import load_actor  # torch: only here, only when asked
 
     results, labels = [], []
     for path in paths:
@@ -104,20 +108,9 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
         seed = actor.config.train.seed
         found = {}
         for speed in extraction_speeds(env, speeds, args.policy_speed, log):
-            t0 = time.perf_counter()
-            r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=args.rollout_seed,
-                        env_config=env)
-            prov = {"policy": str(path), "seed": seed, "policy_meta": actor.meta, "rollout_seed": args.rollout_seed}
-            log(f"rollout {path} at {speed:g} m/s: {r.duration:.1f} s, mean {r.mean_speed:.3f} m/s, "
-                f"E={r.energy:.0f} J, fell={r.fell} ({time.perf_counter() - t0:.0f} s)")
-            try:
-                if kind == "commanded":
-                    found[speed] = commanded_from_rollout(r, env, args.cycle, args.speed_tolerance, provenance=prov)
-                else:
-                    found[speed] = extract_from_rollout(r, env, args.leg, args.speed_tolerance, provenance=prov)
-            except ExtractionError as err:
-                raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try --speed-tolerance "
-                                 "or --policy-speed)") from None
+            prov = {"policy": str(path), "seed": seed, "policy_meta": actor.meta}
+            extract = _extract_commanded if kind == "commanded" else _extract_measured
+            found[speed] = extract(actor, path, speed, args, prov, cfg, log)
         results.append((kind, found))
         labels.append(f"seed{seed}")
     if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
@@ -132,13 +125,61 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
             file = p.save(out / "learned")
             write_rows(cycle_rows(ex), out / "learned", f"{file.stem}_cycles")
             if kind == "commanded":
-                log(f"{file.stem}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles ({args.cycle}), "
+                log(f"{file.stem}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles "
+                    f"({ex.path.provenance.get('cycle', args.cycle)}), "
                     f"{ex.energy:.1f} J per cycle, own H = {p.lift_height:.4f} m -> {file}")
             else:
                 c = ex.chosen
                 log(f"{file.stem}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
                     f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
     return learned
+
+
+def _rollout(actor, path: Path, speed: float, args, rollout_seed: int, log):
+    from cyberdog.rl.rollout import rollout
+
+    t0 = time.perf_counter()
+    r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=rollout_seed, env_config=actor.config.env)
+    log(f"rollout {path} at {speed:g} m/s (env seed {rollout_seed}): {r.duration:.1f} s, mean {r.mean_speed:.3f} "
+        f"m/s, E={r.energy:.0f} J, fell={r.fell} ({time.perf_counter() - t0:.0f} s)")
+    return r
+
+
+def _extract_measured(actor, path: Path, speed: float, args, prov: dict, cfg, log):
+    r = _rollout(actor, path, speed, args, args.rollout_seed, log)
+    try:
+        return extract_from_rollout(r, actor.config.env, args.leg, args.speed_tolerance,
+                                    provenance={**prov, "rollout_seed": args.rollout_seed})
+    except ExtractionError as err:
+        raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try --speed-tolerance or "
+                         "--policy-speed)") from None
+
+
+def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, log):
+    """The first candidate commanded path that replays (`replay_status`): rollouts with env seeds
+    --rollout-seed, +1, ... (--replay-attempts of them), each giving the --cycle path, then the other cycle
+    choice. The rejected candidates are in the kept path's provenance; none replaying is an error."""
+    rejected = []
+    for k in range(args.replay_attempts if args.replay_check else 1):
+        r = _rollout(actor, path, speed, args, args.rollout_seed + k, log)
+        for cycle in dict.fromkeys((args.cycle, *CYCLE_CHOICES)):
+            candidate = {"rollout_seed": args.rollout_seed + k, "cycle": cycle}
+            try:
+                ex = commanded_from_rollout(r, actor.config.env, cycle, args.speed_tolerance,
+                                            provenance={**prov, "rollout_seed": args.rollout_seed + k})
+            except ExtractionError as err:
+                rejected.append({**candidate, "status": f"no path: {err}"})
+                continue
+            status = replay_status(LearnedPath("", ex.path), speed, cfg) if args.replay_check else "not checked"
+            if status in ("ok", "not checked"):
+                ex.path.provenance["replay_check"] = {"status": status, "rejected": rejected,
+                                                      "duration_s": REPLAY_CHECK_S, "robot": "ideal"}
+                return ex
+            log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({status})")
+            rejected.append({**candidate, "status": status})
+    tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
+    raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path replays on the ideal robot "
+                     f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
 
 
 def check_learned_inputs(args) -> None:
@@ -171,12 +212,13 @@ def check_speeds_covered(learned: LearnedSet, speeds: list[float]) -> None:
             f"--policy-speed V) and pass them with --learned")
 
 
-def learned_trajectories(args, out: Path, speeds: list[float], log=print) -> LearnedSet:
+def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None
+                         ) -> LearnedSet:
     """Extract from --policies/--sweep when given, else load --learned (default results/learned/); the
     paths used are copied to out/learned/ beside the results."""
     paths = policy_paths(args.policies, args.sweep)
     if paths:
-        learned = extract_policies(paths, args, speeds, out, log)
+        learned = extract_policies(paths, args, speeds, out, log, cfg)
     else:
         learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
     learned.save(out / "learned", overwrite=False)
