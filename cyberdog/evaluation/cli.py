@@ -37,8 +37,9 @@ run writes is listed at the end and recorded in outputs.json; the last line name
 
 COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of its own --help)
     "all": ("compare + prototype + figures (+ --video) on the learned trajectories (the default)",
-            "compare, prototype and figures (+ a video with --video) on the learned trajectories (default "
-            "results/learned/: one commanded path per seed and speed; --learned FILE|DIR..., or --policies/"
+            "compare, prototype and figures (+ a video with --video) on the learned trajectories (default: "
+            "Table 5 on results/learned/, the paper preset's commanded paths, one per seed and speed; the "
+            "prototype on results/learned_battery/, the battery preset's; --learned FILE|DIR... (both), or --policies/"
             "--sweep to extract them first). Writes table5.md, table5_summary.*, table5.*, comparison.*, "
             "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.*, "
             "figure{4,6,7,10,13}_*.{png,pdf} and learned/<label>.json (the trajectories used)."),
@@ -60,9 +61,11 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                 "electrical energy, positive work and foot slip, and as a reference row the direct search's shape at "
                 "the same lift (--reference); Figures 10 and 13."),
     "prototype": ("Section 4.2 in simulation: battery use and range",
-                  "walks of --prototype-distance m (default 20; the paper's 100) on the ideal and a "
-                  "hardware-like robot: battery use (Eq. 13), range, sim-to-real gap. Writes prototype.* and "
-                  "prototype_gaps.*."),
+                  "every learned seed's paths (default results/learned_battery/, the battery preset's, where "
+                  "shipped) and the common trajectories at their lift, walks of --prototype-distance m (default "
+                  "20; the paper's 100) on the ideal robot and on --prototype-draws hardware-like robots: battery "
+                  "use (Eq. 13), range, energy per 100 m, cost of transport, mean ± 95 % CI across seeds, the "
+                  "learned path's battery saving. Writes prototype.*, prototype_summary.* and prototype_gaps.*."),
     "figures": ("redraw Figures 4, 6, 7, 10, 13 from saved results",
                 "Figures 4, 6, 7, 10 and 13 from saved results (--from DIR: a folder written by `all` or "
                 "`compare`); by default they are written beside those results."),
@@ -148,7 +151,8 @@ def _learned_option() -> argparse.ArgumentParser:
     p.add_argument("--learned", type=Path, nargs="+", default=None, metavar="FILE",
                    help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
                         "per seed and speed) or sampled x-z paths (one per seed, rescaled to every speed); "
-                        "default results/learned/")
+                        "default results/learned/ (the paper's Eq. 7 preset), and for the prototype run "
+                        "results/learned_battery/ (the battery preset) where it is shipped")
     return p
 
 

@@ -129,7 +129,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
 
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
+    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws)
     return run.finish()
@@ -147,9 +147,12 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference, brief=True)
-    if not args.no_prototype:
-        run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                           run.out, brief=True, draws=args.prototype_draws)
+    if not args.no_prototype:  # by default the battery preset's paths where shipped (learned.default_learned)
+        given = args.learned or L.policy_paths(args.policies, args.sweep)
+        proto_learned = learned if given else L.learned_trajectories(args, run.out, args.speeds, cfg=cfg,
+                                                                     for_prototype=True)
+        run_prototype_part(cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
+                           args.workers, run.out, brief=True, draws=args.prototype_draws)
     run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)

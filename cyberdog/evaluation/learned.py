@@ -18,6 +18,9 @@ from cyberdog.evaluation.cli import UsageError
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
+# the prototype run's default: the battery preset's paths (configs/quick_speeds_battery.yaml), where shipped;
+# Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
+DEFAULT_LEARNED_BATTERY = ROOT / "results" / "learned_battery"
 DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
 # the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
 # (tools/optimize_trajectory.py --lift-height 0.095, the same budget at every speed)
@@ -187,8 +190,9 @@ def check_learned_inputs(args) -> None:
     speed that no learned path can walk."""
     paths = policy_paths(args.policies, args.sweep)
     if not paths:
-        learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
-        check_speeds_covered(learned, getattr(args, "speeds", []))
+        for_prototype = {"all": (False, True), "prototype": (True,)}.get(args.command, (False,))
+        for files in dict.fromkeys(tuple(default_learned(args, p)) for p in for_prototype):
+            check_speeds_covered(load_learned(list(files)), getattr(args, "speeds", []))
     from cyberdog.rl.checkpoint import CheckpointError
     from cyberdog.rl.rollout import load_actor
 
@@ -212,16 +216,29 @@ def check_speeds_covered(learned: LearnedSet, speeds: list[float]) -> None:
             f"--policy-speed V) and pass them with --learned")
 
 
-def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None
-                         ) -> LearnedSet:
-    """Extract from --policies/--sweep when given, else load --learned (default results/learned/); the
-    paths used are copied to out/learned/ beside the results."""
+def default_learned(args, for_prototype: bool = False) -> list[Path]:
+    """The learned path files or folders to load: --learned, else the shipped default (the battery preset's
+    paths for the prototype run where they are shipped, the paper preset's otherwise)."""
+    given = getattr(args, "learned", None)
+    if given:
+        return list(given)
+    return [DEFAULT_LEARNED_BATTERY if for_prototype and DEFAULT_LEARNED_BATTERY.is_dir() else DEFAULT_LEARNED]
+
+
+def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None,
+                         for_prototype: bool = False) -> LearnedSet:
+    """Extract from --policies/--sweep when given, else load `default_learned`; the paths used are copied
+    beside the results, into out/learned/ (out/learned_battery/ for the battery preset's default)."""
     paths = policy_paths(args.policies, args.sweep)
+    folder = out / "learned"
     if paths:
         learned = extract_policies(paths, args, speeds, out, log, cfg)
     else:
-        learned = load_learned(getattr(args, "learned", None) or [DEFAULT_LEARNED])
-    learned.save(out / "learned", overwrite=False)
+        files = default_learned(args, for_prototype)
+        learned = load_learned(files)
+        if files == [DEFAULT_LEARNED_BATTERY]:
+            folder = out / DEFAULT_LEARNED_BATTERY.name
+    learned.save(folder, overwrite=False)
     return learned
 
 
@@ -257,6 +274,6 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
     return dict(zip(unique_labels([m.parent.name for m in found]), found))
 
 
-__all__ = ["DEFAULT_LEARNED", "DEFAULT_METRICS", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "default_learned", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
            "extract_policies", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
            "reference_shape"]
