@@ -64,18 +64,20 @@ def test_offset_path_rejects_bad_tables(bad):
         FootOffsetPath(np.zeros((4, 10, 3)), 0.0)
 
 
-def test_a_zero_offset_path_leaves_the_trot_torque_unchanged_and_a_shift_moves_the_targets():
+def test_a_zero_offset_path_leaves_the_trot_torque_unchanged_and_a_shift_moves_the_targets_once_blended_in():
     cfg = C.WalkConfig(gait=GAIT)
     plain, zero = TrotController(cfg), TrotController(cfg, foot_offset_path=FootOffsetPath.zero(0.4))
     shifted = TrotController(cfg, foot_offset_path=FootOffsetPath(np.full((4, 8, 3), 0.01), 0.4))
     q = np.tile([0.0, 0.8, -1.6], 4)
     dq = np.zeros(12)
-    for t in (0.05, 0.23, 0.31):
+    ramp = cfg.controller.speed_ramp_time  # s: over the start-up ramp the shift grows with the commanded speed
+    for t in (0.25 * ramp, ramp + 0.05, ramp + 0.23, ramp + 0.31):
         body = BodyFeedback(forward_speed=1.0)
         assert np.array_equal(plain.torque(t, q, dq, body), zero.torque(t, q, dq, body))
         shifted.torque(t, q, dq, body)
-        assert np.allclose(np.array(shifted.last_foot_targets) - np.array(plain.last_foot_targets), 0.01)
-        assert np.allclose(shifted.last_foot_offsets, 0.01)
+        share = min(1.0, t / ramp)
+        assert np.allclose(np.array(shifted.last_foot_targets) - np.array(plain.last_foot_targets), 0.01 * share)
+        assert np.allclose(shifted.last_foot_offsets, 0.01 * share)
 
 
 # ---- CommandedPath --------------------------------------------------------------------------------------

@@ -17,7 +17,8 @@ NOTES' measurement on a similar robot found plain PD tracking reached only about
 - sideways foot placement in proportion to the body's sideways speed (Raibert's foot-placement idea), which
   damps the roll/sway that otherwise topples the trot at 1.2–1.4 m/s;
 - a start-up ramp of the commanded speed (`speed_ramp_time`, 1 s): stepping from rest to full speed at once
-  rolled the body by up to 0.8 rad and toppled the straight-line trot at 1.4 m/s.
+  rolled the body by up to 0.8 rad and toppled the straight-line trot at 1.4 m/s. A learned path's per-leg
+  shift (`foot_offset_path`) is blended in over the same ramp, in proportion to the commanded speed.
 """
 from __future__ import annotations
 
@@ -160,6 +161,14 @@ class TrotController:
         ramp = self.cfg.controller.speed_ramp_time
         return self.speed if ramp <= 0 else self.speed * min(1.0, t / ramp)
 
+    def _path_blend(self, t: float) -> float:
+        """The share of `foot_offset_path` applied at time t: the commanded speed's share of the set speed, so
+        that over the start-up ramp the trot blends from its plain path into the learned one (a learned path
+        is a steady-state path: replayed whole from a stand, some toppled within 1.5 s), then 1."""
+        if self.speed <= 0:
+            return 1.0
+        return min(1.0, self.commanded_speed(t) / self.speed)
+
     def step_lengths(self, t: float, body: BodyFeedback) -> np.ndarray:
         """(4,) step length S per leg, m: S = v·stance_time, corrected for speed, skewed to hold the heading."""
         left, right = self._side_step_lengths(t, body)
@@ -216,6 +225,10 @@ class TrotController:
             offsets = [(a + d * e, b + f * e, c + g * e) for (a, b, c), (d, f, g) in zip(offsets, rates)]
         if self.foot_offset_path is not None:
             path_offsets, path_rates = self.foot_offset_path.at(phases)
+            blend = self._path_blend(t)
+            if blend < 1.0:  # starting from a stand: the learned shift grows with the commanded speed
+                path_offsets = [(a * blend, b * blend, c * blend) for a, b, c in path_offsets]
+                path_rates = [(a * blend, b * blend, c * blend) for a, b, c in path_rates]
             if offsets is None:
                 offsets, rates = path_offsets, path_rates
             else:  # both: the sum (a policy acting on a learned path)
