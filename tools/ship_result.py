@@ -4,7 +4,7 @@
     python tools/ship_result.py runs/sweep_quick/seed0 --out results/policy
 
 Writes (never over an existing folder unless --force): stage1_actor.pt and stage2_actor.pt (the final
-actors of the two stages), config.yaml (the resolved experiment), metrics.csv (the training log, for
+actors of the two stages; no stage1_actor.pt for a stage-2 run started with --init-from), config.yaml (the resolved experiment), metrics.csv (the training log, for
 Figure 6) and metadata.json (seed, env steps, episodes and wall time per stage, final window scores, the
 git commit of the code, the source run). Checkpoints with replay buffers are not copied (tens of MB).
 """
@@ -21,6 +21,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 FILES = {"stage1_final_actor.pt": "stage1_actor.pt", "stage2_final_actor.pt": "stage2_actor.pt",
          "config.yaml": "config.yaml", "metrics.csv": "metrics.csv"}
+OPTIONAL = {"stage1_final_actor.pt"}  # a stage-2 run started with --init-from has no stage-1 actor of its own
 MAX_BYTES = 2_000_000  # the shipped folder stays under 2 MB
 
 
@@ -55,19 +56,21 @@ def git_commit() -> str:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("run_dir", type=Path, help="a finished two-stage run folder (train.py output)")
+    p.add_argument("run_dir", type=Path, help="a finished run folder (train.py output): both stages, or stage 2 "
+                   "alone started with --init-from")
     p.add_argument("--out", type=Path, default=REPO / "results" / "policy", help="default: results/policy")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
     p.add_argument("--note", default="", help="free text stored in metadata.json")
     args = p.parse_args(argv)
-    missing = [f for f in FILES if not (args.run_dir / f).is_file()]
+    missing = [f for f in FILES if not (args.run_dir / f).is_file() and f not in OPTIONAL]
     if missing:
-        sys.exit(f"{args.run_dir} is not a finished two-stage run: missing {missing}")
+        sys.exit(f"{args.run_dir} is not a finished run: missing {missing}")
     if args.out.exists() and not args.force:
         sys.exit(f"{args.out} exists; pass --force to replace it")
     args.out.mkdir(parents=True, exist_ok=True)
     for src, dst in FILES.items():
-        shutil.copy2(args.run_dir / src, args.out / dst)
+        if (args.run_dir / src).is_file():
+            shutil.copy2(args.run_dir / src, args.out / dst)
     with open(args.run_dir / "metrics.csv") as f:
         rows = list(csv.DictReader(f))
     import yaml
