@@ -38,7 +38,7 @@ import math
 import time
 from dataclasses import dataclass
 
-from cyberdog.analysis.parallel import map_in_processes, milestone
+from cyberdog.analysis.parallel import map_in_processes, progress_log
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.analysis.walk import walk
 from cyberdog.config import WalkConfig
@@ -143,20 +143,12 @@ def run_walk_job(job: WalkJob) -> dict:
 def run_jobs(jobs: list[WalkJob], workers: int | None = None, log=print, every_walk: bool = True) -> list[dict]:
     """Run the walks (in `workers` spawned processes; None: one per walk, at most the CPUs; 1 = in this
     process); rows in job order. A line per walk, or with `every_walk=False` one per quarter of them."""
-    t0 = time.perf_counter()
-
-    def progress(i: int, row: dict, done: int) -> None:
-        if not (every_walk or milestone(done, len(jobs))):
-            return
-        elapsed = time.perf_counter() - t0
-        eta = elapsed / done * (len(jobs) - done)
+    def line(row: dict) -> str:
         seed = f" [{row['seed']}]" if row["seed"] else ""
-        log(f"[{done}/{len(jobs)}] {row['label'] + seed:24s} H={row['lift_height_m']:.3f} m "
-            f"v={row['speed_command_mps']:.1f} m/s  mean {row['mean_speed_mps']:.3f} m/s  "
-            f"E={row['energy_J']:7.1f} J  {row['status']}  ({row['wall_s']:.0f} s; elapsed {elapsed:.0f} s, "
-            f"ETA {eta:.0f} s)")
+        return (f"{row['label'] + seed:24s} H={row['lift_height_m']:.3f} m v={row['speed_command_mps']:.1f} m/s  "
+                f"mean {row['mean_speed_mps']:.3f} m/s  E={row['energy_J']:7.1f} J  {row['status']}")
 
-    return map_in_processes(run_walk_job, jobs, workers, on_result=progress, describe=_describe_job)
+    return map_in_processes(run_walk_job, jobs, workers, on_result=progress_log(len(jobs), line, log, every_walk), describe=_describe_job)
 
 
 def _describe_job(job: WalkJob) -> str:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import multiprocessing
 import operator
 import os
+import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Sequence
 
@@ -146,6 +147,24 @@ def milestone(done: int, total: int, parts: int = 4) -> bool:
     return done == total or done * parts // total != (done - 1) * parts // total
 
 
+def progress_log(total: int, line: Callable[[Any], str], log: Callable[[str], None] = print,
+                 every_job: bool = True) -> Callable[[int, Any, int], None]:
+    """An `on_result` callback that logs `[done/total] <line(result)> (… s; elapsed …, ETA …)` for every job,
+    or with `every_job=False` at each quarter of them (`milestone`). `line` formats one result; the result's
+    own "wall_s" (seconds) is shown where it has one. The clock starts when the callback is made."""
+    t0 = time.perf_counter()
+
+    def on_result(_i: int, result: Any, done: int) -> None:
+        if not (every_job or milestone(done, total)):
+            return
+        elapsed = time.perf_counter() - t0
+        eta = elapsed / done * (total - done)
+        wall = f"{result['wall_s']:.0f} s; " if isinstance(result, dict) and "wall_s" in result else ""
+        log(f"[{done}/{total}] {line(result)}  ({wall}elapsed {elapsed:.0f} s, ETA {eta:.0f} s)")
+
+    return on_result
+
+
 def map_in_processes(fn: Callable[[Any], Any], jobs: Sequence, workers: int | None = None,
                      on_result: Callable[[int, Any, int], None] | None = None,
                      describe: Callable[[Any], str] | None = None) -> list:
@@ -156,4 +175,4 @@ def map_in_processes(fn: Callable[[Any], Any], jobs: Sequence, workers: int | No
         return run(fn, jobs, on_result=on_result, describe=describe)
 
 
-__all__ = ["ProcessMap", "available_cores", "map_in_processes", "milestone", "resolve_workers"]
+__all__ = ["ProcessMap", "available_cores", "map_in_processes", "milestone", "progress_log", "resolve_workers"]

@@ -29,7 +29,7 @@ import pickle
 import time
 from pathlib import Path
 
-from cyberdog.analysis.parallel import map_in_processes, milestone
+from cyberdog.analysis.parallel import map_in_processes, progress_log
 from cyberdog.analysis.prototype_summary import summary_markdown, summary_rows
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
@@ -155,19 +155,13 @@ def run_prototype(trajectories: dict | None = None,
                     cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
                 jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d)
                          for mode, d in robots]
-    t0 = time.perf_counter()
+    def line(row: dict) -> str:
+        return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
+                f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "
+                f"E_el={row['electrical_energy_J'] / 1e3:6.2f} kJ  battery {row['battery_used_pct']:.2f} %  "
+                f"fell={row['fell']}")
 
-    def progress(i: int, row: dict, done: int) -> None:
-        if not (every_walk or milestone(done, len(jobs))):
-            return
-        elapsed = time.perf_counter() - t0
-        eta = elapsed / done * (len(jobs) - done)
-        log(f"[{done}/{len(jobs)}] {row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} "
-            f"{row['distance_m']:6.1f} m in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "
-            f"E_el={row['electrical_energy_J'] / 1e3:6.2f} kJ  battery {row['battery_used_pct']:.2f} %  "
-            f"fell={row['fell']}  ({row['wall_s']:.0f} s; elapsed {elapsed:.0f} s, ETA {eta:.0f} s)")
-
-    rows = map_in_processes(_run_job, jobs, workers, on_result=progress,
+    rows = map_in_processes(_run_job, jobs, workers, on_result=progress_log(len(jobs), line, log, every_walk),
                             describe=lambda j: f"{j.trajectory_name} at {j.speed:g} m/s, {j.mode}, {j.distance_m:g} m")
     return add_gaps(rows)
 

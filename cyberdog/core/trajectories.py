@@ -119,6 +119,22 @@ class FootTrajectory(ABC):
         vz = np.where(swing, dz_dtau / swing_time, 0.0)
         return np.stack([x, z], axis=-1), np.stack([vx, vz], axis=-1)
 
+    def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
+                   stance_time: float) -> tuple[float, float, float, float]:
+        """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same formulas, for
+        a class that defines `_swing_point` (the per-period fast path of the trot controller)."""
+        phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
+        beta = swing_fraction(swing_time, stance_time)
+        if not phi < beta:
+            return _stance_point(phi, beta, step_length, stance_time)
+        x, z, dx_dtau, dz_dtau = self._swing_point(phi / beta, float(step_length), float(lift_height))
+        return x, z, dx_dtau / swing_time, dz_dtau / swing_time
+
+    def _swing_point(self, tau: float, step_length: float, lift_height: float
+                     ) -> tuple[float, float, float, float]:
+        """`swing_path` at one τ in Python floats; a subclass with a float form overrides it."""
+        raise NotImplementedError(f"{type(self).__name__} has no float swing point")
+
 
 class CompositeCycloid(FootTrajectory):
     """The paper's composite pendulum (composite cycloid) swing, Figure 4a.
@@ -142,14 +158,9 @@ class CompositeCycloid(FootTrajectory):
         dz = np.where(rising, dz_up, -dz_up)
         return x, z, dx, dz
 
-    def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
-                   stance_time: float) -> tuple[float, float, float, float]:
-        """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same formulas."""
-        phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
-        beta = swing_fraction(swing_time, stance_time)
-        if not phi < beta:
-            return _stance_point(phi, beta, step_length, stance_time)
-        tau = phi / beta
+    def _swing_point(self, tau: float, step_length: float, lift_height: float
+                     ) -> tuple[float, float, float, float]:
+        """`swing_path` at one τ in Python floats, same formulas."""
         S, H = step_length, lift_height
         two_pi = 2.0 * math.pi
         x = S * (tau - math.sin(two_pi * tau) / two_pi) - 0.5 * S
@@ -160,7 +171,7 @@ class CompositeCycloid(FootTrajectory):
             z = 2.0 * H * (tau - s4)
         else:
             z, dz = 2.0 * H * (1.0 - tau + s4), -dz
-        return x, z, dx / swing_time, dz / swing_time
+        return x, z, dx, dz
 
 
 class StraightLine(FootTrajectory):
@@ -218,21 +229,17 @@ class StraightLine(FootTrajectory):
         pos = vertices[i] + frac[..., None] * seg[i]
         return pos[..., 0], pos[..., 1], total * direction[..., 0], total * direction[..., 1]
 
-    def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
-                   stance_time: float) -> tuple[float, float, float, float]:
-        """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same polyline walk."""
-        phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
-        beta = swing_fraction(swing_time, stance_time)
-        if not phi < beta:
-            return _stance_point(phi, beta, step_length, stance_time)
-        vertices = self._corner_list(float(step_length), float(lift_height))
+    def _swing_point(self, tau: float, step_length: float, lift_height: float
+                     ) -> tuple[float, float, float, float]:
+        """`swing_path` at one τ in Python floats, the same polyline walk."""
+        vertices = self._corner_list(step_length, lift_height)
         segments = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(vertices[:-1], vertices[1:])]
         lengths = [math.hypot(dx, dz) for dx, dz in segments]
         starts = [0.0]  # path length at each segment's start (np.cumsum order)
         for length in lengths[:-1]:
             starts.append(starts[-1] + length)
         total = starts[-1] + lengths[-1]
-        s = (phi / beta) * total
+        s = tau * total
         # last segment with start <= s, as searchsorted(side="right") − 1 clipped to the segments
         i = 0
         while i + 1 < len(segments) and starts[i + 1] <= s:
@@ -240,8 +247,7 @@ class StraightLine(FootTrajectory):
         (dx, dz), length = segments[i], lengths[i]
         safe = length if length > 0 else 1.0
         frac = (s - starts[i]) / safe if length > 0 else 0.0
-        return (vertices[i][0] + frac * dx, vertices[i][1] + frac * dz,
-                total * (dx / safe) / swing_time, total * (dz / safe) / swing_time)
+        return vertices[i][0] + frac * dx, vertices[i][1] + frac * dz, total * (dx / safe), total * (dz / safe)
 
 
 class SampledTrajectory(FootTrajectory):
@@ -368,8 +374,8 @@ def point_evaluator(trajectory: FootTrajectory):
     neither `swing_path` nor `position_velocity`), else None: callers then use `position_velocity`."""
     cls = type(trajectory)
     for base in (CompositeCycloid, StraightLine):
-        if (isinstance(trajectory, base) and cls.foot_point is base.foot_point
-                and cls.swing_path is base.swing_path and cls.position_velocity is FootTrajectory.position_velocity
+        if (isinstance(trajectory, base) and cls.foot_point is FootTrajectory.foot_point
+                and cls._swing_point is base._swing_point and cls.swing_path is base.swing_path and cls.position_velocity is FootTrajectory.position_velocity
                 and (base is not StraightLine or (cls.corners is StraightLine.corners
                                                   and cls._corner_list is StraightLine._corner_list))):
             return trajectory.foot_point
