@@ -11,9 +11,10 @@ from pathlib import Path
 import matplotlib
 from matplotlib.figure import Figure
 
-COLORS = {"learned": "tab:green", "cycloid": "tab:blue", "straight": "tab:red"}
+COLORS = {"learned": "tab:green", "cycloid": "tab:blue", "straight": "tab:red", "searched": "tab:gray"}
 SEED_COLORS = ("tab:purple", "tab:orange", "tab:brown", "tab:olive", "tab:cyan", "tab:pink", "tab:gray")
-NAMES = {"learned": "learned (RL)", "cycloid": "composite cycloid", "straight": "straight line"}
+NAMES = {"learned": "learned (RL)", "cycloid": "composite cycloid", "straight": "straight line",
+         "searched": "direct search (reference)"}
 FONTS = {"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 8.5}
 DPI = 150  # of the PNGs in a results folder; the README's copies are drawn smaller (plots/png/)
 FADED_ALPHA = 0.35  # a bar of a walk that does not count (fell or off the speed band)

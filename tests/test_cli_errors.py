@@ -22,6 +22,15 @@ def test_a_policy_that_is_not_an_actor_file_is_one_line(tmp_path, capsys):
     assert not (tmp_path / "e").exists()  # refused before the output folder was made
 
 
+@pytest.mark.parametrize("command", ["prototype", "all"])
+def test_a_missing_prototype_reference_is_one_line_before_any_walk(command, tmp_path, capsys):
+    assert evaluate.main([command, "--prototype-reference", str(tmp_path / "none.json"),
+                          "--out", str(tmp_path / "p")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--prototype-reference" in err[0] and "does not exist" in err[0]
+    assert not (tmp_path / "p").exists()
+
+
 def test_mp4_without_a_writer_fails_before_rendering(tmp_path, capsys, monkeypatch):
     import cyberdog.analysis.video as video
     monkeypatch.setattr(video, "mp4_writer_problem", lambda: "MP4 needs imageio[ffmpeg] or ffmpeg")

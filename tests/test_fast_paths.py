@@ -180,7 +180,7 @@ def test_gait_phase_list_equals_leg_phases_exactly():
                                         StraightLine("triangle")], ids=lambda t: getattr(t, "shape", t.name))
 def test_trajectory_foot_point_equals_position_velocity(trajectory):
     rng = np.random.default_rng(4)
-    point = point_evaluator(trajectory)
+    point, point_at = trajectory.foot_point, point_evaluator(trajectory)
     for _ in range(500):
         S = 0.0 if rng.random() < 0.1 else float(rng.uniform(0.0, 0.4))
         H, swing, stance = float(rng.uniform(0.02, 0.2)), float(rng.uniform(0.05, 0.4)), float(rng.uniform(0.05, 0.4))
@@ -188,6 +188,9 @@ def test_trajectory_foot_point_equals_position_velocity(trajectory):
         pos, vel = trajectory.position_velocity(phase, S, H, swing, stance)
         np.testing.assert_allclose(point(phase, S, H, swing, stance), np.concatenate([pos, vel]),
                                    rtol=1e-12, atol=1e-14)
+        # the controller's unchecked form, at the wrapped phase and the swing fraction
+        assert point_at(phase % 1.0, swing / (swing + stance), S, H, swing, stance) == point(phase, S, H, swing,
+                                                                                             stance)
     with pytest.raises(ValueError, match="step_length"):
         point(0.1, -0.1, 0.1, 0.2, 0.2)
     with pytest.raises(ValueError, match="phase"):

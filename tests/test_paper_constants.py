@@ -13,7 +13,7 @@ from cyberdog.config import paper
 ROOT = Path(__file__).resolve().parents[1]
 CONSTANTS = ("PAPER_SPEEDS", "PAPER_LIFT_HEIGHT", "PAPER_WALK_DURATION", "PAPER_DISTANCE_M", "SPEED_BAND",
              "SPEED_TOLERANCE")
-USERS = ("baselines", "compare", "prototype", "shape_optimization", "extract", "table5")
+USERS = ("baselines", "compare", "prototype", "shape_optimization", "shape_search", "extract", "table5")
 
 
 def assigned_names(path: Path) -> set[str]:

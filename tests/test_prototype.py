@@ -236,3 +236,21 @@ def test_the_summary_pairs_each_learned_walk_with_the_cheaper_common_one_on_the_
     assert learned["battery_pct_per_100m_mean"] == pytest.approx(np.mean(per_100m))
     text = summary.summary_markdown(summary.summary_rows(rows), "hardware")
     assert "3 of 4 / 1" in text and "(2 seeds)" in text
+
+
+def test_the_searched_shape_is_a_reference_row_not_a_common_trajectory():
+    """A "searched" walk cheaper than both common ones leaves the saving against the common trajectories as it
+    was, and adds the learned path's saving against the searched shape alone (negative: the shape is cheaper)."""
+    rows = [proto_row("learned", "s0", 0, 0.9), proto_row("cycloid", "s0", 0, 1.0), proto_row("straight", "s0", 0, 1.2),
+            proto_row("searched", "s0", 0, 0.6),
+            proto_row("learned", "s1", 0, 0.8), proto_row("cycloid", "s1", 0, 1.0), proto_row("straight", "s1", 0, 1.1),
+            proto_row("searched", "s1", 0, 1.0)]
+    learned = next(r for r in summary.summary_rows(rows) if r["trajectory"] == "learned")
+    assert summary.battery_savings(rows, "hardware", 1.0) == pytest.approx([10.0, 20.0])
+    assert learned["battery_saving_pct_mean"] == pytest.approx(15.0)
+    vs_searched = [100 * (1 - 0.9 / 0.6), 100 * (1 - 0.8 / 1.0)]
+    assert learned["battery_vs_searched_pct_mean"] == pytest.approx(np.mean(vs_searched))
+    assert "vs the searched shape" in summary.summary_markdown(summary.summary_rows(rows), "hardware")
+    without = [r for r in rows if r["trajectory"] != "searched"]
+    assert "battery_vs_searched_pct_mean" not in next(
+        r for r in summary.summary_rows(without) if r["trajectory"] == "learned")

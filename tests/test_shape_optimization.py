@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 
 from cyberdog.analysis import shape_optimization as so
+from cyberdog.analysis import shape_search as search
+from cyberdog.config import HARDWARE_LIKE
 from cyberdog.config import GaitConfig
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
 
@@ -93,24 +95,40 @@ def test_bad_inputs_raise():
     with pytest.raises(ValueError, match="tau"):
         so.swing_x_hat([1.5], so.CYCLOID_PARAMS)
     with pytest.raises(ValueError, match="lift_height"):
-        so.ShapeObjective(lift_height=0.5)
+        search.ShapeObjective(lift_height=0.5)
     with pytest.raises(ValueError, match="speeds"):
-        so.ShapeObjective(speeds=())
+        search.ShapeObjective(speeds=())
     with pytest.raises(ValueError, match="measure_from"):
-        so.ShapeObjective(duration=2.0, measure_from=2.0)
+        search.ShapeObjective(duration=2.0, measure_from=2.0)
     with pytest.raises(ValueError, match="max_evals"):
-        so.optimize_shape(max_evals=1)
+        search.optimize_shape(max_evals=1)
 
 
 def test_objective_smoke_two_evaluations_on_a_short_walk():
-    obj = so.ShapeObjective(lift_height=0.10, speeds=(1.0,), duration=1.0, measure_from=0.5, log=None, max_evals=2)
+    obj = search.ShapeObjective(lift_height=0.10, speeds=(1.0,), duration=1.0, measure_from=0.5, log=None, max_evals=2)
     start = obj(so.to_unit(so.CYCLOID_PARAMS))
     other = obj(so.to_unit(so.ShapeParams(x_law=0.5, stance_law=0.3)))
     assert math.isfinite(start) and math.isfinite(other) and start > 0 and other > 0
     assert obj(so.to_unit(so.CYCLOID_PARAMS)) == start and len(obj.history) == 2  # cached, not walked again
-    with pytest.raises(so.EvaluationBudgetSpent):
+    with pytest.raises(search.EvaluationBudgetSpent):
         obj(so.to_unit(so.ShapeParams(x_skew=0.2)))
     walk = obj.history[0].walks[0]
     assert walk["energy_window_J"] < walk["energy_total_J"]  # the window leaves the start out
     row = obj.history[1].row()
     assert row["x_law"] == pytest.approx(0.5) and "E_window_J@1.00" in row
+
+
+def test_the_electrical_objective_on_the_hardware_like_robot_counts_what_the_battery_pays():
+    """The battery's search: the window's electrical energy (copper loss, friction, driver) of the hardware-like
+    robot's walk, which is more than its Eq. (7) energy there; bad objectives are refused by name."""
+    kw = dict(lift_height=0.085, speeds=(1.0,), duration=1.0, measure_from=0.5, log=None)
+    eq7 = search.ShapeObjective(**kw, hardware=HARDWARE_LIKE)
+    battery = search.ShapeObjective(**kw, objective="electrical", hardware=HARDWARE_LIKE)
+    u = so.to_unit(so.CYCLOID_PARAMS)
+    e_mech, e_el = eq7(u), battery(u)
+    assert math.isfinite(e_mech) and math.isfinite(e_el) and e_el > e_mech > 0
+    assert eq7.history[0].walks[0]["energy_total_J"] == pytest.approx(battery.history[0].walks[0]["energy_total_J"])
+    with pytest.raises(ValueError, match="objective"):
+        search.ShapeObjective(objective="mechanical")
+    with pytest.raises(TypeError, match="hardware"):
+        search.ShapeObjective(hardware="hardware")

@@ -2,12 +2,15 @@
 """Optimise the foot path's SHAPE for energy at a fixed lift height and gait timing, then replay it.
 
     python tools/optimize_trajectory.py --lift-height 0.10 --max-evals 100 --workers 2
+    python tools/optimize_trajectory.py --lift-height 0.085 --objective electrical --robot hardware   # battery
 
-Beyond the paper (`cyberdog.analysis.shape_optimization`): a 5-parameter periodic foot path (swing x timing
-law and skew, apex timing and fullness with the apex exactly at H, stance timing law), started from the
-composite cycloid and improved with bounded Nelder–Mead on the mean Eq. (7) energy of `--duration`-s walks
-(measured from `--measure-from` s on) at each of `--speeds`, with the same simulator and IK + PID trot as
-Table 5. Falls and speed misses beyond 5 % are penalised.
+Beyond the paper (`cyberdog.analysis.shape_optimization`, the search in `cyberdog.analysis.shape_search`): a
+5-parameter periodic foot path (swing x timing law and skew, apex timing and fullness with the apex exactly at
+H, stance timing law), started from the composite cycloid and improved with bounded Nelder–Mead on the mean
+energy (Eq. 7, or with `--objective electrical` what the battery pays) of `--duration`-s walks (measured from
+`--measure-from` s on) at each of `--speeds`, with the same simulator and IK + PID trot as Table 5, on the
+ideal robot or with `--robot hardware` the prototype run's hardware-like one. Falls and speed misses beyond
+5 % are penalised.
 
 Then the optimised path, the start point replayed through the same spline ("cycloid (sampled)", a control
 for the spline's rounding), the composite cycloid and the straight line (rectangle) walk `--replay-duration`
@@ -34,9 +37,10 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
 from cyberdog.analysis import shape_optimization as so  # noqa: E402
+from cyberdog.analysis import shape_search  # noqa: E402
 from cyberdog.analysis.compare import WalkJob, reduction, run_jobs, walk_config  # noqa: E402
 from cyberdog.analysis.report import json_safe  # noqa: E402
-from cyberdog.config import GaitConfig, WalkConfig  # noqa: E402
+from cyberdog.config import HARDWARE_LIKE, GaitConfig, WalkConfig  # noqa: E402
 from cyberdog.core.trajectories import SampledTrajectory  # noqa: E402
 
 TABLE_COLUMNS = ["speed_command_mps", "trajectory", "energy_J", "energy_per_100m_kJ", "mean_speed_mps", "fell",
@@ -58,24 +62,32 @@ def git_state() -> dict:
 def parse_args(argv=None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--lift-height", type=float, default=0.10, help="m, fixed lift height H (default 0.10)")
-    p.add_argument("--speeds", type=float, nargs="+", default=list(so.PAPER_SPEEDS), help="m/s (default 1.0 1.2 1.4)")
+    p.add_argument("--speeds", type=float, nargs="+", default=list(shape_search.PAPER_SPEEDS), help="m/s (default 1.0 1.2 1.4)")
     p.add_argument("--duration", type=float, default=6.0, help="s, each optimisation walk (default 6)")
     p.add_argument("--measure-from", type=float, default=2.0,
                    help="s, energy integrated from here on (skips the 1 s start-up ramp; default 2)")
     p.add_argument("--max-evals", type=int, default=100, help="objective evaluations (default 100)")
+    p.add_argument("--objective", choices=shape_search.OBJECTIVES, default="eq7",
+                   help="what a walk's energy counts: eq7, the paper's Σ∫|τ·ω|dt, or electrical, what the battery "
+                        "pays (default eq7)")
+    p.add_argument("--robot", choices=("ideal", "hardware"), default="ideal",
+                   help="the robot of the optimisation walks: ideal, or hardware, the prototype run's "
+                        "hardware-like robot (HARDWARE_LIKE: friction, latency, sensor noise, Kalman speed, its "
+                        "seeded mass draw); the replay table stays on the ideal robot (default ideal)")
     p.add_argument("--workers", type=int, default=2, help="parallel walk processes (default 2)")
     p.add_argument("--initial-step", type=float, default=0.2,
                    help="initial Nelder–Mead simplex size, share of each parameter's range (default 0.2)")
     p.add_argument("--replay-duration", type=float, default=10.0, help="s, the final comparison walks (default 10)")
     p.add_argument("--out", type=Path, default=None, help="run folder (default runs/optimize-<time>/)")
     p.add_argument("--result", type=Path, default=None,
-                   help="optimised path file (default results/optimized_trajectory_H<H>.json)")
+                   help="optimised path file (default results/optimized_trajectory_H<H>.json; with another "
+                        "--objective or --robot, results/optimized_trajectory_H<H>_<objective>_<robot>.json)")
     p.add_argument("--replay-only", type=Path, default=None, metavar="FILE",
                    help="skip the optimisation; replay this saved path (its provenance's H must match)")
     args = p.parse_args(argv)
     # every check before any long work starts
     try:
-        so._check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from)
+        shape_search._check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from)
     except ValueError as err:
         p.error(str(err))
     if args.max_evals < 2:
@@ -89,7 +101,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     if args.replay_only is not None and not args.replay_only.is_file():
         p.error(f"--replay-only file {str(args.replay_only)!r} does not exist")
     args.out = args.out or REPO / "runs" / time.strftime("optimize-%Y%m%d-%H%M%S")
-    args.result = args.result or REPO / "results" / f"optimized_trajectory_H{args.lift_height:.2f}.json"
+    name = (f"optimized_trajectory_H{args.lift_height:.2f}" if (args.objective, args.robot) == ("eq7", "ideal")
+            else f"optimized_trajectory_H{args.lift_height:.3f}_{args.objective}_{args.robot}")
+    args.result = args.result or REPO / "results" / f"{name}.json"
     return args
 
 
@@ -176,8 +190,9 @@ def main(argv=None) -> int:
         print(f"optimising the foot-path shape at H = {args.lift_height} m, speeds {args.speeds} m/s, "
               f"{args.duration} s walks measured from {args.measure_from} s, ≤ {args.max_evals} evaluations, "
               f"{args.workers} worker(s) → {args.out}")
-        res = so.optimize_shape(args.lift_height, args.speeds, args.duration, args.measure_from, args.max_evals,
-                                args.workers, initial_step=args.initial_step)
+        res = shape_search.optimize_shape(args.lift_height, args.speeds, args.duration, args.measure_from, args.max_evals,
+                                args.workers, initial_step=args.initial_step, objective=args.objective,
+                                hardware=HARDWARE_LIKE if args.robot == "hardware" else None)
         write_csv(args.out / "history.csv", [e.row() for e in res.history])
         cpu_s = sum(w["cpu_s"] for e in res.history for w in e.walks)
         print(f"done: {len(res.history)} evaluations in {res.wall_s:.0f} s wall ({cpu_s:.0f} s CPU in walks); "
@@ -185,8 +200,10 @@ def main(argv=None) -> int:
               f"({res.saving_pct:+.2f} % saved); {res.message}")
         print("best parameters: " + ", ".join(f"{k}={v:+.4f}" for k, v in res.best.params.as_dict().items()))
         summary.update({
-            "objective": (f"mean over speeds of Eq. (7) energy, J, of a {args.duration} s walk from "
-                          f"{args.measure_from} s on; falls and >5 % speed misses penalised"),
+            "objective": (f"mean over speeds of {'Eq. (7)' if args.objective == 'eq7' else 'electrical'} energy, J, "
+                          f"of a {args.duration} s walk from {args.measure_from} s on, {args.robot} robot; falls and "
+                          ">5 % speed misses penalised"),
+            "energy_objective": args.objective, "robot": args.robot,
             "optimizer": "scipy Nelder-Mead, bounded, unit coordinates, started from the composite cycloid",
             "shape_params": res.best.params.as_dict(), "objective_J": res.best.objective_J,
             "start_objective_J": res.start.objective_J, "objective_saving_pct": res.saving_pct,

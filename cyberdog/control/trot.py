@@ -22,6 +22,7 @@ NOTES' measurement on a similar robot found plain PD tracking reached only about
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +32,7 @@ from cyberdog.core import kinematics as kin
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
-from cyberdog.core.trajectories import FootTrajectory, make_trajectory, point_evaluator
+from cyberdog.core.trajectories import FootTrajectory, _check_gait_args, make_trajectory, point_evaluator
 
 SIDES = (np.array([0, 2]), np.array([1, 3]))  # leg indices of the left (LF, LH) and right (RF, RH) legs
 MAX_ATTITUDE_SHIFT = 0.03  # m, bound on the sideways foot-placement shift of the foot targets
@@ -115,6 +116,11 @@ class TrotController:
         self.last_foot_targets: list[tuple[float, float, float]] | None = None
         self.last_foot_offsets: list[tuple[float, float, float]] | None = None
         self._point_for = (None, None)  # (trajectory, its float evaluator or None), see _foot_points
+        # the per-period path's constants as floats (the configs are frozen): gait timing, link lengths
+        g, r = cfg.gait, cfg.robot
+        self._swing_time, self._stance_time = g.swing_time, g.stance_time  # s
+        self._swing_fraction = self.scheduler.gait.swing_fraction
+        self._links = (r.l1, r.l2, r.l3)  # m
 
     def reset(self) -> None:
         self.pid.reset()
@@ -177,27 +183,31 @@ class TrotController:
     def _side_step_lengths(self, t: float, body: BodyFeedback) -> tuple[float, float]:
         """(S_left, S_right), m; advances the speed integral (once per call, as `step_lengths`)."""
         c = self.cfg.controller
-        v = self.commanded_speed(t)
+        ramp = c.speed_ramp_time
+        v = self.speed if ramp <= 0 else self.speed * min(1.0, t / ramp)  # commanded_speed(t)
         if body.forward_speed is not None and c.speed_gain > 0:
             limit = c.max_speed_correction * v
             correction = self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.controller_dt
             self.speed_correction = float(min(max(correction, -limit), limit))  # np.clip on a scalar
-        S = (v + self.speed_correction) * self.gait.stance_time
+        S = (v + self.speed_correction) * self._stance_time
         # heading set-point turns back toward the path (y = 0); positive yaw error → lengthen left steps
         heading_error = body.yaw + c.lateral_gain * body.lateral_offset
         skew = min(max(c.heading_gain * heading_error, -0.5), 0.5)
         return max(S * (1.0 + skew), 0.0), max(S * (1.0 - skew), 0.0)
 
     def _foot_points(self, phases: list[float], S: tuple[float, float]) -> list[tuple[float, float, float, float]]:
-        """Per leg (x, z, vx, vz) of the trajectory at its phase and side's step length."""
-        g = self.gait
-        lift, swing, stance = g.lift_height, g.swing_time, g.stance_time  # (stance_time is a property)
+        """Per leg (x, z, vx, vz) of the trajectory at its phase (in [0, 1)) and side's step length."""
+        lift, swing, stance = self.gait.lift_height, self._swing_time, self._stance_time
         traj = self.trajectory
         if self._point_for[0] is not traj:
             self._point_for = (traj, point_evaluator(traj))
         point = self._point_for[1]
         if point is not None:
-            return [point(phase, S[0] if is_left else S[1], lift, swing, stance)
+            S_left, S_right = S
+            if not (0.0 <= S_left < math.inf and 0.0 <= S_right < math.inf):  # NaN feedback: the usual message
+                _check_gait_args(min(S_left, S_right), lift, swing, stance)
+            beta = self._swing_fraction
+            return [point(phase, beta, S_left if is_left else S_right, lift, swing, stance)
                     for phase, is_left in zip(phases, LEG_IS_LEFT)]
         points = [None] * 4  # any other trajectory: its array method, once per side
         for side, legs in enumerate(SIDES):
@@ -206,19 +216,9 @@ class TrotController:
                 points[i] = (float(xz[row, 0]), float(xz[row, 1]), float(vxz[row, 0]), float(vxz[row, 1]))
         return points
 
-    def _leg_targets(self, t: float, body: BodyFeedback):
-        """Foot targets (4 × (x, y, z)), foot velocities (4 × (vx, vy, vz)), joint targets and joint speed
-        targets (12 floats each) and the swing flags (4 bools) at time t, in plain Python values."""
-        c, r = self.cfg.controller, self.robot
-        phases = self.scheduler.leg_phase_list(t)
-        S = self._side_step_lengths(t, body)
-        # sideways foot placement against the body's sideways speed
-        dy = min(max(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT), MAX_ATTITUDE_SHIFT)
-        l1, l2, l3 = r.l1, r.l2, r.l3
-        points = self._foot_points(phases, S)
-        feet = [(x, side * l1 + dy, z - self.stand_height) for (x, z, _, _), side in zip(points, LEG_SIDE)]
-        foot_vels = [(vx, 0.0, vz) for _, _, vx, vz in points]
-        plain_feet = feet
+    def _shift(self, t: float, phases: list[float]):
+        """(offsets, rates) of the foot targets at time t: the policy's ramp and the learned path's shift (each
+        4 × (x, y, z), m and m/s), or (None, None) for the plain trot; rates may be None (a still shift)."""
         offsets, rates = self.foot_offsets, self.foot_offset_rates
         if self.foot_offset_time is not None:  # a ramp: the offsets have moved on at their rates
             e = t - self.foot_offset_time
@@ -235,26 +235,47 @@ class TrotController:
                 offsets = [(a + d, b + e, c + f) for (a, b, c), (d, e, f) in zip(offsets, path_offsets)]
                 rates = path_rates if rates is None else [
                     (a + d, b + e, c + f) for (a, b, c), (d, e, f) in zip(rates, path_rates)]
-        if offsets is not None:
-            feet = [(x + ox, y + oy, z + oz) for (x, y, z), (ox, oy, oz) in zip(feet, offsets)]
-            if rates is not None:
-                foot_vels = [(vx + rx, vy + ry, vz + rz) for (vx, vy, vz), (rx, ry, rz) in zip(foot_vels, rates)]
-        self.last_foot_targets, self.last_foot_offsets = feet, offsets
-        q_t, dq_t = [], []
-        feedforward = c.velocity_feedforward
-        for leg, ((x, y, z), (vx, vy, vz), side) in enumerate(zip(feet, foot_vels, LEG_SIDE)):
+        return offsets, rates
+
+    def _leg_targets(self, t: float, body: BodyFeedback):
+        """Foot targets (4 × (x, y, z)), foot velocities (4 × (vx, vy, vz)), joint targets and joint speed
+        targets (12 floats each) and the swing flags (4 bools) at time t, in plain Python values."""
+        c = self.cfg.controller
+        phases = self.scheduler.leg_phase_list(t)
+        S = self._side_step_lengths(t, body)
+        # sideways foot placement against the body's sideways speed
+        dy = min(max(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT), MAX_ATTITUDE_SHIFT)
+        l1, l2, l3 = self._links
+        stand, feedforward = self.stand_height, c.velocity_feedforward
+        offsets, rates = self._shift(t, phases)
+        ik = kin.leg_inverse_kinematics_velocity
+        feet, foot_vels, q_t, dq_t = [], [], [], []
+        for leg, (x, z, vx, vz) in enumerate(self._foot_points(phases, S)):
+            side = LEG_SIDE[leg]
+            foot = plain = (x, side * l1 + dy, z - stand)
+            vy = 0.0
+            if offsets is not None:
+                ox, oy, oz = offsets[leg]
+                foot = (foot[0] + ox, foot[1] + oy, foot[2] + oz)
+                if rates is not None:
+                    rx, ry, rz = rates[leg]
+                    vx, vy, vz = vx + rx, vy + ry, vz + rz
             try:
-                joint = kin.leg_inverse_kinematics_velocity(x, y, z, vx, vy, vz, side, l1, l2, l3)
+                a, h, k, da, dh, dk = ik(*foot, vx, vy, vz, side, l1, l2, l3)
             except ValueError:
-                if feet is plain_feet:  # unreachable: the array function raises with its full message
-                    kin.inverse_kinematics(np.array(feet), r)
+                if offsets is None:  # unreachable: the array function raises with its full message
+                    kin.inverse_kinematics(np.array([(p[0], s * l1 + dy, p[1] - stand) for p, s in
+                                                     zip(self._foot_points(phases, S), LEG_SIDE)]), self.robot)
                     raise
-                feet[leg] = plain_feet[leg]  # a shifted target out of reach: the unshifted one
-                joint = kin.leg_inverse_kinematics_velocity(*feet[leg], vx, vy, vz, side, l1, l2, l3)
-            q_t.extend(joint[:3])
-            dq_t.extend(joint[3:] if feedforward else (0.0, 0.0, 0.0))
-        swing_fraction = self.scheduler.gait.swing_fraction
-        return feet, foot_vels, q_t, dq_t, [phase < swing_fraction for phase in phases]
+                foot = plain  # a shifted target out of reach: the unshifted one
+                a, h, k, da, dh, dk = ik(*foot, vx, vy, vz, side, l1, l2, l3)
+            feet.append(foot)
+            foot_vels.append((vx, vy, vz))
+            q_t += (a, h, k)
+            dq_t += (da, dh, dk) if feedforward else (0.0, 0.0, 0.0)
+        self.last_foot_targets, self.last_foot_offsets = feet, offsets
+        beta = self._swing_fraction
+        return feet, foot_vels, q_t, dq_t, [phase < beta for phase in phases]
 
     def targets(self, t: float, body: BodyFeedback | None = None) -> TrotTargets:
         """Foot and joint targets at time t (s) for the measured body state."""

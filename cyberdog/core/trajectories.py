@@ -122,12 +122,18 @@ class FootTrajectory(ABC):
     def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
                    stance_time: float) -> tuple[float, float, float, float]:
         """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same formulas, for
-        a class that defines `_swing_point` (the per-period fast path of the trot controller)."""
+        a class that defines `_swing_point`."""
         phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
-        beta = swing_fraction(swing_time, stance_time)
+        return self.point_at(phi, swing_fraction(swing_time, stance_time), step_length, lift_height, swing_time,
+                             stance_time)
+
+    def point_at(self, phi: float, beta: float, step_length: float, lift_height: float, swing_time: float,
+                 stance_time: float) -> tuple[float, float, float, float]:
+        """`foot_point` at a phase φ already in [0, 1) with β = `swing_fraction(swing_time, stance_time)`, the
+        arguments unchecked: the trot controller's per-period path, which checks them once per period."""
         if not phi < beta:
             return _stance_point(phi, beta, step_length, stance_time)
-        x, z, dx_dtau, dz_dtau = self._swing_point(phi / beta, float(step_length), float(lift_height))
+        x, z, dx_dtau, dz_dtau = self._swing_point(phi / beta, step_length, lift_height)
         return x, z, dx_dtau / swing_time, dz_dtau / swing_time
 
     def _swing_point(self, tau: float, step_length: float, lift_height: float
@@ -232,7 +238,7 @@ class StraightLine(FootTrajectory):
     def _swing_point(self, tau: float, step_length: float, lift_height: float
                      ) -> tuple[float, float, float, float]:
         """`swing_path` at one τ in Python floats, the same polyline walk."""
-        vertices = self._corner_list(step_length, lift_height)
+        vertices = self._corner_list(float(step_length), float(lift_height))
         segments = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(vertices[:-1], vertices[1:])]
         lengths = [math.hypot(dx, dz) for dx, dz in segments]
         starts = [0.0]  # path length at each segment's start (np.cumsum order)
@@ -369,16 +375,16 @@ class SampledTrajectory(FootTrajectory):
 
 
 def point_evaluator(trajectory: FootTrajectory):
-    """The trajectory's one-phase float evaluator `foot_point(phase, S, H, swing_time, stance_time)` if it has
-    one that matches its `position_velocity` (CompositeCycloid, StraightLine, and subclasses that change
+    """The trajectory's one-phase float evaluator `point_at(phi, beta, S, H, swing_time, stance_time)` if it
+    has one that matches its `position_velocity` (CompositeCycloid, StraightLine, and subclasses that change
     neither `swing_path` nor `position_velocity`), else None: callers then use `position_velocity`."""
     cls = type(trajectory)
     for base in (CompositeCycloid, StraightLine):
-        if (isinstance(trajectory, base) and cls.foot_point is FootTrajectory.foot_point
+        if (isinstance(trajectory, base) and cls.point_at is FootTrajectory.point_at
                 and cls._swing_point is base._swing_point and cls.swing_path is base.swing_path and cls.position_velocity is FootTrajectory.position_velocity
                 and (base is not StraightLine or (cls.corners is StraightLine.corners
                                                   and cls._corner_list is StraightLine._corner_list))):
-            return trajectory.foot_point
+            return trajectory.point_at
     return None
 
 

@@ -202,6 +202,12 @@ def _prototype_options() -> argparse.ArgumentParser:
                    help=f"hardware-like robots (each its own mass draw and sensor noise) every learned seed's path "
                         f"and the common trajectories at its lift walk on (default {DEFAULT_PROTOTYPE_DRAWS}); every "
                         f"learned seed walks, and the tables give mean ± 95 %% CI across seeds")
+    g.add_argument("--prototype-reference", type=Path, default=None, metavar="FILE",
+                   help="a shape saved by tools/optimize_trajectory.py walked beside the common trajectories at each "
+                        "learned path's lift as the reference row \"searched\" (default "
+                        "results/optimized_trajectory_H0.085_electrical_hardware.json: searched for the battery on the "
+                        "hardware-like robot)")
+    g.add_argument("--no-prototype-reference", action="store_true", help="no reference row in the prototype run")
     return p
 
 

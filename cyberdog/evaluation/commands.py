@@ -128,10 +128,11 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_prototype_part
 
     L.check_learned_inputs(args)
+    reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                       run.out, draws=args.prototype_draws)
+                       run.out, draws=args.prototype_draws, reference=reference)
     return run.finish()
 
 
@@ -142,6 +143,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     if args.video:
         check_video_format(args)
     reference = L.reference_shape(args)
+    proto_reference = None if args.no_prototype else L.reference_shape(args, prototype=True)
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
@@ -152,7 +154,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
         proto_learned = learned if given else L.learned_trajectories(args, run.out, args.speeds, cfg=cfg,
                                                                      for_prototype=True)
         run_prototype_part(cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
-                           args.workers, run.out, brief=True, draws=args.prototype_draws)
+                           args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference)
     run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)

@@ -25,6 +25,8 @@ DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the ship
 # the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
 # (tools/optimize_trajectory.py --lift-height 0.095, the same budget at every speed)
 DEFAULT_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.095.json"
+# the prototype run's reference row: the direct search's shape for the battery on the hardware-like robot
+DEFAULT_PROTOTYPE_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.085_electrical_hardware.json"
 # preference order: the shipped name, then the actor at the end of stage 2 (fixed in advance), then the one of
 # its best-scoring episode (chosen on a noisy score)
 STAGE2_ACTORS = ("stage2_actor.pt", "stage2_final_actor.pt", "stage2_best_actor.pt")
@@ -242,23 +244,27 @@ def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C
     return learned
 
 
-def reference_shape(args, log=print) -> SampledTrajectory | None:
+def reference_shape(args, log=print, prototype: bool = False) -> SampledTrajectory | None:
     """The reference shape of the matched-lift table: --reference FILE, else the shipped one if it is there;
-    None with --no-reference or --no-same-lift."""
-    if getattr(args, "no_reference", False) or getattr(args, "no_same_lift", False):
+    None with --no-reference or --no-same-lift. With `prototype`, the prototype run's: --prototype-reference
+    FILE, else the shipped battery search's; None with --no-prototype-reference."""
+    flag, default, where = (("prototype_reference", DEFAULT_PROTOTYPE_REFERENCE, "the prototype tables") if prototype
+                            else ("reference", DEFAULT_REFERENCE, "the matched-lift table"))
+    if getattr(args, f"no_{flag}", False) or (not prototype and getattr(args, "no_same_lift", False)):
         return None
-    path = getattr(args, "reference", None)
+    option = "--" + flag.replace("_", "-")
+    path = getattr(args, flag, None)
     if path is None:
-        if not DEFAULT_REFERENCE.is_file():
-            log(f"no reference shape ({DEFAULT_REFERENCE} is missing): the matched-lift table has no reference row")
+        if not default.is_file():
+            log(f"no reference shape ({default} is missing): {where} have no reference row")
             return None
-        path = DEFAULT_REFERENCE
+        path = default
     if not Path(path).is_file():
-        raise UsageError(f"--reference {path} does not exist")
+        raise UsageError(f"{option} {path} does not exist")
     try:
         return SampledTrajectory.load(path)
     except (OSError, ValueError, KeyError, json.JSONDecodeError) as err:
-        raise UsageError(f"--reference {path}: not a saved foot trajectory ({err})") from None
+        raise UsageError(f"{option} {path}: not a saved foot trajectory ({err})") from None
 
 
 def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict[str, Path]:
@@ -274,6 +280,6 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
     return dict(zip(unique_labels([m.parent.name for m in found]), found))
 
 
-__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "default_learned", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "default_learned", "DEFAULT_PROTOTYPE_REFERENCE", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
            "extract_policies", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
            "reference_shape"]

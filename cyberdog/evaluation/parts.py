@@ -87,17 +87,19 @@ def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
 
 def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], distance_m: float,
                        modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False,
-                       draws: int = 1) -> list[dict]:
+                       draws: int = 1, reference=None) -> list[dict]:
     """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
     lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
+    `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched".
     `brief`: a progress line per quarter of the walks and the summary's main numbers only."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
-    from cyberdog.analysis.prototype_summary import summary_rows
+    from cyberdog.analysis.prototype_summary import REFERENCE, summary_rows
 
-    trajectories = {"cycloid": None, "straight": None}
+    trajectories = {"cycloid": None, "straight": None, **({REFERENCE: reference} if reference is not None else {})}
     robots = sum(draws if m == "hardware" else 1 for m in modes)
     log(f"prototype: {len(learned) * len(speeds) * (len(trajectories) + 1) * robots} walks of {distance_m:g} m "
-        f"({len(learned)} learned seeds, each with the common trajectories at its lift height; "
+        f"({len(learned)} learned seeds, each with the common trajectories"
+        f"{' and the searched shape' if reference is not None else ''} at its lift height; "
         f"{draws} hardware-like robot{'s' * (draws > 1)})")
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
                          base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws)
@@ -118,6 +120,8 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
         print(f"  {'':8s} learned saves " + " / ".join(
             f"{r['battery_saving_pct_mean']:.1f} ± {r['battery_saving_pct_ci95']:.1f} %" for r in saving)
               + " of the battery against the cheaper common trajectory at its lift"
+              + ("; against the searched shape " + " / ".join(
+                  f"{r['battery_vs_searched_pct_mean']:.1f} %" for r in saving) if reference is not None else "")
               + "".join(f"; {r['walks'] - r['counted']} learned walk(s) at {r['speed_mps']:g} m/s did not count "
                         f"({r['fell']} fell)" for r in saving if r["counted"] < r["walks"]))
     return rows
