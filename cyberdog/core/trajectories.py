@@ -121,8 +121,7 @@ class FootTrajectory(ABC):
 
     def foot_point(self, phase: float, step_length: float, lift_height: float, swing_time: float,
                    stance_time: float) -> tuple[float, float, float, float]:
-        """`position_velocity` at one phase in Python floats: (x, z) m and (vx, vz) m/s, same formulas, for
-        a class that defines `_swing_point`."""
+        """`position_velocity` at one phase in Python floats, (x, z) m and (vx, vz) m/s (with `_swing_point`)."""
         phi = _point_args(phase, step_length, lift_height, swing_time, stance_time)
         return self.point_at(phi, swing_fraction(swing_time, stance_time), step_length, lift_height, swing_time,
                              stance_time)
@@ -136,8 +135,7 @@ class FootTrajectory(ABC):
         x, z, dx_dtau, dz_dtau = self._swing_point(phi / beta, step_length, lift_height)
         return x, z, dx_dtau / swing_time, dz_dtau / swing_time
 
-    def _swing_point(self, tau: float, step_length: float, lift_height: float
-                     ) -> tuple[float, float, float, float]:
+    def _swing_point(self, tau: float, step_length: float, lift_height: float) -> tuple[float, ...]:
         """`swing_path` at one τ in Python floats; a subclass with a float form overrides it."""
         raise NotImplementedError(f"{type(self).__name__} has no float swing point")
 

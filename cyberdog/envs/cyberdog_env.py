@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from typing import Any
 
@@ -297,7 +298,7 @@ class CyberDogEnv(gym.Env):
                                      step_energy_J=step_energy if step_electrical is None else step_electrical)
         weighted = rewards.weighted_terms(terms, cfg.reward)
         reward = float(sum(weighted.values()))
-        finite = np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.base_position))
+        finite = math.isfinite(sum(s.q.tolist()) + sum(s.base_position.tolist()))  # a NaN or inf anywhere
         fallen = self.walker.fallen(s)
         terminated = bool(fallen or not finite)
         info = {"reward_terms": terms, "reward_weighted": weighted, "step_energy_J": step_energy,
@@ -322,8 +323,9 @@ class CyberDogEnv(gym.Env):
             s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(t)],
             [np.sin(phase), np.cos(phase)]]
             + ([self._last_action] if self.cfg.observe_last_action else [])).astype(np.float32)
-        obs = np.nan_to_num(obs, nan=0.0)
-        return np.clip(obs, self.observation_space.low, self.observation_space.high)
+        if not np.isfinite(obs).all():  # rare (a blown-up state): NaN → 0, ±inf → the extremes, then clipped
+            obs = np.nan_to_num(obs, nan=0.0)
+        return np.minimum(np.maximum(obs, self.observation_space.low, out=obs), self.observation_space.high, out=obs)
 
     def render(self):
         if self.render_mode == "rgb_array":

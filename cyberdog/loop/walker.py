@@ -238,7 +238,8 @@ class Walker:
     def fallen(self, state=None) -> bool:
         """The body is below `fall_height` or tilted beyond `fall_tilt` in roll or pitch."""
         s = self.state if state is None else state
-        return bool(s.base_position[2] < self.fall_height or np.max(np.abs(s.base_rpy[:2])) > self.fall_tilt)
+        roll, pitch, _ = s.base_rpy.tolist()
+        return bool(s.base_position[2] < self.fall_height or abs(roll) > self.fall_tilt or abs(pitch) > self.fall_tilt)
 
     def energy(self, since: int = 0) -> float:
         """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the controller periods from `since` to now."""
