@@ -47,9 +47,9 @@ def walk_row(job: tuple) -> dict:
         r = rollout(actor, speed, duration, seed=draw, env_config=env)
     elif kind == "replay":
         r = walk(cfg, duration, trajectory, hardware=hw, foot_offsets=offsets)
-    else:  # the cycloid at the path's lift height
-        r = walk(dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, trajectory="cycloid")), duration,
-                 hardware=hw)
+    else:  # the cycloid at the path's own lift height, as the prototype run matches it
+        gait = dataclasses.replace(cfg.gait, trajectory="cycloid", lift_height=path.lift_height)
+        r = walk(dataclasses.replace(cfg, gait=gait), duration, hardware=hw)
     ok = not r.fell and speed_within_band(r.mean_speed, speed)
     return {"label": label, "speed_mps": speed, "draw": draw, "walk": kind, "fell": r.fell,
             "mean_speed_mps": r.mean_speed, "distance_m": r.distance, "counts": ok,
