@@ -32,7 +32,7 @@ from cyberdog.core import kinematics as kin
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
-from cyberdog.core.trajectories import FootTrajectory, _check_gait_args, make_trajectory, point_evaluator
+from cyberdog.core.trajectories import FootTrajectory, check_gait_args, make_trajectory, point_evaluator
 
 SIDES = (np.array([0, 2]), np.array([1, 3]))  # leg indices of the left (LF, LH) and right (RF, RH) legs
 MAX_ATTITUDE_SHIFT = 0.03  # m, bound on the sideways foot-placement shift of the foot targets
@@ -205,7 +205,7 @@ class TrotController:
         if point is not None:
             S_left, S_right = S
             if not (0.0 <= S_left < math.inf and 0.0 <= S_right < math.inf):  # NaN feedback: the usual message
-                _check_gait_args(min(S_left, S_right), lift, swing, stance)
+                check_gait_args(min(S_left, S_right), lift, swing, stance)
             beta = self._swing_fraction
             return [point(phase, beta, S_left if is_left else S_right, lift, swing, stance)
                     for phase, is_left in zip(phases, LEG_IS_LEFT)]

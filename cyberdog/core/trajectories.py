@@ -44,7 +44,7 @@ def _check_finite_positive(name: str, value: float, allow_zero: bool = False) ->
         raise ValueError(f"{name} must be {'>= 0' if allow_zero else '> 0'} and finite, got {value!r}")
 
 
-def _check_gait_args(step_length: float, lift_height: float, swing_time: float, stance_time: float) -> None:
+def check_gait_args(step_length: float, lift_height: float, swing_time: float, stance_time: float) -> None:
     _check_finite_positive("step_length (m)", step_length, allow_zero=True)
     _check_finite_positive("lift_height (m)", lift_height)
     _check_finite_positive("swing_time (s)", swing_time)
@@ -74,7 +74,7 @@ def _point_args(phase: float, step_length: float, lift_height: float, swing_time
     if not (step_length >= 0.0 and lift_height > 0.0 and swing_time > 0.0 and stance_time > 0.0
             and math.isfinite(step_length) and math.isfinite(lift_height) and math.isfinite(swing_time)
             and math.isfinite(stance_time)):
-        _check_gait_args(step_length, lift_height, swing_time, stance_time)
+        check_gait_args(step_length, lift_height, swing_time, stance_time)
     if not math.isfinite(phase):
         raise ValueError("phase must be finite")
     phi = phase % 1.0  # float % is np.mod
@@ -106,7 +106,7 @@ class FootTrajectory(ABC):
         by the chain rule d/dt = (1/swing_time) d/dτ. Stance: x = S/2 − S·σ with σ = (φ − swing_fraction) /
         (1 − swing_fraction), constant velocity (−S / stance_time, 0), z = 0.
         """
-        _check_gait_args(step_length, lift_height, swing_time, stance_time)
+        check_gait_args(step_length, lift_height, swing_time, stance_time)
         phi = _wrap_phase(phase)
         beta = swing_fraction(swing_time, stance_time)
         swing = phi < beta
@@ -315,7 +315,7 @@ class SampledTrajectory(FootTrajectory):
         return self._curve(_check_tau(tau), step_length, lift_height)
 
     def position_velocity(self, phase, step_length, lift_height, swing_time, stance_time):
-        _check_gait_args(step_length, lift_height, swing_time, stance_time)
+        check_gait_args(step_length, lift_height, swing_time, stance_time)
         period = swing_time + stance_time
         x, z, dx, dz = self._curve(phase, step_length, lift_height)
         return np.stack([x, z], axis=-1), np.stack([dx / period, dz / period], axis=-1)
