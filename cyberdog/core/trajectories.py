@@ -39,12 +39,12 @@ def swing_fraction(swing_time: float, stance_time: float) -> float:
 
 
 def _check_finite_positive(name: str, value: float, allow_zero: bool = False) -> None:
-    ok = np.isfinite(value) and (value >= 0 if allow_zero else value > 0)
-    if not ok:
+    if not (np.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
         raise ValueError(f"{name} must be {'>= 0' if allow_zero else '> 0'} and finite, got {value!r}")
 
 
 def check_gait_args(step_length: float, lift_height: float, swing_time: float, stance_time: float) -> None:
+    """ValueError naming the argument unless S ≥ 0 and H, swing and stance times > 0, all finite (m, s)."""
     _check_finite_positive("step_length (m)", step_length, allow_zero=True)
     _check_finite_positive("lift_height (m)", lift_height)
     _check_finite_positive("swing_time (s)", swing_time)
