@@ -87,7 +87,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     args = p.parse_args(argv)
     # every check before any long work starts
     try:
-        shape_search._check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from)
+        shape_search.check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from)
     except ValueError as err:
         p.error(str(err))
     if args.max_evals < 2:

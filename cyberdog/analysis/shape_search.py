@@ -1,4 +1,5 @@
-"""The direct search for the energy-optimal foot-path shape (`cyberdog.analysis.shape_optimization`'s parameters).
+"""The direct search for the energy-optimal foot-path shape over `cyberdog.analysis.shape_optimization`'s
+five parameters.
 
 Objective (`ShapeObjective`): the mean over the speeds of the energy (Eq. 7, or the electrical energy with
 `objective="electrical"`), J, of a `duration`-s walk
@@ -49,9 +50,10 @@ class ShapeWalk:
     hardware: HardwareConfig | None = None  # the robot walked: None = ideal, else the hardware-like effects
 
 
-def _check_objective_args(lift_height: float, speeds: Sequence[float], duration: float,
+def check_objective_args(lift_height: float, speeds: Sequence[float], duration: float,
                           measure_from: float, objective: str = "eq7",
                           hardware: HardwareConfig | None = None) -> None:
+    """ValueError (TypeError for `hardware`) naming the argument that is out of its range."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
     if hardware is not None and not isinstance(hardware, HardwareConfig):
@@ -132,7 +134,7 @@ class ShapeObjective:
                  measure_from: float = 2.0, base: WalkConfig | None = None, pool: ProcessMap | None = None,
                  log: Callable[[str], None] | None = print, max_evals: int | None = None, objective: str = "eq7",
                  hardware: HardwareConfig | None = None) -> None:
-        _check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware)
+        check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware)
         self.objective, self.hardware = objective, hardware
         self.lift_height, self.speeds = float(lift_height), tuple(float(v) for v in speeds)
         self.duration, self.measure_from = float(duration), float(measure_from)
@@ -208,7 +210,7 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
     """
     from scipy.optimize import minimize
 
-    _check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware)
+    check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware)
     if not (isinstance(max_evals, (int, np.integer)) and max_evals >= 2):
         raise ValueError(f"max_evals must be an integer >= 2, got {max_evals!r}")
     if not (isinstance(workers, (int, np.integer)) and workers >= 1):

@@ -280,6 +280,6 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
     return dict(zip(unique_labels([m.parent.name for m in found]), found))
 
 
-__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "default_learned", "DEFAULT_PROTOTYPE_REFERENCE", "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs",
-           "extract_policies", "learned_trajectories", "load_learned", "metrics_files", "policy_paths",
-           "reference_shape"]
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
+           "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned", "extract_policies",
+           "learned_trajectories", "load_learned", "metrics_files", "policy_paths", "reference_shape"]
