@@ -21,6 +21,7 @@ import math
 from cyberdog.analysis.report import markdown_table
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.config.paper import PAPER_DISTANCE_M, speed_within_band
+
 COMMON = ("cycloid", "straight")  # the paper's common trajectories: what the learned path's saving is against
 REFERENCE = "searched"  # the prototype run's reference row: a shape the direct search found for the battery
 # metric name → its value per walk (per 100 m where it is an amount; NaN where a row lacks the field, as the

@@ -256,7 +256,7 @@ def reference_shape(args, log=print, prototype: bool = False) -> SampledTrajecto
     path = getattr(args, flag, None)
     if path is None:
         if not default.is_file():
-            log(f"no reference shape ({default} is missing): {where} have no reference row")
+            log(f"no reference shape ({default} is missing): no reference row in {where}")
             return None
         path = default
     if not Path(path).is_file():
