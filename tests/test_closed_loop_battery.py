@@ -41,3 +41,6 @@ def test_actors_and_labels_must_pair_up(tmp_path):
         closed_loop.main(["--actors", str(ACTOR), "--labels", "seed0", "seed1", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
         closed_loop.main(["--actors", str(tmp_path / "none.pt"), "--labels", "seed0", "--out", str(tmp_path)])
+    with pytest.raises(SystemExit):  # no path of that label in the learned set: refused before any walk
+        closed_loop.main(["--actors", str(ACTOR), "--labels", "seed9", "--learned", str(LEARNED), "--out",
+                          str(tmp_path)])

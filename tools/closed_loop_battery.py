@@ -30,16 +30,15 @@ from cyberdog.analysis.parallel import map_in_processes
 from cyberdog.analysis.report import json_safe, markdown_table
 from cyberdog.analysis.walk import walk
 from cyberdog.config.paper import speed_within_band
-from cyberdog.core.learned_set import LearnedSet, learned_files
+from cyberdog.core.learned_set import LearnedSet, LearnedSetError, learned_files
 
 
 def walk_row(job: tuple) -> dict:
-    """One walk → one row (in a worker process). job: (kind, actor file, label, learned dir, speed, draw, s)."""
+    """One walk → one row (in a worker process). job: (kind, actor file, label, learned path, speed, draw, s)."""
     from cyberdog.rl.rollout import load_actor, rollout
 
-    kind, actor_file, label, learned_dir, speed, draw, duration = job
+    kind, actor_file, label, path, speed, draw, duration = job
     hw = dataclasses.replace(C.HARDWARE_LIKE, seed=C.HARDWARE_LIKE.seed + draw)
-    path = LearnedSet.load(learned_files([learned_dir])).path(label, speed)
     cfg, trajectory, offsets = path.walk_args(C.WalkConfig(), speed)
     if kind == "closed loop":
         actor = load_actor(actor_file)
@@ -74,10 +73,13 @@ def main(argv=None) -> int:
     missing = [a for a in args.actors if not a.is_file()]
     if missing:
         p.error(f"no actor file {missing[0]}")
-    learned = LearnedSet.load(learned_files([args.learned]))
-    jobs = [(kind, str(a), label, str(args.learned), v, d, args.duration)
-            for a, label in zip(args.actors, args.labels) for v in args.speeds if learned.covers(v)
-            for d in range(args.draws) for kind in ("closed loop", "replay", "cycloid")]
+    try:
+        learned = LearnedSet.load(learned_files([args.learned]))
+        jobs = [(kind, str(a), label, learned.path(label, v), v, d, args.duration)
+                for a, label in zip(args.actors, args.labels) for v in args.speeds if learned.covers(v)
+                for d in range(args.draws) for kind in ("closed loop", "replay", "cycloid")]
+    except LearnedSetError as err:  # a label or speed without a path, an unreadable file: before any walk
+        p.error(str(err))
     print(f"{len(jobs)} walks of {args.duration:g} s on {args.draws} hardware-like robot(s)", flush=True)
     rows = map_in_processes(walk_row, jobs, args.workers)
     table = []
