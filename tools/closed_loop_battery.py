@@ -26,7 +26,7 @@ import sys
 from pathlib import Path
 
 from cyberdog import config as C
-from cyberdog.analysis.parallel import map_in_processes
+from cyberdog.analysis.parallel import map_in_processes, progress_log
 from cyberdog.analysis.report import json_safe, markdown_table
 from cyberdog.analysis.walk import walk
 from cyberdog.config.paper import speed_within_band
@@ -81,7 +81,11 @@ def main(argv=None) -> int:
     except LearnedSetError as err:  # a label or speed without a path, an unreadable file: before any walk
         p.error(str(err))
     print(f"{len(jobs)} walks of {args.duration:g} s on {args.draws} hardware-like robot(s)", flush=True)
-    rows = map_in_processes(walk_row, jobs, args.workers)
+    def line(r: dict) -> str:
+        return (f"{r['label']} {r['speed_mps']:g} m/s draw {r['draw']} {r['walk']:11s} "
+                f"{r['mean_speed_mps']:.3f} m/s fell={r['fell']}")
+
+    rows = map_in_processes(walk_row, jobs, args.workers, on_result=progress_log(len(jobs), line))
     table = []
     for i in range(0, len(rows), 3):
         closed, replay, cycloid = rows[i:i + 3]
