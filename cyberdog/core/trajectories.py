@@ -378,10 +378,9 @@ def point_evaluator(trajectory: FootTrajectory):
     neither `swing_path` nor `position_velocity`), else None: callers then use `position_velocity`."""
     cls = type(trajectory)
     for base in (CompositeCycloid, StraightLine):
-        if (isinstance(trajectory, base) and cls.point_at is FootTrajectory.point_at
-                and cls._swing_point is base._swing_point and cls.swing_path is base.swing_path and cls.position_velocity is FootTrajectory.position_velocity
-                and (base is not StraightLine or (cls.corners is StraightLine.corners
-                                                  and cls._corner_list is StraightLine._corner_list))):
+        same = ("_swing_point", "swing_path") + (("corners", "_corner_list") if base is StraightLine else ())
+        if (isinstance(trajectory, base) and all(getattr(cls, n) is getattr(base, n) for n in same) and all(
+                getattr(cls, n) is getattr(FootTrajectory, n) for n in ("point_at", "position_velocity"))):
             return trajectory.point_at
     return None
 

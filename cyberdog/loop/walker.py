@@ -239,7 +239,8 @@ class Walker:
         """The body is below `fall_height` or tilted beyond `fall_tilt` in roll or pitch."""
         s = self.state if state is None else state
         roll, pitch, _ = s.base_rpy.tolist()
-        return bool(s.base_position[2] < self.fall_height or abs(roll) > self.fall_tilt or abs(pitch) > self.fall_tilt)
+        tilt = self.fall_tilt
+        return bool(s.base_position[2] < self.fall_height or abs(roll) > tilt or abs(pitch) > tilt)
 
     def energy(self, since: int = 0) -> float:
         """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the controller periods from `since` to now."""
