@@ -198,7 +198,7 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
 
     _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
     verdicts = iter(["speed miss (0.911 m/s)", "ok"])
-    monkeypatch.setattr(learned_module, "replay_status", lambda *a, **k: next(verdicts))
+    monkeypatch.setattr(learned_module, "replay_verdict", lambda *a, **k: next(verdicts))
     args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
             "--speed-tolerance", "0.3"]
     assert evaluate.main([*args, "--out", str(tmp_path / "ex")]) == 0
@@ -206,7 +206,7 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     assert prov["cycle"] == "cheapest" and prov["rollout_seed"] == 0  # the other cycle choice of the same rollout
     assert prov["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle": "mean", "status": "speed miss (0.911 m/s)"}]
     assert "rejected: the mean path of env seed 0 does not replay" in capsys.readouterr().out
-    monkeypatch.setattr(learned_module, "replay_status", lambda *a, **k: "fell at 2.50 s")
+    monkeypatch.setattr(learned_module, "replay_verdict", lambda *a, **k: "fell at 2.50 s")
     assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "none")]) == 2
     err = capsys.readouterr().err
     assert "no candidate path replays" in err and "cheapest of env seed 1: fell at 2.50 s" in err
@@ -222,3 +222,29 @@ def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles()
     # swing feet lowered by 9 cm at mid-swing (a 1 cm lift): the feet scuff and the trot loses its speed
     status = replay_status(LearnedPath("seed0", commanded(1.0, -0.09, 0)), 1.0)
     assert status.startswith(("speed miss", "fell at")), status
+
+
+def test_replay_verdict_walks_the_ideal_robot_then_a_hardware_like_robot_the_prototype_never_walks(monkeypatch):
+    """The plain trot passes both walks; a failure on the second robot is named as such, and that robot's seed
+    and distance are those of a prototype walk on a robot the prototype itself does not draw."""
+    from conftest import commanded
+    from cyberdog.analysis import replay_check
+    from cyberdog.core.learned_set import LearnedPath
+    from cyberdog.evaluation.cli import DEFAULT_PROTOTYPE_DISTANCE, DEFAULT_PROTOTYPE_DRAWS
+
+    path = LearnedPath("seed0", commanded(1.2, 0.0, 0))
+    assert replay_check.replay_verdict(path, 1.2) == "ok"
+    assert replay_check.HARDWARE_CHECK_DISTANCE_M == DEFAULT_PROTOTYPE_DISTANCE
+    assert replay_check.HARDWARE_CHECK.seed >= 100 * DEFAULT_PROTOTYPE_DRAWS  # far from the prototype's draws
+    assert not replay_check.HARDWARE_CHECK.ideal
+    calls = []
+
+    def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None):
+        calls.append((hardware, distance))
+        return "ok" if hardware is None else "fell at 14.00 s"
+
+    monkeypatch.setattr(replay_check, "replay_status", stand_in)
+    assert replay_check.replay_verdict(path, 1.2) == "hardware-like robot (seed 1000): fell at 14.00 s"
+    assert calls == [(None, None), (replay_check.HARDWARE_CHECK, DEFAULT_PROTOTYPE_DISTANCE)]
+    monkeypatch.setattr(replay_check, "replay_status", lambda *a, **k: "speed miss (0.900 m/s)")
+    assert replay_check.replay_verdict(path, 1.2) == "ideal robot: speed miss (0.900 m/s)"

@@ -3,30 +3,57 @@
 A policy walks in closed loop; its commanded path, averaged over the rollout's cycles and replayed open loop
 through the IK + PID trot, need not (measured: of one battery-preset seed's 1.4 m/s rollouts, the mean path of
 two of three lost the gait in replay and slowed to 0.9 m/s, while their cheapest single cycles walked at the
-command). `replay_status` replays a path as the comparison does (the ideal robot, `REPLAY_CHECK_S`, the ±5 %
-speed band over the last half) and says "ok" or why not; extraction then tries the next candidate (the other
-cycle choice, another rollout) and records the rejected ones in the path's provenance. The check looks at
-walking only (fall, speed), never at energy, so it cannot select for a saving.
+command). `replay_verdict` replays a path on the two robots its numbers come from:
+
+1. the ideal robot, as the comparison walks it (Table 5: `REPLAY_CHECK_S`, the ±5 % speed band);
+2. a hardware-like robot as the prototype walks it (`HARDWARE_CHECK`: `HARDWARE_LIKE` with its own seed, so a
+   mass draw and sensor noise that the prototype's robots, seeds 0 .. draws − 1, never have; the prototype's
+   default `HARDWARE_CHECK_DISTANCE_M` and time cap). A path that walks 10 s on the ideal robot can still
+   topple after 14 s, or on a heavier robot with a late command.
+
+It says "ok" or which robot failed and why; extraction then tries the next candidate (the other cycle choice,
+another rollout) and records the rejected ones in the path's provenance. The check looks at walking only
+(fall, speed), never at energy, so it cannot select for a saving.
 """
 from __future__ import annotations
 
+import dataclasses
+
+from cyberdog.analysis.prototype import time_cap
 from cyberdog.analysis.walk import walk
-from cyberdog.config import WalkConfig
+from cyberdog.config import HARDWARE_LIKE, HardwareConfig, WalkConfig
 from cyberdog.config.paper import PAPER_WALK_DURATION
 from cyberdog.core.learned_set import LearnedPath
 
 REPLAY_CHECK_S = PAPER_WALK_DURATION  # s: the comparison's walk (Table 5)
+HARDWARE_CHECK_SEED = 1000  # HardwareConfig.seed of the check's robot: far from the prototype's 0 .. draws − 1
+HARDWARE_CHECK = dataclasses.replace(HARDWARE_LIKE, seed=HARDWARE_CHECK_SEED)
+HARDWARE_CHECK_DISTANCE_M = 20.0  # m: the prototype's default walk (evaluate.py --prototype-distance)
 
 
 def replay_status(path: LearnedPath, speed: float, cfg: WalkConfig | None = None,
-                  duration: float = REPLAY_CHECK_S) -> str:
-    """"ok" if `path` replayed at `speed` (m/s) on the ideal robot for `duration` s neither falls nor leaves
-    the ±5 % speed band; else "fell at T s" or "speed miss (V m/s)"."""
+                  duration: float = REPLAY_CHECK_S, hardware: HardwareConfig | None = None,
+                  distance: float | None = None) -> str:
+    """"ok" if `path` replayed at `speed` (m/s) for `duration` s (or over `distance` m, `duration` then the time
+    cap) on the ideal robot (or `hardware`) neither falls nor leaves the ±5 % speed band; else "fell at T s"
+    or "speed miss (V m/s)"."""
     walk_cfg, trajectory, offsets = path.walk_args(cfg or WalkConfig(), speed)
-    r = walk(walk_cfg, duration, trajectory, foot_offsets=offsets)
+    r = walk(walk_cfg, duration, trajectory, foot_offsets=offsets, hardware=hardware, distance=distance)
     if r.fell:
         return f"fell at {r.duration:.2f} s"
     return "ok" if r.speed_ok else f"speed miss ({r.mean_speed:.3f} m/s)"
 
 
-__all__ = ["REPLAY_CHECK_S", "replay_status"]
+def replay_verdict(path: LearnedPath, speed: float, cfg: WalkConfig | None = None) -> str:
+    """"ok" if `path` walks at `speed` (m/s) on both robots of the module docstring (the ideal one first: it is
+    the faster check); else the first failure, prefixed with the robot ("ideal robot: fell at 3.20 s")."""
+    status = replay_status(path, speed, cfg)
+    if status != "ok":
+        return f"ideal robot: {status}"
+    cap = time_cap(HARDWARE_CHECK_DISTANCE_M, speed, cfg or WalkConfig())
+    status = replay_status(path, speed, cfg, cap, HARDWARE_CHECK, HARDWARE_CHECK_DISTANCE_M)
+    return "ok" if status == "ok" else f"hardware-like robot (seed {HARDWARE_CHECK_SEED}): {status}"
+
+
+__all__ = ["HARDWARE_CHECK", "HARDWARE_CHECK_DISTANCE_M", "HARDWARE_CHECK_SEED", "REPLAY_CHECK_S", "replay_status",
+           "replay_verdict"]

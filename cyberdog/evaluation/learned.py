@@ -10,7 +10,8 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
                                       extract_from_rollout)
-from cyberdog.analysis.replay_check import REPLAY_CHECK_S, replay_status
+from cyberdog.analysis.replay_check import (HARDWARE_CHECK_DISTANCE_M, HARDWARE_CHECK_SEED, REPLAY_CHECK_S,
+                                             replay_verdict)
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
@@ -161,7 +162,7 @@ def _extract_measured(actor, path: Path, speed: float, args, prov: dict, cfg, lo
 
 
 def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, log):
-    """The first candidate commanded path that replays (`replay_status`): rollouts with env seeds
+    """The first candidate commanded path that replays on both robots (`replay_verdict`): rollouts with env seeds
     --rollout-seed, +1, ... (--replay-attempts of them), each giving the --cycle path, then the other cycle
     choice. The rejected candidates are in the kept path's provenance; none replaying is an error."""
     rejected = []
@@ -175,15 +176,16 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             except ExtractionError as err:
                 rejected.append({**candidate, "status": f"no path: {err}"})
                 continue
-            status = replay_status(LearnedPath("", ex.path), speed, cfg) if args.replay_check else "not checked"
+            status = replay_verdict(LearnedPath("", ex.path), speed, cfg) if args.replay_check else "not checked"
             if status in ("ok", "not checked"):
-                ex.path.provenance["replay_check"] = {"status": status, "rejected": rejected,
-                                                      "duration_s": REPLAY_CHECK_S, "robot": "ideal"}
+                ex.path.provenance["replay_check"] = {
+                    "status": status, "rejected": rejected, "duration_s": REPLAY_CHECK_S, "robot": "ideal",
+                    "hardware_like": {"seed": HARDWARE_CHECK_SEED, "distance_m": HARDWARE_CHECK_DISTANCE_M}}
                 return ex
             log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({status})")
             rejected.append({**candidate, "status": status})
     tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
-    raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path replays on the ideal robot "
+    raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path replays on both robots "
                      f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
 
 
