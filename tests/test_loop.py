@@ -72,7 +72,7 @@ def _calls(tree: ast.AST, attribute: str) -> list[str]:
 
 
 def test_one_place_steps_the_robot_under_the_controller():
-    """Only the walker calls `Robot.step` and the trot controller's `command` and `driver_torque` (its
+    """Only the walker calls `Robot.step` and the trot controller's `command` and `driver_torque(_list)` (its
     `torque` is the two in one, for callers outside the loop), and nothing replaces a method of the robot at
     run time."""
     steppers, torquers, patches = set(), set(), []
@@ -81,8 +81,9 @@ def test_one_place_steps_the_robot_under_the_controller():
         rel = str(path.relative_to(PACKAGE))
         if any("robot" in c.lower() for c in _calls(tree, "step")):
             steppers.add(rel)
-        if any(c.endswith(("controller.torque", "ctrl.torque", "controller.command", "controller.driver_torque"))
-               for name in ("torque", "command", "driver_torque") for c in _calls(tree, name)):
+        if any(c.endswith(("controller.torque", "ctrl.torque", "controller.command", "controller.driver_torque",
+                           "controller.driver_torque_list"))
+               for name in ("torque", "command", "driver_torque", "driver_torque_list") for c in _calls(tree, name)):
             torquers.add(rel)
         for node in ast.walk(tree):
             if isinstance(node, ast.Assign):
@@ -93,3 +94,23 @@ def test_one_place_steps_the_robot_under_the_controller():
     assert steppers == {"loop/walker.py"}
     assert torquers == {"loop/walker.py"}
     assert patches == []
+
+
+def test_a_walker_without_its_body_trace_walks_the_same_and_refuses_a_walk_result():
+    """The body trace is bookkeeping only (the env leaves it off): the same torques either way, and a result
+    that needs it says so instead of failing on empty arrays."""
+    from cyberdog.loop.result import walk_result
+
+    cfg = C.WalkConfig()
+    taus = []
+    for body_trace in (True, False):
+        with Walker(cfg, body_trace=body_trace) as w:
+            for _ in range(100):
+                w.step()
+            taus.append(w.traces()["tau"].copy())
+            if body_trace:
+                assert walk_result(w, 1.0, fell=False).energy == pytest.approx(w.energy(), rel=1e-12)
+            else:
+                with pytest.raises(ValueError, match="body_trace=True"):
+                    walk_result(w, 1.0, fell=False)
+    assert np.array_equal(taus[0], taus[1])

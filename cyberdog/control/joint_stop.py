@@ -19,9 +19,12 @@ class JointStop:
         self._bounds = list(zip(self.q_low.tolist(), self.q_high.tolist()))
 
     def torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray | None:
-        """N·m (12,); None while every joint is inside its range (almost always: a check in floats, a third
-        of the time of the array comparisons, instead of the torque)."""
-        if all(lo <= x <= hi for x, (lo, hi) in zip(q.tolist(), self._bounds)):
+        """N·m (12,); None while every joint is inside its range (almost always: checked by a loop over
+        floats, under half the time of the array comparisons, and no generator for all() to build)."""
+        for x, (lo, hi) in zip(q.tolist(), self._bounds):
+            if not lo <= x <= hi:
+                break
+        else:
             return None
         over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
         if not over.any():

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -61,9 +62,9 @@ class BodyFeedback:
 _NO_FEEDBACK = BodyFeedback()
 
 
-@dataclass(frozen=True)
-class JointCommand:
-    """One controller period's command to the twelve motor drivers (lists of 12 floats, joint order)."""
+class JointCommand(NamedTuple):
+    """One controller period's command to the twelve motor drivers (lists of 12 floats, joint order); a named
+    tuple, built at every controller period (half the time of a frozen dataclass)."""
 
     q_target: list  # rad
     dq_target: list  # rad/s
@@ -305,8 +306,12 @@ class TrotController:
         """The motor drivers' law, τ = PID(q_target − q, q̇_target − q̇) + τ_ff (12,), N·m, on the joint state
         (q, q̇) they read now: as CyberDog's motor command (q_des, qd_des, kp, kd, tau_des; MiRoboticsLab
         cyberdog_motor_sdk), with the trot's PID gains."""
+        return np.array(self.driver_torque_list(command, q, dq))
+
+    def driver_torque_list(self, command: JointCommand, q: np.ndarray, dq: np.ndarray) -> list:
+        """`driver_torque` as a list of 12 floats (the walker's per-period path hands it to `Robot.step` as is)."""
         tau = self.pid.torque_from_lists(command.q_target, q.tolist(), command.dq_target, dq.tolist())
-        return np.array([a + b for a, b in zip(tau, command.feedforward)])
+        return [a + b for a, b in zip(tau, command.feedforward)]
 
     def _checked_torque(self, q_t, q, dq_t, dq, in_swing) -> np.ndarray:
         tau = self.pid.torque(np.array(q_t), q, np.array(dq_t), dq)  # raises on a bad shape

@@ -85,6 +85,8 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
     cfg, dt = walker.cfg, walker.dt
     tr = walker.traces()
     tau, dq = tr["tau"], tr["dq"]
+    if not walker.body_trace:
+        raise ValueError("walk_result needs the walker's body trace: build the Walker with body_trace=True")
     body = walker.body.view()
     vx, rpy, z = body[:, 0], body[:, 1:4], body[:, 4]
     n = len(tau)

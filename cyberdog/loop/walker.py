@@ -72,14 +72,15 @@ class Walker:
         built with `hardware_walk_config(cfg, hardware).actuator`.
     joint_stop: the virtual end stop of the env's joint range (None: only the URDF limits).
     record: keep the state, contacts and foot targets of every step (`traces`); gait_metrics: sample non-foot
-        contacts and foot slip.
+        contacts and foot slip; body_trace: keep the body's speed, attitude and height at every step (what
+        `cyberdog.loop.result.walk_result` reads; the env, which reads none of it, leaves it off).
     fall_height, fall_tilt: m, rad: what `fallen` means.
     """
 
     def __init__(self, cfg: WalkConfig, controller: TrotController | None = None, robot: Robot | None = None,
                  hardware: HardwareConfig | None = None, joint_stop: JointStop | None = None, drive: bool = True,
                  record: bool = False, gait_metrics: bool = False, gui: bool = False,
-                 fall_height: float = FALL_HEIGHT, fall_tilt: float = FALL_TILT) -> None:
+                 fall_height: float = FALL_HEIGHT, fall_tilt: float = FALL_TILT, body_trace: bool = True) -> None:
         if hardware is not None and not isinstance(hardware, HardwareConfig):
             raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
         self.cfg = cfg = hardware_walk_config(cfg, hardware)
@@ -91,7 +92,7 @@ class Walker:
         self.controller = controller or TrotController(cfg)
         self.hardware = hardware
         self.joint_stop, self.drive = joint_stop, drive
-        self.record, self.gait_metrics = record, gait_metrics
+        self.record, self.gait_metrics, self.body_trace = record, gait_metrics, body_trace
         self.fall_height, self.fall_tilt = fall_height, fall_tilt
         self.dt = cfg.sim.controller_dt  # s, one `step`
         self.contact_check_every = max(1, int(round(CONTACT_CHECK_PERIOD / self.dt)))  # steps
@@ -139,7 +140,9 @@ class Walker:
             self.sensing.reset(self.state)
         self.start = self.state.base_position.copy()
         self.steps = 0
-        self.tau, self.dq = _Rows((12,)), _Rows((12,))  # applied motor torque, mean joint speed Δq / dt
+        self.tau = _Rows((12,))  # applied motor torque, N·m, per step
+        self.q_rows = _Rows((12,))  # joint angles, rad, at the reset and after each step (`joint_speeds`)
+        self.q_rows.append(self.state.q)
         self.body = _Rows((5,))  # body state at the step start: forward speed (m/s), roll, pitch, yaw (rad), z (m)
         self._traces: dict[str, _Rows] = {}
         self.non_foot_contacts: set[str] = set()
@@ -194,8 +197,9 @@ class Walker:
         tau = self._driver_torque(arrived, q, dq)
         applied = self.robot.step(tau)
         self.tau.append(applied)
-        rpy = s.base_rpy
-        self.body.append((s.base_linear_velocity_world[0], rpy[0], rpy[1], rpy[2], s.base_position[2]))
+        if self.body_trace:
+            rpy = s.base_rpy
+            self.body.append((s.base_linear_velocity_world[0], rpy[0], rpy[1], rpy[2], s.base_position[2]))
         if self.record:
             self._record(s)
         if self.gait_metrics:
@@ -206,15 +210,18 @@ class Walker:
                 self.slip_contacts.append(self.robot.foot_contacts())
         self.steps = k + 1
         self.state = state = self.robot.read_state()
-        self.dq.append((state.q - s.q) * (1.0 / self.dt))  # ω̄ over the period: τ·ω̄·dt = τ·Δq exactly
+        self.q_rows.append(state.q)
         return applied
 
-    def _driver_torque(self, arrived, q, dq) -> np.ndarray:
+    def _driver_torque(self, arrived, q, dq) -> np.ndarray | list:
         """The torque the motor drivers apply for the command that has arrived (None: none yet, zero torque):
-        the controller's PID + feedforward on the joint state (q, dq) read this period, then the added torques."""
+        the controller's PID + feedforward on the joint state (q, dq) read this period, then the added torques
+        (12 floats as a list when nothing is added, else an array)."""
         if arrived is None:
             return np.zeros(12)
         command, extra, stop = arrived
+        if command is not None and extra is None and stop is None:  # the usual period: a list for Robot.step
+            return self.controller.driver_torque_list(command, q, dq)
         tau = self.controller.driver_torque(command, q, dq) if command is not None else None
         if extra is not None:
             tau = extra if tau is None else extra + tau
@@ -242,20 +249,26 @@ class Walker:
         tilt = self.fall_tilt
         return bool(s.base_position[2] < self.fall_height or abs(roll) > tilt or abs(pitch) > tilt)
 
+    def joint_speeds(self, since: int = 0) -> np.ndarray:
+        """(n, 12) rad/s, each step's mean joint speed ω̄ = Δq / dt from step `since` on (τ·ω̄·dt = τ·Δq exactly);
+        computed from the joint-angle rows when asked (once per agent step, not at every period)."""
+        q = self.q_rows.view(since)
+        return (q[1:] - q[:-1]) * (1.0 / self.dt)
+
     def energy(self, since: int = 0) -> float:
         """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the controller periods from `since` to now."""
-        return float(en.joint_energy(self.tau.view(since), self.dq.view(since), self.dt).sum())
+        return float(en.joint_energy(self.tau.view(since), self.joint_speeds(since), self.dt).sum())
 
     def electrical_energy(self, since: int = 0) -> float:
         """J drawn from the battery over the controller periods from `since` (copper loss, friction, driver)."""
         c = self.cfg
-        return float(np.sum(en.electrical_power(self.tau.view(since), self.dq.view(since), c.actuator,
+        return float(np.sum(en.electrical_power(self.tau.view(since), self.joint_speeds(since), c.actuator,
                                                 c.energy))) * self.dt
 
     def traces(self) -> dict:
         """Every step's t, tau, dq, power Σ|τ·ω| (and with `record`: q, base_position, contacts,
         foot_targets, foot_offsets), arrays with the step as the first axis."""
-        tau, dq = self.tau.view(), self.dq.view()
+        tau, dq = self.tau.view(), self.joint_speeds()
         out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": np.abs(tau * dq)}
         out.update({name: rows.view() for name, rows in self._traces.items()})
         return out

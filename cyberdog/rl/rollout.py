@@ -72,9 +72,9 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=())
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
-        # the env's simulation loop keeps every controller period: state, applied torque, contacts, and the trot
-        # controller's commanded foot targets and the policy's shift of them; and samples foot slip
-        env.walker.record = env.walker.gait_metrics = True
+        # the env's simulation loop keeps every controller period: state, body, applied torque, contacts, and the
+        # trot controller's commanded foot targets and the policy's shift of them; and samples foot slip
+        env.walker.record = env.walker.gait_metrics = env.walker.body_trace = True
         obs, _ = env.reset(seed=seed, options={"target_speed": float(speed)})
         n_steps = int(round(duration / cfg.control_dt))
         score, fell = 0.0, False

@@ -254,18 +254,21 @@ class Robot:
         self.step_count = 0
 
     def step(self, torque_command: np.ndarray) -> np.ndarray:
-        """Apply joint torque commands (12,) N·m for one controller period (`dt`, held constant over its
+        """Apply joint torque commands (12,) N·m (an array, or a list of 12 numbers) for one controller period (`dt`, held constant over its
         physics substeps); return the motor torque applied (12,).
 
         The actuator model clips the command and applies the torque–speed envelope at the current joint
         velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
         """
-        tau = np.asarray(torque_command, dtype=float)
-        if tau.shape != (N_JOINTS,):
-            raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
-        command = tau.tolist()  # the actuator law in floats: 12 values are too few for numpy's call overhead
+        if type(torque_command) is list and len(torque_command) == N_JOINTS:  # the walker's: no array round trip
+            command = torque_command
+        else:
+            tau = np.asarray(torque_command, dtype=float)
+            if tau.shape != (N_JOINTS,):
+                raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
+            command = tau.tolist()  # the actuator law in floats: 12 values are too few for numpy's call overhead
         if not math.isfinite(sum(command)) and not all(map(math.isfinite, command)):
-            raise ValueError(f"torque_command must be finite, got {tau!r}")
+            raise ValueError(f"torque_command must be finite, got {command!r}")
         self._joint_states()
         motor, joint = self.actuator.joint_torque_list(command, self._dq_list)
         self._set_motors(self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, forces=joint)
