@@ -11,9 +11,11 @@ step is one period of the joint controller (`SimConfig.controller_dt`, 2.5 ms by
 2. the virtual end stop of Table 4's joint range adds its torque, if one is given;
 3. the command waits out the actuation latency, goes through the actuator model and is held constant over
    the period's `SimConfig.physics_substeps` solver steps (one `stepSimulation`, substeps in C++);
-4. the applied torque τ and the joint's mean speed over the period, ω̄ = Δq / dt, are kept for Eq. (7) and
-   the electrical energy, and with `record` the state, contacts and the controller's foot targets; with
-   `gait_metrics` the non-foot ground contacts and the feet's positions for foot slip are sampled.
+4. the applied torque τ and the joint angles after the period are kept for Eq. (7) and the electrical energy
+   (the joint's mean speed over the period, ω̄ = Δq / dt, is taken from them when asked: `joint_speeds`),
+   with `body_trace` the body's speed, attitude and height, and with `record` the state, contacts and the
+   controller's foot targets; with `gait_metrics` the non-foot ground contacts and the feet's positions for
+   foot slip are sampled.
 
 Energy. Over a period of constant torque the joint's work is exactly ∫τ·ω dt = τ·Δq, so Eq. (7) is taken as
 Σ_k |τ_k·Δq_k| = Σ_k |τ_k·ω̄_k|·dt per joint. That equals ∫|τ·ω|dt unless ω changes sign inside a period;
