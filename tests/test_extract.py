@@ -224,9 +224,10 @@ def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles()
     assert status.startswith(("speed miss", "fell at")), status
 
 
-def test_replay_verdict_walks_the_ideal_robot_then_a_hardware_like_robot_the_prototype_never_walks(monkeypatch):
-    """The plain trot passes both walks; a failure on the second robot is named as such, and that robot's seed
-    and distance are those of a prototype walk on a robot the prototype itself does not draw."""
+def test_replay_verdict_walks_both_tables_robots_and_names_the_walk_that_fails(monkeypatch):
+    """The plain trot passes every walk; the check walks the ideal robot (Table 5's 10 s, the prototype's 20 m),
+    then hardware-like robots that the prototype never draws, each over the prototype's distance, and names
+    the first walk that fails."""
     from conftest import commanded
     from cyberdog.analysis import replay_check
     from cyberdog.core.learned_set import LearnedPath
@@ -234,17 +235,19 @@ def test_replay_verdict_walks_the_ideal_robot_then_a_hardware_like_robot_the_pro
 
     path = LearnedPath("seed0", commanded(1.2, 0.0, 0))
     assert replay_check.replay_verdict(path, 1.2) == "ok"
-    assert replay_check.HARDWARE_CHECK_DISTANCE_M == DEFAULT_PROTOTYPE_DISTANCE
-    assert replay_check.HARDWARE_CHECK.seed >= 100 * DEFAULT_PROTOTYPE_DRAWS  # far from the prototype's draws
-    assert not replay_check.HARDWARE_CHECK.ideal
+    assert replay_check.CHECK_DISTANCE_M == DEFAULT_PROTOTYPE_DISTANCE
+    seeds = replay_check.HARDWARE_CHECK_SEEDS
+    assert len(seeds) >= 2 and min(seeds) >= 100 * DEFAULT_PROTOTYPE_DRAWS  # far from the prototype's draws
     calls = []
 
     def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None):
-        calls.append((hardware, distance))
-        return "ok" if hardware is None else "fell at 14.00 s"
+        calls.append((None if hardware is None else hardware.seed, distance))
+        return "fell at 14.00 s" if hardware is not None and hardware.seed == seeds[-1] else "ok"
 
     monkeypatch.setattr(replay_check, "replay_status", stand_in)
-    assert replay_check.replay_verdict(path, 1.2) == "hardware-like robot (seed 1000): fell at 14.00 s"
-    assert calls == [(None, None), (replay_check.HARDWARE_CHECK, DEFAULT_PROTOTYPE_DISTANCE)]
+    verdict = replay_check.replay_verdict(path, 1.2)
+    assert verdict == f"hardware-like robot (seed {seeds[-1]}), 20 m: fell at 14.00 s"
+    d = DEFAULT_PROTOTYPE_DISTANCE
+    assert calls == [(None, None), (None, d)] + [(seed, d) for seed in seeds]
     monkeypatch.setattr(replay_check, "replay_status", lambda *a, **k: "speed miss (0.900 m/s)")
-    assert replay_check.replay_verdict(path, 1.2) == "ideal robot: speed miss (0.900 m/s)"
+    assert replay_check.replay_verdict(path, 1.2) == "ideal robot, 10 s: speed miss (0.900 m/s)"

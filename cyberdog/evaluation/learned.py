@@ -10,8 +10,7 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
                                       extract_from_rollout)
-from cyberdog.analysis.replay_check import (HARDWARE_CHECK_DISTANCE_M, HARDWARE_CHECK_SEED, REPLAY_CHECK_S,
-                                             replay_verdict)
+from cyberdog.analysis.replay_check import CHECK_DISTANCE_M, HARDWARE_CHECK_SEEDS, REPLAY_CHECK_S, replay_verdict
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
@@ -180,7 +179,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             if status in ("ok", "not checked"):
                 ex.path.provenance["replay_check"] = {
                     "status": status, "rejected": rejected, "duration_s": REPLAY_CHECK_S, "robot": "ideal",
-                    "hardware_like": {"seed": HARDWARE_CHECK_SEED, "distance_m": HARDWARE_CHECK_DISTANCE_M}}
+                    "distance_m": CHECK_DISTANCE_M, "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS)}
                 return ex
             log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({status})")
             rejected.append({**candidate, "status": status})
