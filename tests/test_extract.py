@@ -1,4 +1,5 @@
 """Extraction of the learned foot trajectory (paper Section 3, after Figure 6) from recorded rollout traces."""
+import dataclasses
 import json
 
 import numpy as np
@@ -224,20 +225,23 @@ def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles()
     assert status.startswith(("speed miss", "fell at")), status
 
 
-def test_replay_verdict_walks_both_tables_robots_and_names_the_walk_that_fails(monkeypatch):
-    """The plain trot passes every walk; the check walks the ideal robot (Table 5's 10 s, the prototype's 20 m),
-    then hardware-like robots that the prototype never draws, each over the prototype's distance, and names
-    the first walk that fails."""
+def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the_walk_that_fails(monkeypatch):
+    """The check walks the ideal robot (Table 5's 10 s, then the paper's 100 m), then hardware-like robots that
+    the prototype never draws, each over the paper's 100 m, and names the first walk that fails; one of those
+    walks, shortened to 20 m, passes for the plain trot."""
     from conftest import commanded
     from cyberdog.analysis import replay_check
+    from cyberdog.config import HARDWARE_LIKE
+    from cyberdog.config.paper import PAPER_DISTANCE_M
     from cyberdog.core.learned_set import LearnedPath
-    from cyberdog.evaluation.cli import DEFAULT_PROTOTYPE_DISTANCE, DEFAULT_PROTOTYPE_DRAWS
+    from cyberdog.evaluation.cli import DEFAULT_PROTOTYPE_DRAWS
 
     path = LearnedPath("seed0", commanded(1.2, 0.0, 0))
-    assert replay_check.replay_verdict(path, 1.2) == "ok"
-    assert replay_check.CHECK_DISTANCE_M == DEFAULT_PROTOTYPE_DISTANCE
     seeds = replay_check.HARDWARE_CHECK_SEEDS
+    assert replay_check.CHECK_DISTANCE_M == PAPER_DISTANCE_M == 100.0
     assert len(seeds) >= 2 and min(seeds) >= 100 * DEFAULT_PROTOTYPE_DRAWS  # far from the prototype's draws
+    hardware = dataclasses.replace(HARDWARE_LIKE, seed=seeds[0])
+    assert replay_check.replay_status(path, 1.2, None, 30.0, hardware, 20.0) == "ok"
     calls = []
 
     def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None):
@@ -246,8 +250,7 @@ def test_replay_verdict_walks_both_tables_robots_and_names_the_walk_that_fails(m
 
     monkeypatch.setattr(replay_check, "replay_status", stand_in)
     verdict = replay_check.replay_verdict(path, 1.2)
-    assert verdict == f"hardware-like robot (seed {seeds[-1]}), 20 m: fell at 14.00 s"
-    d = DEFAULT_PROTOTYPE_DISTANCE
-    assert calls == [(None, None), (None, d)] + [(seed, d) for seed in seeds]
+    assert verdict == f"hardware-like robot (seed {seeds[-1]}), 100 m: fell at 14.00 s"
+    assert calls == [(None, None), (None, 100.0)] + [(seed, 100.0) for seed in seeds]
     monkeypatch.setattr(replay_check, "replay_status", lambda *a, **k: "speed miss (0.900 m/s)")
     assert replay_check.replay_verdict(path, 1.2) == "ideal robot, 10 s: speed miss (0.900 m/s)"

@@ -177,7 +177,7 @@ def _extraction_options() -> argparse.ArgumentParser:
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--no-replay-check", dest="replay_check", action="store_false",
                    help="keep a commanded path without replaying it first (by default a path that falls or misses "
-                        "the speed in a 10 s and a 20 m replay on the ideal robot, or in 20 m walks on three "
+                        "the speed in a 10 s and a 100 m replay on the ideal robot, or in 100 m walks on six "
                         "hardware-like robots that the prototype does not draw, is rejected for the next "
                         "candidate: the other --cycle choice, then the rollout of the next env seed)")
     g.add_argument("--replay-attempts", type=positive_int, default=3, metavar="N",
