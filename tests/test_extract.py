@@ -179,8 +179,9 @@ def test_evaluate_extracts_the_commanded_path_of_a_speed_range_policy_at_each_sp
 
     _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
     out = tmp_path / "ex"
+    # without the replay check (its 100 m walks take a minute here; the tests below cover it)
     assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.0", "1.2", "--rollout-duration",
-                          "3.0", "--speed-tolerance", "0.3", "--out", str(out)]) == 0
+                          "3.0", "--speed-tolerance", "0.3", "--no-replay-check", "--out", str(out)]) == 0
     for v in (1.0, 1.2):
         path = CommandedPath.load(out / "learned" / f"seed0_{v:g}mps.json")
         assert path.speed == v and path.provenance["path"] == "commanded" and path.provenance["cycle"] == "mean"
