@@ -178,7 +178,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             status = replay_verdict(LearnedPath("", ex.path), speed, cfg) if args.replay_check else "not checked"
             if status in ("ok", "not checked"):
                 ex.path.provenance["replay_check"] = {
-                    "status": status, "rejected": rejected, "duration_s": REPLAY_CHECK_S, "robot": "ideal",
+                    "status": status, "rejected": rejected, "ideal_duration_s": REPLAY_CHECK_S,
                     "distance_m": CHECK_DISTANCE_M, "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS)}
                 return ex
             log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({status})")

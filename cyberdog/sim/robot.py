@@ -253,9 +253,9 @@ class Robot:
         self._joint_cache = None
         self.step_count = 0
 
-    def step(self, torque_command: np.ndarray) -> np.ndarray:
-        """Apply joint torque commands (12,) N·m (an array, or a list of 12 numbers) for one controller period (`dt`, held constant over its
-        physics substeps); return the motor torque applied (12,).
+    def step(self, torque_command: np.ndarray | list) -> np.ndarray:
+        """Apply joint torque commands (12,) N·m (an array, or a list of 12 numbers) for one controller period
+        (`dt`, held constant over its physics substeps); return the motor torque applied (12,).
 
         The actuator model clips the command and applies the torque–speed envelope at the current joint
         velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
