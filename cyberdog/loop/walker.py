@@ -234,9 +234,8 @@ class Walker:
     def _record(self, s) -> None:
         traces = self._traces
         if not traces:
-            traces.update(q=_Rows((12,)), base_position=_Rows((3,)), contacts=_Rows((4,), bool),
+            traces.update(base_position=_Rows((3,)), contacts=_Rows((4,), bool),
                           foot_targets=_Rows((4, 3)), foot_offsets=_Rows((4, 3)))
-        traces["q"].append(s.q)
         traces["base_position"].append(s.base_position)
         traces["contacts"].append(self.robot.foot_contacts())  # after the step
         c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
@@ -272,6 +271,8 @@ class Walker:
         foot_targets, foot_offsets), arrays with the step as the first axis."""
         tau, dq = self.tau.view(), self.joint_speeds()
         out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": np.abs(tau * dq)}
+        if self._traces:  # with `record`: q at each step's start is the joint-angle rows but the last
+            out["q"] = self.q_rows.view()[:-1]
         out.update({name: rows.view() for name, rows in self._traces.items()})
         return out
 
