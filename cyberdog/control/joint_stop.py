@@ -18,14 +18,16 @@ class JointStop:
         self.stiffness, self.damping = float(stiffness), float(damping)
         self._bounds = list(zip(self.q_low.tolist(), self.q_high.tolist()))
 
-    def torque(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray | None:
+    def torque(self, q: np.ndarray | list, dq: np.ndarray | list) -> np.ndarray | None:
         """N·m (12,); None while every joint is inside its range (almost always: checked by a loop over
-        floats, under half the time of the array comparisons, and no generator for all() to build)."""
-        for x, (lo, hi) in zip(q.tolist(), self._bounds):
+        floats, under half the time of the array comparisons, and no generator for all() to build). q, q̇ (12,)
+        as arrays or lists of floats."""
+        for x, (lo, hi) in zip(q if type(q) is list else q.tolist(), self._bounds):
             if not lo <= x <= hi:
                 break
         else:
             return None
+        q, dq = np.asarray(q, dtype=float), np.asarray(dq, dtype=float)
         over = np.minimum(q - self.q_low, 0.0) + np.maximum(q - self.q_high, 0.0)
         if not over.any():
             return None

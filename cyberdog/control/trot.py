@@ -293,13 +293,15 @@ class TrotController:
             return self._checked_torque(q_t, q, dq_t, dq, in_swing)
         return self.driver_torque(self.command(t, q, body), q, dq)
 
-    def command(self, t: float, q: np.ndarray, body: BodyFeedback | None = None) -> JointCommand:
-        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,):
-        joint targets and speeds from the trajectory and IK, and the stance feedforward torque."""
+    def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None) -> JointCommand:
+        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,
+        an array or a list of floats): joint targets and speeds from the trajectory and IK, and the stance
+        feedforward torque."""
         _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
-            self._add_stance_feedforward(feedforward, q.tolist(), [not swing for swing in in_swing])
+            self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(),
+                                         [not swing for swing in in_swing])
         return JointCommand(q_t, dq_t, feedforward)
 
     def driver_torque(self, command: JointCommand, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
@@ -308,9 +310,12 @@ class TrotController:
         cyberdog_motor_sdk), with the trot's PID gains."""
         return np.array(self.driver_torque_list(command, q, dq))
 
-    def driver_torque_list(self, command: JointCommand, q: np.ndarray, dq: np.ndarray) -> list:
-        """`driver_torque` as a list of 12 floats (the walker's per-period path hands it to `Robot.step` as is)."""
-        tau = self.pid.torque_from_lists(command.q_target, q.tolist(), command.dq_target, dq.tolist())
+    def driver_torque_list(self, command: JointCommand, q: np.ndarray | list, dq: np.ndarray | list) -> list:
+        """`driver_torque` as a list of 12 floats (the walker's per-period path hands it to `Robot.step` as is);
+        q, q̇ as arrays or lists of floats."""
+        q = q if type(q) is list else q.tolist()
+        dq = dq if type(dq) is list else dq.tolist()
+        tau = self.pid.torque_from_lists(command.q_target, q, command.dq_target, dq)
         return [a + b for a, b in zip(tau, command.feedforward)]
 
     def _checked_torque(self, q_t, q, dq_t, dq, in_swing) -> np.ndarray:

@@ -245,6 +245,16 @@ def leg_jacobian_z_row(abad: float, hip: float, knee: float, side: float, l1: fl
     return (c1 * (side * l1) - s1 * z_leg, c1 * (l2 * math.sin(hip) + l3 * s_hk), c1 * (l3 * s_hk))
 
 
+def lateral_velocity_body(quaternion, linear_velocity_world) -> float:
+    """m/s, the body-frame y velocity (row y of Rᵀ times v) in floats, without the matrix: row y of Rᵀ is
+    column y of R, (s(xy − zw), 1 − s(x² + z²), s(yz + xw)) with s = 2 / |q|² for the quaternion q = (x, y, z, w)
+    (as PyBullet's getMatrixFromQuaternion, which does not assume |q| = 1)."""
+    x, y, z, w = quaternion
+    vx, vy, vz = linear_velocity_world
+    s = 2.0 / (x * x + y * y + z * z + w * w)
+    return s * (x * y - z * w) * vx + (1.0 - s * (x * x + z * z)) * vy + s * (y * z + x * w) * vz
+
+
 def joint_limits(robot: RobotConfig) -> tuple[np.ndarray, np.ndarray]:
     """(12,) lower and upper joint limits, rad, in joint order leg-major (LF abad, hip, knee, RF ...)."""
     lo = np.array([-robot.abad_limit, robot.hip_limit[0], robot.knee_limit[0]] * 4)

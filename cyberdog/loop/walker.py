@@ -34,9 +34,10 @@ from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
 from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
+from cyberdog.core import kinematics as kin
 from cyberdog.sim.hardware import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
-from cyberdog.sim.robot import Robot
+from cyberdog.sim.robot import Robot, RobotState
 
 # "fallen" means the same everywhere (EnvConfig's defaults; the env passes its own)
 FALL_HEIGHT = EnvConfig.fall_height  # m, body centre below this
@@ -137,14 +138,16 @@ class Walker:
         self.robot.reset()
         self.controller.reset()
         self.delay.reset(d.latency_periods)
-        self.state = self.robot.read_state()
+        self.reading = self.robot.read()
+        self._state = None
         if self.sensing is not None:
             self.sensing.reset(self.state)
         self.start = self.state.base_position.copy()
+        self._start_y = float(self.start[1])
         self.steps = 0
         self.tau = _Rows((12,))  # applied motor torque, N·m, per step
         self.q_rows = _Rows((12,))  # joint angles, rad, at the reset and after each step (`joint_speeds`)
-        self.q_rows.append(self.state.q)
+        self.q_rows.append(self.reading.q)
         self.body = _Rows((5,))  # body state at the step start: forward speed (m/s), roll, pitch, yaw (rad), z (m)
         self._traces: dict[str, _Rows] = {}
         self.non_foot_contacts: set[str] = set()
@@ -156,6 +159,14 @@ class Walker:
     def time(self) -> float:
         """s since the reset."""
         return self.steps * self.dt
+
+    @property
+    def state(self) -> RobotState:
+        """The robot's state after the last step (as arrays; built from `reading` when first asked)."""
+        s = self._state
+        if s is None:
+            s = self._state = RobotState.from_reading(self.reading)
+        return s
 
     # ------------------------------------------------------------------------------------------------------
     def body_feedback(self, state, v_world: np.ndarray | None) -> BodyFeedback:
@@ -183,20 +194,26 @@ class Walker:
     def step(self, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
         """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
         torque applied (12,)."""
-        s, k = self.state, self.steps
+        r, k = self.reading, self.steps
         q = dq = command = None
         if self.drive:
-            if self.sensing is None:
-                q, dq, feedback = s.q, s.dq, BodyFeedback.from_state(s, self.start)
+            if self.sensing is None:  # the truth, in floats: no arrays built at the controller rate
+                q, dq = r.q, r.dq
+                feedback = BodyFeedback(yaw=r.base_rpy[2], lateral_offset=r.base_position[1] - self._start_y,
+                                        forward_speed=r.base_linear_velocity_world[0],
+                                        lateral_speed=kin.lateral_velocity_body(r.base_quaternion,
+                                                                                r.base_linear_velocity_world))
             else:
+                s = self.state
                 q, dq, v_world = self.sensing.read(k, s, self.robot.foot_contacts)
                 feedback = self.body_feedback(s, v_world)
             command = self.controller.command(k * self.dt, q, feedback)
-        stop = self.joint_stop.torque(s.q, s.dq) if self.joint_stop is not None else None
+        stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
         # the latency holds the whole command (targets, feedforward, the added torques); the drivers' PD then
         # acts on the joint state read now (q, dq of this period)
         arrived = self.delay.push((command, extra_torque, stop))
         tau = self._driver_torque(arrived, q, dq)
+        s = self.state if self.body_trace or self.record else None  # this period's start, before the step
         applied = self.robot.step(tau)
         self.tau.append(applied)
         if self.body_trace:
@@ -211,8 +228,9 @@ class Walker:
                 self.slip_xy.append(self.robot.foot_positions_world()[:, :2])
                 self.slip_contacts.append(self.robot.foot_contacts())
         self.steps = k + 1
-        self.state = state = self.robot.read_state()
-        self.q_rows.append(state.q)
+        self.reading = reading = self.robot.read()
+        self._state = None
+        self.q_rows.append(reading.q)
         return applied
 
     def _driver_torque(self, arrived, q, dq) -> np.ndarray | list:

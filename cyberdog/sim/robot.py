@@ -39,12 +39,13 @@ import warnings
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig, SimConfig
 from cyberdog.core.actuator import ActuatorModel
-from cyberdog.core.kinematics import standing_joint_angles
+from cyberdog.core.kinematics import lateral_velocity_body, standing_joint_angles
 from cyberdog.sim.quiet import quiet_pybullet
 
 with quiet_pybullet():  # without pybullet's build banner
@@ -59,6 +60,20 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1]
 REPO_ROOT = PACKAGE_DIR.parent  # a checkout's root; in an installed package, site-packages (never a match)
 SPAWN_CLEARANCE = 0.002  # m, default base height above robot.body_height so the feet start just off the ground
 N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)
+
+
+class StateReading(NamedTuple):
+    """One read of the robot's state as PyBullet reports it, in plain floats (`Robot.read`): what the
+    controller's per-period path uses, without building arrays. `RobotState.from_reading` makes the arrays."""
+
+    time: float  # s, simulated time since the last reset
+    q: list  # 12 joint angles, rad
+    dq: list  # 12 joint velocities, rad/s
+    base_position: tuple  # body origin in the world, m
+    base_quaternion: tuple  # x y z w
+    base_rpy: tuple  # roll, pitch, yaw, rad
+    base_linear_velocity_world: tuple  # m/s
+    base_angular_velocity_world: tuple  # rad/s
 
 
 @dataclass(frozen=True)
@@ -90,13 +105,15 @@ class RobotState:
 
     @property
     def lateral_velocity_body(self) -> float:
-        """m/s, the body-frame y velocity (= base_linear_velocity_body[1]) in floats, without the matrix: row y
-        of Rᵀ is column y of R, (s(xy − zw), 1 − s(x² + z²), s(yz + xw)) with s = 2 / |q|² for the quaternion
-        q = (x, y, z, w) (as PyBullet's getMatrixFromQuaternion, which does not assume |q| = 1)."""
-        x, y, z, w = self.base_quaternion.tolist()
-        vx, vy, vz = self.base_linear_velocity_world.tolist()
-        s = 2.0 / (x * x + y * y + z * z + w * w)
-        return s * (x * y - z * w) * vx + (1.0 - s * (x * x + z * z)) * vy + s * (y * z + x * w) * vz
+        """m/s, the body-frame y velocity (= base_linear_velocity_body[1]), in floats (`lateral_velocity_body`)."""
+        return lateral_velocity_body(self.base_quaternion.tolist(), self.base_linear_velocity_world.tolist())
+
+    @classmethod
+    def from_reading(cls, r: StateReading) -> "RobotState":
+        """The snapshot of a `StateReading`, as arrays."""
+        return cls(r.time, np.array(r.q), np.array(r.dq), np.array(r.base_position), np.array(r.base_quaternion),
+                   np.array(r.base_rpy), np.array(r.base_linear_velocity_world),
+                   np.array(r.base_angular_velocity_world))
 
     @cached_property
     def base_angular_velocity_body(self) -> np.ndarray:
@@ -184,8 +201,7 @@ class Robot:
         self._get_base_velocity = c.getBaseVelocity
         self._get_euler = c.getEulerFromQuaternion
         self._multiply_transforms = c.multiplyTransforms
-        self._joint_cache: tuple[np.ndarray, np.ndarray] | None = None
-        self._dq_list: list[float] = []  # the cached joint velocities as floats, for the actuator law
+        self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
         self.step_count = 0
         self._closed = False
         self.reset()
@@ -269,8 +285,7 @@ class Robot:
             command = tau.tolist()  # the actuator law in floats: 12 values are too few for numpy's call overhead
         if not math.isfinite(sum(command)) and not all(map(math.isfinite, command)):
             raise ValueError(f"torque_command must be finite, got {command!r}")
-        self._joint_states()
-        motor, joint = self.actuator.joint_torque_list(command, self._dq_list)
+        motor, joint = self.actuator.joint_torque_list(command, self._joint_lists()[1])
         self._set_motors(self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, forces=joint)
         self._step_simulation()
         self._joint_cache = None
@@ -286,28 +301,29 @@ class Robot:
     # state reads
     # ------------------------------------------------------------------------------------------------------
 
-    def _joint_states(self) -> tuple[np.ndarray, np.ndarray]:
-        """(q, dq) from one getJointStates call, cached until the next step or reset (do not modify)."""
+    def _joint_lists(self) -> tuple[list, list]:
+        """(q, dq) as 12 floats each from one getJointStates call, cached until the next step or reset (do not
+        modify)."""
         if self._joint_cache is None:
             states = self._get_joint_states(self.body_id, self.joint_ids)
-            self._dq_list = [s[1] for s in states]
-            self._joint_cache = (np.array([s[0] for s in states]), np.array(self._dq_list))
+            self._joint_cache = ([s[0] for s in states], [s[1] for s in states])
         return self._joint_cache
 
     def joint_angles(self) -> np.ndarray:
-        return self._joint_states()[0].copy()
+        return np.array(self._joint_lists()[0])
 
     def joint_velocities(self) -> np.ndarray:
-        return self._joint_states()[1].copy()
+        return np.array(self._joint_lists()[1])
 
     def base_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Position (3,) and quaternion (x y z w) of the trunk's link frame (the body frame) in the world."""
         pos, quat = self._multiply_transforms(*self._get_base_pose(self.body_id), *self._inertial_to_link)
         return np.array(pos), np.array(quat)
 
-    def read_state(self) -> RobotState:
-        """Joint and body state; body values are of the trunk's link frame (see the module docstring)."""
-        q, dq = self._joint_states()
+    def read(self) -> StateReading:
+        """Joint and body state in plain floats (the controller's per-period read); body values are of the
+        trunk's link frame (see the module docstring)."""
+        q, dq = self._joint_lists()
         com_pos, com_quat = self._get_base_pose(self.body_id)
         pos, quat = self._multiply_transforms(com_pos, com_quat, *self._inertial_to_link)
         lin_com, ang = self._get_base_velocity(self.body_id)
@@ -315,8 +331,11 @@ class Robot:
         rx, ry, rz = pos[0] - com_pos[0], pos[1] - com_pos[1], pos[2] - com_pos[2]
         wx, wy, wz = ang
         lin = (lin_com[0] + wy * rz - wz * ry, lin_com[1] + wz * rx - wx * rz, lin_com[2] + wx * ry - wy * rx)
-        return RobotState(self.step_count * self.dt, q.copy(), dq.copy(), np.array(pos), np.array(quat),
-                          np.array(self._get_euler(quat)), np.array(lin), np.array(ang))
+        return StateReading(self.step_count * self.dt, q, dq, pos, quat, self._get_euler(quat), lin, ang)
+
+    def read_state(self) -> RobotState:
+        """Joint and body state as arrays (a `RobotState`); body values are of the trunk's link frame."""
+        return RobotState.from_reading(self.read())
 
     def _ground_contacts(self) -> list:
         return self.client.getContactPoints(bodyA=self.body_id, bodyB=self.plane_id)
