@@ -1,6 +1,7 @@
 """Extraction of the learned foot trajectory (paper Section 3, after Figure 6) from recorded rollout traces."""
 import dataclasses
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -195,24 +196,57 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     """Extraction keeps the first candidate whose replay walks (here a stand-in check rejects the first), records
     the rejected ones, and refuses to keep any path when none walks."""
     import evaluate
+    from cyberdog.analysis.replay_check import ReplayCheck
     from cyberdog.core.commanded_path import CommandedPath
     from cyberdog.evaluation import learned as learned_module
 
     _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
-    verdicts = iter(["speed miss (0.911 m/s)", "ok"])
-    monkeypatch.setattr(learned_module, "replay_verdict", lambda *a, **k: next(verdicts))
+    checks = iter([ReplayCheck("speed miss (0.911 m/s)"), ReplayCheck("ok", 30.0)])
+    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
     args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
             "--speed-tolerance", "0.3"]
-    assert evaluate.main([*args, "--out", str(tmp_path / "ex")]) == 0
+    assert evaluate.main([*args, "--candidates", "1", "--out", str(tmp_path / "ex")]) == 0
     prov = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json").provenance
     assert prov["cycle"] == "cheapest" and prov["rollout_seed"] == 0  # the other cycle choice of the same rollout
     assert prov["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle": "mean", "status": "speed miss (0.911 m/s)"}]
     assert "rejected: the mean path of env seed 0 does not replay" in capsys.readouterr().out
-    monkeypatch.setattr(learned_module, "replay_verdict", lambda *a, **k: "fell at 2.50 s")
+    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: ReplayCheck("fell at 2.50 s"))
     assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "none")]) == 2
     err = capsys.readouterr().err
     assert "no candidate path replays" in err and "cheapest of env seed 1: fell at 2.50 s" in err
     assert not (tmp_path / "none" / "learned" / "seed0_1mps.json").exists()
+
+
+def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, capsys, monkeypatch):
+    """With --candidates N the first N rollouts whose path replays each give one candidate, and the path kept is
+    the one with the least electrical energy per metre on the check's robots; with fewer rollouts that replay
+    than N, the cheapest of those. Every candidate and its energy is in the provenance."""
+    import evaluate
+    from cyberdog.analysis.replay_check import ReplayCheck
+    from cyberdog.core.commanded_path import CommandedPath
+    from cyberdog.evaluation import learned as learned_module
+
+    _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
+    # rollout 0: mean replays (31 J/m); rollout 1: mean falls, cheapest replays (27 J/m); rollout 2: mean 29 J/m
+    checks = iter([ReplayCheck("ok", 31.0), ReplayCheck("fell at 3.00 s"), ReplayCheck("ok", 27.0),
+                   ReplayCheck("ok", 29.0), ReplayCheck("ok", 20.0)])
+    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
+            "--speed-tolerance", "0.3", "--replay-attempts", "5"]
+    assert evaluate.main([*args, "--candidates", "3", "--out", str(tmp_path / "ex")]) == 0
+    check = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json").provenance["replay_check"]
+    assert [(c["rollout_seed"], c["cycle"], c["electrical_J_per_m"]) for c in check["candidates"]] == [
+        (0, "mean", 31.0), (1, "cheapest", 27.0), (2, "mean", 29.0)]  # three found: the fourth rollout not run
+    prov = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json").provenance
+    assert (prov["rollout_seed"], prov["cycle"]) == (1, "cheapest")
+    assert "the cheapest of 3 candidates" in capsys.readouterr().out
+    checks = iter([ReplayCheck("fell at 1.00 s"), ReplayCheck("ok", 33.0), ReplayCheck("fell at 1.00 s"),
+                   ReplayCheck("fell at 1.00 s")])
+    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "few")]) == 0
+    prov = CommandedPath.load(tmp_path / "few" / "learned" / "seed0_1mps.json").provenance
+    assert (prov["rollout_seed"], prov["cycle"]) == (0, "cheapest")  # the only candidate of two rollouts
+    assert len(prov["replay_check"]["candidates"]) == 1
 
 
 def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles():
@@ -247,11 +281,19 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
 
     def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None):
         calls.append((None if hardware is None else hardware.seed, distance))
-        return "fell at 14.00 s" if hardware is not None and hardware.seed == seeds[-1] else "ok"
+        fell = hardware is not None and hardware.seed == seeds[-1]
+        return SimpleNamespace(fell=fell, duration=14.0, speed_ok=True, mean_speed=1.2, distance=100.0,
+                               electrical_energy=2000.0 + (0.0 if hardware is None else hardware.seed))
 
-    monkeypatch.setattr(replay_check, "replay_status", stand_in)
+    monkeypatch.setattr(replay_check, "replay_walk", stand_in)
     verdict = replay_check.replay_verdict(path, 1.2)
     assert verdict == f"hardware-like robot (seed {seeds[-1]}), 100 m: fell at 14.00 s"
     assert calls == [(None, None), (None, 100.0)] + [(seed, 100.0) for seed in seeds]
-    monkeypatch.setattr(replay_check, "replay_status", lambda *a, **k: "speed miss (0.900 m/s)")
+    # all walk: the energy per metre is the mean over the hardware-like walks only
+    monkeypatch.setattr(replay_check, "HARDWARE_CHECK_SEEDS", seeds[:-1])
+    check = replay_check.replay_check(path, 1.2)
+    assert check.status == "ok"
+    assert check.electrical_J_per_m == pytest.approx((2000.0 + sum(seeds[:-1]) / len(seeds[:-1])) / 100.0)
+    monkeypatch.setattr(replay_check, "replay_walk",
+                        lambda *a, **k: SimpleNamespace(fell=False, speed_ok=False, mean_speed=0.9))
     assert replay_check.replay_verdict(path, 1.2) == "ideal robot, 10 s: speed miss (0.900 m/s)"

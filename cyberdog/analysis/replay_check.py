@@ -16,12 +16,16 @@ robots, one that fell after 14 s on both prototype robots (and on four of six ro
 with 20 m walks on six, one that walks 20 m and falls within 100 m on both prototype robots.
 
 It says "ok" or which robot failed and why; extraction then tries the next candidate (the other cycle choice,
-another rollout) and records the rejected ones in the path's provenance. The check looks at walking only
-(fall, speed), never at energy, so it cannot select for a saving.
+another rollout) and records the rejected ones in the path's provenance. Whether a path passes depends on
+walking only (fall, speed). A path that passes also reports its electrical energy per metre on the check's
+hardware-like robots (`ReplayCheck.electrical_J_per_m`): extraction can keep the cheapest of several passing
+candidates by it (`evaluate.py extract --candidates N`). Those robots are validation robots: the prototype
+run, which reports the saving, walks other draws (seeds 0 .. draws − 1).
 """
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 from cyberdog.analysis.prototype import time_cap
 from cyberdog.analysis.walk import walk
@@ -34,33 +38,61 @@ HARDWARE_CHECK_SEEDS = tuple(range(1000, 1006))  # HardwareConfig.seed of the ch
 CHECK_DISTANCE_M = PAPER_DISTANCE_M  # m: the paper's prototype walk (evaluate.py --prototype-distance 100)
 
 
-def replay_status(path: LearnedPath, speed: float, cfg: WalkConfig | None = None,
-                  duration: float = REPLAY_CHECK_S, hardware: HardwareConfig | None = None,
-                  distance: float | None = None) -> str:
-    """"ok" if `path` replayed at `speed` (m/s) for `duration` s (or over `distance` m, `duration` then the time
-    cap) on the ideal robot (or `hardware`) neither falls nor leaves the ±5 % speed band; else "fell at T s"
-    or "speed miss (V m/s)"."""
+@dataclass(frozen=True)
+class ReplayCheck:
+    """The outcome of `replay_check`."""
+
+    status: str  # "ok", or the first walk that failed and why ("ideal robot, 100 m: fell at 3.20 s")
+    electrical_J_per_m: float | None = None  # J/m, mean over the hardware-like check walks (None unless "ok")
+
+
+def replay_walk(path: LearnedPath, speed: float, cfg: WalkConfig | None = None, duration: float = REPLAY_CHECK_S,
+                hardware: HardwareConfig | None = None, distance: float | None = None):
+    """`path` replayed at `speed` (m/s) for `duration` s (or over `distance` m, `duration` then the time cap) on
+    the ideal robot (or `hardware`): the walk's `WalkResult`."""
     walk_cfg, trajectory, offsets = path.walk_args(cfg or WalkConfig(), speed)
-    r = walk(walk_cfg, duration, trajectory, foot_offsets=offsets, hardware=hardware, distance=distance)
+    return walk(walk_cfg, duration, trajectory, foot_offsets=offsets, hardware=hardware, distance=distance)
+
+
+def walk_status(r) -> str:
+    """"ok" for a walk that neither fell nor left the ±5 % speed band; else "fell at T s" or "speed miss (V m/s)"."""
     if r.fell:
         return f"fell at {r.duration:.2f} s"
     return "ok" if r.speed_ok else f"speed miss ({r.mean_speed:.3f} m/s)"
 
 
-def replay_verdict(path: LearnedPath, speed: float, cfg: WalkConfig | None = None) -> str:
-    """"ok" if `path` walks at `speed` (m/s) in every walk of the module docstring (the quickest first); else
-    the first failure, prefixed with its walk ("ideal robot, 100 m: fell at 3.20 s")."""
+def replay_status(path: LearnedPath, speed: float, cfg: WalkConfig | None = None,
+                  duration: float = REPLAY_CHECK_S, hardware: HardwareConfig | None = None,
+                  distance: float | None = None) -> str:
+    """`walk_status` of `replay_walk`."""
+    return walk_status(replay_walk(path, speed, cfg, duration, hardware, distance))
+
+
+def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None) -> ReplayCheck:
+    """Every walk of the module docstring (the quickest first), stopping at the first that fails: status "ok"
+    and the mean electrical energy per metre of the hardware-like walks, or the first failure, prefixed with
+    its walk ("ideal robot, 100 m: fell at 3.20 s")."""
     cfg = cfg or WalkConfig()
     cap = time_cap(CHECK_DISTANCE_M, speed, cfg)
     walks = [("ideal robot, 10 s", REPLAY_CHECK_S, None, None),
              (f"ideal robot, {CHECK_DISTANCE_M:g} m", cap, None, CHECK_DISTANCE_M)]
     walks += [(f"hardware-like robot (seed {seed}), {CHECK_DISTANCE_M:g} m", cap,
                dataclasses.replace(HARDWARE_LIKE, seed=seed), CHECK_DISTANCE_M) for seed in HARDWARE_CHECK_SEEDS]
+    per_metre = []
     for name, duration, hardware, distance in walks:
-        status = replay_status(path, speed, cfg, duration, hardware, distance)
+        r = replay_walk(path, speed, cfg, duration, hardware, distance)
+        status = walk_status(r)
         if status != "ok":
-            return f"{name}: {status}"
-    return "ok"
+            return ReplayCheck(f"{name}: {status}")
+        if hardware is not None:
+            per_metre.append(r.electrical_energy / r.distance)
+    return ReplayCheck("ok", sum(per_metre) / len(per_metre))
 
 
-__all__ = ["CHECK_DISTANCE_M", "HARDWARE_CHECK_SEEDS", "REPLAY_CHECK_S", "replay_status", "replay_verdict"]
+def replay_verdict(path: LearnedPath, speed: float, cfg: WalkConfig | None = None) -> str:
+    """The status of `replay_check`: "ok" if `path` walks at `speed` (m/s) in every walk, else the first failure."""
+    return replay_check(path, speed, cfg).status
+
+
+__all__ = ["CHECK_DISTANCE_M", "HARDWARE_CHECK_SEEDS", "REPLAY_CHECK_S", "ReplayCheck", "replay_check", "replay_status",
+           "replay_verdict", "replay_walk", "walk_status"]

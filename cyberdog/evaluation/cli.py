@@ -19,6 +19,7 @@ CYCLE_CHOICES = ("mean", "cheapest")  # cyberdog.analysis.extract.CYCLE_CHOICES
 DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (the paper's 100 with --prototype-distance)
 DEFAULT_PROTOTYPE_DRAWS = 2  # hardware-like robots (mass draw, sensor noise) each path walks on
 DEFAULT_COMMAND = "all"
+DEFAULT_CANDIDATES = 3  # commanded paths that replay, per speed, of which extraction keeps the cheapest on the check robots
 
 
 class UsageError(Exception):
@@ -183,6 +184,11 @@ def _extraction_options() -> argparse.ArgumentParser:
     g.add_argument("--replay-attempts", type=positive_int, default=3, metavar="N",
                    help="extraction rollouts (env seeds --rollout-seed, +1, ...) tried per speed before giving up "
                         "(default 3)")
+    g.add_argument("--candidates", type=positive_int, default=DEFAULT_CANDIDATES, metavar="N",
+                   help="commanded path: keep the first N candidates that replay (one per rollout) and extract "
+                        "the one with the least electrical energy per metre on the replay check's hardware-like "
+                        f"robots, which the prototype never walks (default {DEFAULT_CANDIDATES}; 1: the first "
+                        "that replays)")
     g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
                    help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
     g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the reference foot")

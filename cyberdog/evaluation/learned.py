@@ -10,7 +10,8 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
                                       extract_from_rollout)
-from cyberdog.analysis.replay_check import CHECK_DISTANCE_M, HARDWARE_CHECK_SEEDS, REPLAY_CHECK_S, replay_verdict
+from cyberdog.analysis.replay_check import (CHECK_DISTANCE_M, HARDWARE_CHECK_SEEDS, REPLAY_CHECK_S, ReplayCheck,
+                                           replay_check)
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
@@ -161,10 +162,13 @@ def _extract_measured(actor, path: Path, speed: float, args, prov: dict, cfg, lo
 
 
 def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, log):
-    """The first candidate commanded path that replays on both robots (`replay_verdict`): rollouts with env seeds
-    --rollout-seed, +1, ... (--replay-attempts of them), each giving the --cycle path, then the other cycle
-    choice. The rejected candidates are in the kept path's provenance; none replaying is an error."""
-    rejected = []
+    """The commanded path kept for `speed`: rollouts with env seeds --rollout-seed, +1, ... (--replay-attempts
+    of them) each give a candidate, the --cycle path, or the other cycle choice if that one does not replay on
+    both robots (`replay_check`). The first --candidates paths that replay are kept as candidates, and the one
+    with the least electrical energy per metre on the check's hardware-like robots (validation robots, never
+    the prototype's) is the path. The candidates and the rejected paths are in its provenance; none replaying
+    is an error."""
+    rejected, passed = [], []
     for k in range(args.replay_attempts if args.replay_check else 1):
         r = _rollout(actor, path, speed, args, args.rollout_seed + k, log)
         for cycle in dict.fromkeys((args.cycle, *CYCLE_CHOICES)):
@@ -175,17 +179,33 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             except ExtractionError as err:
                 rejected.append({**candidate, "status": f"no path: {err}"})
                 continue
-            status = replay_verdict(LearnedPath("", ex.path), speed, cfg) if args.replay_check else "not checked"
-            if status in ("ok", "not checked"):
-                ex.path.provenance["replay_check"] = {
-                    "status": status, "rejected": rejected, "ideal_duration_s": REPLAY_CHECK_S,
-                    "distance_m": CHECK_DISTANCE_M, "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS)}
-                return ex
-            log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({status})")
-            rejected.append({**candidate, "status": status})
-    tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
-    raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path replays on both robots "
-                     f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
+            check = (replay_check(LearnedPath("", ex.path), speed, cfg) if args.replay_check
+                     else ReplayCheck("not checked"))
+            if check.status in ("ok", "not checked"):
+                if check.electrical_J_per_m is not None:
+                    log(f"  candidate: the {cycle} path of env seed {args.rollout_seed + k} replays, "
+                        f"{check.electrical_J_per_m:.2f} J/m on the check's hardware-like robots")
+                passed.append((ex, check, {**candidate, "electrical_J_per_m": check.electrical_J_per_m}))
+                break  # one candidate per rollout
+            log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({check.status})")
+            rejected.append({**candidate, "status": check.status})
+        if len(passed) == (args.candidates if args.replay_check else 1):
+            break
+    if not passed:
+        tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
+        raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path replays on both robots "
+                         f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
+    # the cheapest on the validation robots; with one candidate (or unchecked) the first
+    ex, check, _ = min(passed, key=lambda c: c[1].electrical_J_per_m if c[1].electrical_J_per_m is not None else 0.0)
+    ex.path.provenance["replay_check"] = {
+        "status": check.status, "rejected": rejected, "candidates": [c for _, _, c in passed],
+        "selected_by": "least electrical energy per metre on the hardware-like check robots",
+        "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
+        "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS)}
+    if len(passed) > 1:
+        log(f"  kept the {ex.path.provenance.get('cycle', args.cycle)} path of env seed "
+            f"{ex.path.provenance['rollout_seed']}, the cheapest of {len(passed)} candidates")
+    return ex
 
 
 def check_learned_inputs(args) -> None:
