@@ -318,11 +318,39 @@ def test_read_state_equals_the_eager_reference():
                     np.testing.assert_allclose(getattr(state, name), value, rtol=1e-12, atol=1e-12, err_msg=name)
                 assert state.lateral_velocity_body == pytest.approx(want["base_linear_velocity_body"][1],
                                                                     rel=1e-12, abs=1e-12)
+            if k % 20 == 9:  # the per-period read in floats: the reference's numbers, and the snapshot's to the bit
+                reading, want, state = robot.read(), reference_state(robot), robot.read_state()
+                for name, value in want.items():
+                    if name in reading._fields:
+                        np.testing.assert_allclose(getattr(reading, name), value, rtol=1e-12, atol=1e-12, err_msg=name)
+                        assert np.array_equal(np.array(getattr(reading, name)), getattr(state, name)), name
+                assert reading.time == state.time
         state = robot.read_state()
         with pytest.raises(dataclasses.FrozenInstanceError):
             state.q = np.zeros(12)
         state.q[0] = 123.0  # a caller's copy: the robot's own joint cache is unchanged
         assert robot.read_state().q[0] != 123.0
+        assert robot.read().q[0] != 123.0
+
+
+def test_the_walkers_per_period_feedback_equals_the_state_snapshot():
+    """The walker builds the trot's body feedback from the float reading, not from the RobotState arrays:
+    the same four numbers, bit for bit, on a walk that sways and turns."""
+    from cyberdog.control.trot import BodyFeedback
+    from cyberdog.core import kinematics as kin
+    from cyberdog.loop.walker import Walker
+
+    walker = Walker(C.WalkConfig())
+    for k in range(400):
+        walker.step()
+        if k % 50 == 49:
+            r, s = walker.reading, walker.state
+            want = BodyFeedback.from_state(s, walker.start)
+            assert r.base_rpy[2] == want.yaw and r.base_position[1] - float(walker.start[1]) == want.lateral_offset
+            assert r.base_linear_velocity_world[0] == want.forward_speed
+            assert kin.lateral_velocity_body(r.base_quaternion, r.base_linear_velocity_world) == want.lateral_speed
+            assert walker.state is s  # built once per period, when first asked
+            assert np.array_equal(s.q, r.q) and np.array_equal(walker.q_rows.view()[-1], s.q)
 
 
 def test_joint_stop_is_off_inside_the_range_and_a_spring_damper_outside():
@@ -337,6 +365,8 @@ def test_joint_stop_is_off_inside_the_range_and_a_spring_damper_outside():
     q[1], q[5] = stop.q_high[1] + 0.1, stop.q_low[5] - 0.2
     dq = np.arange(12.0)
     tau = stop.torque(q, dq)
+    np.testing.assert_array_equal(stop.torque(q.tolist(), dq.tolist()), tau)  # the walker passes floats
+    assert stop.torque(q_stand.tolist(), dq.tolist()) is None
     k, c = cfg.joint_stop_stiffness, cfg.joint_stop_damping
     assert tau[1] == pytest.approx(-k * 0.1 - c * dq[1]) and tau[5] == pytest.approx(k * 0.2 - c * dq[5])
     assert np.count_nonzero(tau) == 2

@@ -171,6 +171,8 @@ def jacobian(q: np.ndarray, robot: RobotConfig, side: np.ndarray | None = None) 
 # numpy's per-call overhead on (4, 3) arrays cost more than the arithmetic (about 10x). Tested against the
 # array functions in tests/test_fast_paths.py.
 # ---------------------------------------------------------------------------------------------------------
+_sqrt, _atan2, _acos, _sin, _cos = math.sqrt, math.atan2, math.acos, math.sin, math.cos  # no attribute lookups
+_PI, _TWO_PI = math.pi, 2.0 * math.pi
 
 def leg_inverse_kinematics(x: float, y: float, z: float, side: float, l1: float, l2: float, l3: float
                            ) -> tuple[float, float, float]:
@@ -179,20 +181,7 @@ def leg_inverse_kinematics(x: float, y: float, z: float, side: float, l1: float,
     side: +1 left, −1 right; l1, l2, l3 the link lengths (m). Raises ValueError for an unreachable target
     (the array function's message names the reach; call it for the message).
     """
-    r2 = y * y + z * z
-    l1_sq = l1 * l1
-    if r2 < l1_sq - 1e-12:
-        raise ValueError(f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
-    z_leg = -math.sqrt(max(r2 - l1_sq, 0.0))  # _sagittal_height
-    abad = math.atan2(z, y) - math.atan2(z_leg, side * l1)
-    abad = (abad + math.pi) % (2.0 * math.pi) - math.pi
-    # sagittal_inverse
-    cos_knee = (x * x + z_leg * z_leg - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-    if cos_knee > 1.0 + 1e-12 or cos_knee < -1.0 - 1e-12:
-        raise ValueError(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
-    knee = -math.acos(min(max(cos_knee, -1.0), 1.0))
-    hip = math.atan2(-x, -z_leg) - math.atan2(l3 * math.sin(knee), l2 + l3 * math.cos(knee))
-    return abad, hip, knee
+    return leg_inverse_kinematics_velocity(x, y, z, None, None, None, side, l1, l2, l3)
 
 
 def leg_joint_velocity(abad: float, hip: float, knee: float, side: float, vx: float, vy: float, vz: float,
@@ -225,15 +214,31 @@ def _leg_velocity(c1: float, s1: float, c_h: float, s_h: float, c_hk: float, s_h
     return dabad, dhip, dknee
 
 
-def leg_inverse_kinematics_velocity(x: float, y: float, z: float, vx: float, vy: float, vz: float, side: float,
-                                    l1: float, l2: float, l3: float) -> tuple[float, ...]:
-    """`leg_inverse_kinematics` and `leg_joint_velocity` in one call (the trot controller's per-period path):
-    (abad, hip, knee, dabad, dhip, dknee), rad and rad/s, for the foot at (x, y, z), m, moving at (vx, vy, vz),
-    m/s, leg frame. Raises ValueError for an unreachable target."""
-    abad, hip, knee = leg_inverse_kinematics(x, y, z, side, l1, l2, l3)
-    return (abad, hip, knee) + _leg_velocity(math.cos(abad), math.sin(abad), math.cos(hip), math.sin(hip),
-                                             math.cos(hip + knee), math.sin(hip + knee), side, vx, vy, vz,
-                                             l1, l2, l3)
+def leg_inverse_kinematics_velocity(x: float, y: float, z: float, vx: float | None, vy: float | None,
+                                    vz: float | None, side: float, l1: float, l2: float, l3: float
+                                    ) -> tuple[float, ...]:
+    """`leg_inverse_kinematics` and `leg_joint_velocity` in one call (the trot controller's per-period path, one
+    function call per leg): (abad, hip, knee, dabad, dhip, dknee), rad and rad/s, for the foot at (x, y, z), m,
+    moving at (vx, vy, vz), m/s, leg frame; with vx None the angles alone. Raises ValueError for an unreachable
+    target."""
+    r2 = y * y + z * z
+    l1_sq = l1 * l1
+    if r2 < l1_sq - 1e-12:
+        raise ValueError(f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
+    z_leg = -_sqrt(max(r2 - l1_sq, 0.0))  # _sagittal_height
+    abad = _atan2(z, y) - _atan2(z_leg, side * l1)
+    abad = (abad + _PI) % _TWO_PI - _PI
+    # sagittal_inverse
+    cos_knee = (x * x + z_leg * z_leg - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+    if cos_knee > 1.0 + 1e-12 or cos_knee < -1.0 - 1e-12:
+        raise ValueError(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
+    knee = -_acos(min(max(cos_knee, -1.0), 1.0))
+    hip = _atan2(-x, -z_leg) - _atan2(l3 * _sin(knee), l2 + l3 * _cos(knee))
+    if vx is None:
+        return abad, hip, knee
+    hip_knee = hip + knee
+    return (abad, hip, knee, *_leg_velocity(_cos(abad), _sin(abad), _cos(hip), _sin(hip), _cos(hip_knee),
+                                            _sin(hip_knee), side, vx, vy, vz, l1, l2, l3))
 
 
 def leg_jacobian_z_row(abad: float, hip: float, knee: float, side: float, l1: float, l2: float, l3: float

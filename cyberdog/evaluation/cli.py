@@ -19,7 +19,7 @@ CYCLE_CHOICES = ("mean", "cheapest")  # cyberdog.analysis.extract.CYCLE_CHOICES
 DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (the paper's 100 with --prototype-distance)
 DEFAULT_PROTOTYPE_DRAWS = 2  # hardware-like robots (mass draw, sensor noise) each path walks on
 DEFAULT_COMMAND = "all"
-DEFAULT_CANDIDATES = 3  # commanded paths that replay, per speed, of which extraction keeps the cheapest on the check robots
+DEFAULT_CANDIDATES = 3  # paths that replay, per speed, of which extraction keeps the cheapest on the check robots
 
 
 class UsageError(Exception):

@@ -211,8 +211,10 @@ class Walker:
         stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
         # the latency holds the whole command (targets, feedforward, the added torques); the drivers' PD then
         # acts on the joint state read now (q, dq of this period)
-        arrived = self.delay.push((command, extra_torque, stop))
-        tau = self._driver_torque(arrived, q, dq)
+        if command is not None and extra_torque is None and stop is None and self.delay.steps == 0:
+            tau = self.controller.driver_torque_list(command, q, dq)  # the usual period, without the queue
+        else:
+            tau = self._driver_torque(self.delay.push((command, extra_torque, stop)), q, dq)
         s = self.state if self.body_trace or self.record else None  # this period's start, before the step
         applied = self.robot.step(tau)
         self.tau.append(applied)
