@@ -174,6 +174,7 @@ def jacobian(q: np.ndarray, robot: RobotConfig, side: np.ndarray | None = None) 
 _sqrt, _atan2, _acos, _sin, _cos = math.sqrt, math.atan2, math.acos, math.sin, math.cos  # no attribute lookups
 _PI, _TWO_PI = math.pi, 2.0 * math.pi
 
+
 def leg_inverse_kinematics(x: float, y: float, z: float, side: float, l1: float, l2: float, l3: float
                            ) -> tuple[float, float, float]:
     """`inverse_kinematics` of one leg: (abad, hip, knee), rad, putting the foot at (x, y, z), m, leg frame.

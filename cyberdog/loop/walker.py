@@ -78,6 +78,9 @@ class Walker:
         contacts and foot slip; body_trace: keep the body's speed, attitude and height at every step (what
         `cyberdog.loop.result.walk_result` reads; the env, which reads none of it, leaves it off).
     fall_height, fall_tilt: m, rad: what `fallen` means.
+
+    After each step, `reading` holds the robot's state in floats (`Robot.read`, what the controller's per-period
+    path uses) and `state` the same as a `RobotState` of arrays, built when first asked.
     """
 
     def __init__(self, cfg: WalkConfig, controller: TrotController | None = None, robot: Robot | None = None,
