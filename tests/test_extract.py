@@ -243,7 +243,7 @@ def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, c
     checks = iter([ReplayCheck("fell at 1.00 s"), ReplayCheck("ok", 33.0), ReplayCheck("fell at 1.00 s"),
                    ReplayCheck("fell at 1.00 s")])
     monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
-    assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "few")]) == 0
+    assert evaluate.main([*args, "--replay-attempts", "2", "--candidates", "3", "--out", str(tmp_path / "few")]) == 0
     prov = CommandedPath.load(tmp_path / "few" / "learned" / "seed0_1mps.json").provenance
     assert (prov["rollout_seed"], prov["cycle"]) == (0, "cheapest")  # the only candidate of two rollouts
     assert len(prov["replay_check"]["candidates"]) == 1
