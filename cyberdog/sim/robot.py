@@ -30,11 +30,7 @@ All arrays are numpy, SI units; joint arrays are (12,) in the order LF, RF, LH, 
 """
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import math
-import os
-import sys
 import warnings
 from dataclasses import dataclass
 from functools import cached_property
@@ -46,6 +42,7 @@ import numpy as np
 from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig, SimConfig
 from cyberdog.core.actuator import ActuatorModel
 from cyberdog.core.kinematics import lateral_velocity_body, standing_joint_angles
+from cyberdog.sim.display import display_problem
 from cyberdog.sim.quiet import quiet_pybullet
 
 with quiet_pybullet():  # without pybullet's build banner
@@ -81,7 +78,7 @@ class RobotState:
     """One snapshot of the robot, read after the last controller period.
 
     The rotation matrix and the body-frame velocities are computed on first access (then kept): most
-    controller periods use at most one of them, and `read_state` runs at every one of them.
+    users need at most one of them. The controller's per-period path reads a `StateReading` instead.
     """
 
     time: float  # s, simulated time since the last reset
@@ -129,30 +126,6 @@ def resolve_path(path: str) -> Path:
         return p
     shipped = PACKAGE_DIR / p
     return shipped if shipped.is_file() else REPO_ROOT / p
-
-
-def display_problem() -> str | None:
-    """Why PyBullet's GUI cannot open a window here (None if it can): checked before connecting, because a
-    failed GUI connection ends the process instead of raising."""
-    if sys.platform in ("darwin", "win32"):
-        return None
-    display = os.environ.get("DISPLAY")
-    if not display:
-        if os.environ.get("WAYLAND_DISPLAY"):
-            return ("WAYLAND_DISPLAY is set but DISPLAY is not (PyBullet's window is an X11 window; XWayland "
-                    "provides DISPLAY)")
-        return "neither DISPLAY nor WAYLAND_DISPLAY is set (a headless machine)"
-    try:
-        x11 = ctypes.CDLL(ctypes.util.find_library("X11") or "libX11.so.6")
-    except OSError:
-        return f"DISPLAY={display} is set but libX11 cannot be loaded"
-    x11.XOpenDisplay.restype, x11.XOpenDisplay.argtypes = ctypes.c_void_p, [ctypes.c_char_p]
-    handle = x11.XOpenDisplay(display.encode())
-    if not handle:
-        return f"cannot connect to the X server of DISPLAY={display}"
-    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
-    x11.XCloseDisplay(handle)
-    return None
 
 
 class Robot:
