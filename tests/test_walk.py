@@ -81,3 +81,30 @@ def test_config_yaml_round_trip_and_overrides(tmp_path):
         C.override(cfg, ["gait.speeed=1"])
     with pytest.raises(ValueError, match="unknown"):
         C.from_dict(C.GaitConfig, {"sped": 1})
+
+
+def test_a_walk_whose_trot_asks_for_a_foot_beyond_reach_ends_as_a_fall(monkeypatch):
+    """A robot going down can make the trot ask for a foot target the leg cannot reach (the kinematics raise
+    UnreachableFootTarget, a ValueError): the walk ends there as a fall, with the periods walked so far,
+    instead of aborting a run of many walks. Any other error still propagates."""
+    from cyberdog.core import kinematics as kin
+
+    with pytest.raises(kin.UnreachableFootTarget):
+        kin.leg_inverse_kinematics(0.0, 0.1, -0.6, 1.0, 0.1, 0.2, 0.2)
+    assert issubclass(kin.UnreachableFootTarget, ValueError)
+    original, calls = TrotController.command, []
+
+    def command(self, *args, error=kin.UnreachableFootTarget, **kwargs):
+        calls.append(1)
+        if len(calls) == 100:
+            raise error("unreachable foot target [-0.273, 0.131, -0.282]: outside the leg's reach")
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(TrotController, "command", command)
+    cfg = C.WalkConfig()
+    r = walk(cfg, duration=1.0)
+    assert r.fell and r.duration == pytest.approx(99 * cfg.sim.controller_dt)
+    calls.clear()
+    monkeypatch.setattr(TrotController, "command", lambda self, *a, **k: command(self, *a, error=RuntimeError, **k))
+    with pytest.raises(RuntimeError):
+        walk(cfg, duration=1.0)

@@ -17,6 +17,7 @@ import numpy as np
 from cyberdog.config import HardwareConfig, WalkConfig
 from cyberdog.control.trot import TrotController
 from cyberdog.core.foot_offsets import FootOffsetPath
+from cyberdog.core.kinematics import UnreachableFootTarget
 from cyberdog.core.trajectories import FootTrajectory
 from cyberdog.loop.result import WalkResult, walk_result
 from cyberdog.loop.walker import Walker
@@ -36,6 +37,9 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
         a given `robot` must have been built with `hardware_walk_config(cfg, hardware).actuator`; its mass is
         set to the hardware's draw for the walk.
     record: keep the traces (t, tau, dq, power, q, base_position, contacts) in the result.
+
+    The walk ends as a fall when the body falls (`Walker.fallen`) or when the trot asks for a foot target beyond
+    the leg's reach (`UnreachableFootTarget`: a robot going down can make it step too far).
     """
     if not (duration > 0 and np.isfinite(duration)):
         raise ValueError(f"duration must be > 0 s and finite, got {duration!r}")
@@ -51,7 +55,11 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
         for _ in range(n_steps):
             if goal_x is not None and walker.state.base_position[0] >= goal_x:
                 break  # the energy of exactly the steps that carried the body to the goal
-            walker.step()
+            try:
+                walker.step()
+            except UnreachableFootTarget:  # the trot asks for a foot beyond the leg's reach: the robot is going down
+                fell = True
+                break
             if walker.fallen():
                 fell = True
                 break

@@ -56,6 +56,11 @@ def sagittal_foot_position(hip: np.ndarray, knee: np.ndarray, l2: float, l3: flo
     return x, z
 
 
+class UnreachableFootTarget(ValueError):
+    """A foot target outside the leg's reach (a ValueError): raised by the inverse kinematics; a walk whose trot
+    asks for one ends there (`cyberdog.analysis.walk`)."""
+
+
 def sagittal_inverse(x: np.ndarray, z: np.ndarray, l2: float, l3: float) -> tuple[np.ndarray, np.ndarray]:
     """Eq. (6), corrected: hip and knee angles (knee ≤ 0 branch) placing the foot at (x, z) from the hip.
 
@@ -69,7 +74,7 @@ def sagittal_inverse(x: np.ndarray, z: np.ndarray, l2: float, l3: float) -> tupl
     bad = (cos_knee > 1.0 + 1e-12) | (cos_knee < -1.0 - 1e-12)
     if np.any(bad):
         d = np.sqrt(d2)[bad].ravel()[0]
-        raise ValueError(
+        raise UnreachableFootTarget(
             f"unreachable foot target: distance {d:.4f} m from the hip; the leg reaches "
             f"{abs(l2 - l3):.4f} m to {l2 + l3:.4f} m (x={np.ravel(x[bad] if x.shape else x)[0]:.4f}, "
             f"z={np.ravel(z[bad] if z.shape else z)[0]:.4f})")
@@ -125,7 +130,7 @@ def inverse_kinematics(p: np.ndarray, robot: RobotConfig, side: np.ndarray | Non
     r2 = y * y + z * z
     if np.any(r2 < l1 * l1 - 1e-12):
         i = np.argmin(np.ravel(r2 - l1 * l1))
-        raise ValueError(
+        raise UnreachableFootTarget(
             f"unreachable foot target {np.reshape(p, (-1, 3))[i].round(4).tolist()} m: it lies "
             f"{np.sqrt(np.ravel(r2)[i]):.4f} m from the abad axis, closer than the abad offset l1 = {l1:.4f} m")
     z_leg = _sagittal_height(y, z, l1)
@@ -135,7 +140,8 @@ def inverse_kinematics(p: np.ndarray, robot: RobotConfig, side: np.ndarray | Non
     try:
         hip, knee = sagittal_inverse(x, z_leg, robot.l2, robot.l3)
     except ValueError as err:
-        raise ValueError(f"unreachable foot target (leg frame) {np.round(p, 4).tolist()}: {err}") from None
+        raise UnreachableFootTarget(
+            f"unreachable foot target (leg frame) {np.round(p, 4).tolist()}: {err}") from None
     return np.stack([abad, hip, knee], axis=-1)
 
 
@@ -225,14 +231,15 @@ def leg_inverse_kinematics_velocity(x: float, y: float, z: float, vx: float | No
     r2 = y * y + z * z
     l1_sq = l1 * l1
     if r2 < l1_sq - 1e-12:
-        raise ValueError(f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
+        raise UnreachableFootTarget(
+            f"unreachable foot target {[x, y, z]}: closer to the abad axis than l1 = {l1} m")
     z_leg = -_sqrt(max(r2 - l1_sq, 0.0))  # _sagittal_height
     abad = _atan2(z, y) - _atan2(z_leg, side * l1)
     abad = (abad + _PI) % _TWO_PI - _PI
     # sagittal_inverse
     cos_knee = (x * x + z_leg * z_leg - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
     if cos_knee > 1.0 + 1e-12 or cos_knee < -1.0 - 1e-12:
-        raise ValueError(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
+        raise UnreachableFootTarget(f"unreachable foot target {[x, y, z]}: outside the leg's reach")
     knee = -_acos(min(max(cos_knee, -1.0), 1.0))
     hip = _atan2(-x, -z_leg) - _atan2(l3 * _sin(knee), l2 + l3 * _cos(knee))
     if vx is None:
