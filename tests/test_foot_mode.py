@@ -70,3 +70,25 @@ def test_raising_every_foot_target_lowers_the_body():
     plain, _ = _episode(np.zeros(12, dtype=np.float32), 40, action_mode="foot")
     drop = float(np.mean(plain[-20:, 0] - shifted[-20:, 0]))  # body height z, last 0.5 s
     assert 0.02 < drop < 0.04, drop
+
+
+def test_foot_action_ramps_each_offset_to_the_clipped_action_times_the_scale():
+    """A foot-mode step ramps the targets' offsets from the last action's to this one's (clipped to ±1, times
+    the scale per axis) over the agent step, reaching this one's at the step's last controller period."""
+    env = CyberDogEnv(action_mode="foot", foot_offset_scale=0.03, foot_offset_scale_z=0.02)
+    env.reset(seed=0)
+    scale = np.array([0.03, 0.03, 0.02])
+    period, agent_dt = env.walker.dt, env.cfg.control_dt
+    c, previous = env.controller, np.zeros((4, 3))
+    for action in (np.linspace(-1.5, 1.5, 12, dtype=np.float32), np.linspace(0.9, -0.4, 12, dtype=np.float32)):
+        start_time = env.walker.time
+        env.step(action)
+        target = np.clip(action.astype(float), -1.0, 1.0).reshape(4, 3) * scale
+        rates = np.array(c.foot_offset_rates)
+        assert c.foot_offset_time == start_time
+        np.testing.assert_allclose(rates, (target - previous) / agent_dt, rtol=1e-12, atol=1e-12)
+        # the ramp's value at the step's last period (k = decimation − 1) is this action's offset
+        last = np.array(c.foot_offsets) + rates * (agent_dt - period)
+        np.testing.assert_allclose(last, target, atol=1e-12)
+        previous = target
+    env.close()

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Optional, Tuple
@@ -37,9 +38,9 @@ class RewardConfig:
     # friction and driver efficiency of `cyberdog.core.energy.electrical_power`, about 3.5x Eq. 7 at 1 m/s)
     energy_model: str = "mechanical"
 
-    @property
+    @functools.cached_property
     def weights(self) -> dict[str, float]:
-        """Weights by term name, in the order of Eq. (10)."""
+        """Weights by term name, in the order of Eq. (10) (made once: the config is frozen; do not modify)."""
         return {n: getattr(self, n) for n in REWARD_TERM_NAMES}
 
     def __post_init__(self) -> None:

@@ -158,6 +158,12 @@ class TrotController:
                 raise ValueError(f"a foot offset ramp needs rates and a finite at_time (s), got {at_time!r}")
             self.foot_offset_time = float(at_time)
 
+    def ramp_foot_offsets(self, offsets: list, rates: list, at_time: float) -> None:
+        """`set_foot_offsets(offsets, rates, at_time)` for offsets and rates already as 4 tuples of 3 finite
+        floats each (m, m/s) and a finite time (s), unchecked: the env's per-agent-step path, which has checked
+        the action they come from."""
+        self.foot_offsets, self.foot_offset_rates, self.foot_offset_time = offsets, rates, at_time
+
     def set_speed(self, speed: float) -> None:
         if not np.isfinite(speed) or speed < 0:
             raise ValueError(f"speed must be >= 0 and finite, got {speed!r}")
@@ -253,24 +259,26 @@ class TrotController:
         feet, foot_vels, q_t, dq_t = [], [], [], []
         for leg, (x, z, vx, vz) in enumerate(self._foot_points(phases, S)):
             side = LEG_SIDE[leg]
-            foot = plain = (x, side * l1 + dy, z - stand)
+            y, z = side * l1 + dy, z - stand
             vy = 0.0
-            if offsets is not None:
+            if offsets is None:
+                fx, fy, fz = x, y, z
+            else:
                 ox, oy, oz = offsets[leg]
-                foot = (foot[0] + ox, foot[1] + oy, foot[2] + oz)
+                fx, fy, fz = x + ox, y + oy, z + oz
                 if rates is not None:
                     rx, ry, rz = rates[leg]
                     vx, vy, vz = vx + rx, vy + ry, vz + rz
             try:
-                a, h, k, da, dh, dk = ik(*foot, vx, vy, vz, side, l1, l2, l3)
+                a, h, k, da, dh, dk = ik(fx, fy, fz, vx, vy, vz, side, l1, l2, l3)
             except ValueError:
                 if offsets is None:  # unreachable: the array function raises with its full message
                     kin.inverse_kinematics(np.array([(p[0], s * l1 + dy, p[1] - stand) for p, s in
                                                      zip(self._foot_points(phases, S), LEG_SIDE)]), self.robot)
                     raise
-                foot = plain  # a shifted target out of reach: the unshifted one
-                a, h, k, da, dh, dk = ik(*foot, vx, vy, vz, side, l1, l2, l3)
-            feet.append(foot)
+                fx, fy, fz = x, y, z  # a shifted target out of reach: the unshifted one
+                a, h, k, da, dh, dk = ik(fx, fy, fz, vx, vy, vz, side, l1, l2, l3)
+            feet.append((fx, fy, fz))
             foot_vels.append((vx, vy, vz))
             q_t += (a, h, k)
             dq_t += (da, dh, dk) if feedforward else (0.0, 0.0, 0.0)
@@ -300,8 +308,7 @@ class TrotController:
         _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
-            self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(),
-                                         [not swing for swing in in_swing])
+            self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(), in_swing)
         return JointCommand(q_t, dq_t, feedforward)
 
     def driver_torque(self, command: JointCommand, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
@@ -333,16 +340,16 @@ class TrotController:
         tau = J[:, 2, :] * (-self.body_weight / n * stance)[:, None]  # Jᵀ (0, 0, f_z)
         return tau.ravel()
 
-    def _add_stance_feedforward(self, tau: list[float], q: list[float], stance: list[bool]) -> None:
-        """`stance_feedforward` added to tau (12 floats) in place, q as 12 floats: only the stance legs'
-        Jacobian rows are computed (the swing legs' terms are zeros)."""
-        n = sum(stance)
+    def _add_stance_feedforward(self, tau: list[float], q: list[float], in_swing: list[bool]) -> None:
+        """`stance_feedforward` added to tau (12 floats) in place, q as 12 floats, the legs' swing flags (4
+        bools): only the stance legs' Jacobian rows are computed (the swing legs' terms are zeros)."""
+        n = 4 - sum(in_swing)
         if n == 0:
             return
         r = self.robot
         f_z = -self.body_weight / n  # N, each stance foot's share of the weight, pushing down
-        for leg, (on_ground, side) in enumerate(zip(stance, LEG_SIDE)):
-            if on_ground:
+        for leg, (swing, side) in enumerate(zip(in_swing, LEG_SIDE)):
+            if not swing:
                 i = 3 * leg
                 row = kin.leg_jacobian_z_row(q[i], q[i + 1], q[i + 2], side, r.l1, r.l2, r.l3)
                 for j in range(3):

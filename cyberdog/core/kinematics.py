@@ -245,8 +245,9 @@ def leg_inverse_kinematics_velocity(x: float, y: float, z: float, vx: float | No
     if vx is None:
         return abad, hip, knee
     hip_knee = hip + knee
-    return (abad, hip, knee, *_leg_velocity(_cos(abad), _sin(abad), _cos(hip), _sin(hip), _cos(hip_knee),
-                                            _sin(hip_knee), side, vx, vy, vz, l1, l2, l3))
+    da, dh, dk = _leg_velocity(_cos(abad), _sin(abad), _cos(hip), _sin(hip), _cos(hip_knee), _sin(hip_knee), side,
+                               vx, vy, vz, l1, l2, l3)
+    return abad, hip, knee, da, dh, dk
 
 
 def leg_jacobian_z_row(abad: float, hip: float, knee: float, side: float, l1: float, l2: float, l3: float

@@ -14,6 +14,8 @@ import math
 
 from cyberdog.config import REWARD_TERM_NAMES, RewardConfig
 
+_TERM_NAME_SET = frozenset(REWARD_TERM_NAMES)
+
 
 def speed_term(v_x: float, v_target: float) -> float:
     """r_v = (v_target − v_x)², (m/s)²: squared error of the forward body speed.
@@ -62,21 +64,20 @@ def reward_terms(*, v_x: float, v_target: float, y: float, z: float, z_nominal: 
                  sample_time: float, episode_time: float, step_energy_J: float) -> dict[str, float]:
     """The five unweighted terms of Eq. (10), keyed by `REWARD_TERM_NAMES` (speed, y_offset, fuselage,
     keep_moving, energy), in that order."""
-    terms = {
-        "speed": speed_term(v_x, v_target),
-        "y_offset": y_offset_term(y),
-        "fuselage": fuselage_term(z, z_nominal),
-        "keep_moving": keep_moving_term(sample_time, episode_time),
+    return {  # in the order of REWARD_TERM_NAMES
+        "speed": float(speed_term(v_x, v_target)),
+        "y_offset": float(y_offset_term(y)),
+        "fuselage": float(fuselage_term(z, z_nominal)),
+        "keep_moving": float(keep_moving_term(sample_time, episode_time)),
         "energy": energy_term(step_energy_J),
     }
-    return {n: float(terms[n]) for n in REWARD_TERM_NAMES}
 
 
 def weighted_terms(terms: dict[str, float], cfg: RewardConfig) -> dict[str, float]:
     """Each term times its weight (A…E of Eq. 10); the values sum to the reward (`total_reward`)."""
-    missing = [n for n in REWARD_TERM_NAMES if n not in terms]
-    unknown = sorted(set(terms) - set(REWARD_TERM_NAMES))
-    if missing or unknown:
+    if terms.keys() != _TERM_NAME_SET:
+        missing = [n for n in REWARD_TERM_NAMES if n not in terms]
+        unknown = sorted(set(terms) - _TERM_NAME_SET)
         raise ValueError(f"reward terms must be exactly {list(REWARD_TERM_NAMES)}; "
                          f"missing {missing}, unknown {unknown}")
     weights = cfg.weights

@@ -81,13 +81,6 @@ def _point_args(phase: float, step_length: float, lift_height: float, swing_time
     return 0.0 if phi >= 1.0 else phi
 
 
-def _stance_point(phi: float, beta: float, step_length: float, stance_time: float
-                  ) -> tuple[float, float, float, float]:
-    """The shared stance of `position_velocity` for one phase φ ≥ β: (x, z, vx, vz)."""
-    sigma = (phi - beta) / (1.0 - beta)
-    return 0.5 * step_length - step_length * sigma, 0.0, -step_length / stance_time, 0.0
-
-
 class FootTrajectory(ABC):
     """A foot trajectory: a swing path over τ ∈ [0, 1] plus the shared constant-speed stance."""
 
@@ -130,8 +123,9 @@ class FootTrajectory(ABC):
                  stance_time: float) -> tuple[float, float, float, float]:
         """`foot_point` at a phase φ already in [0, 1) with β = `swing_fraction(swing_time, stance_time)`, the
         arguments unchecked: the trot controller's per-period path, which checks them once per period."""
-        if not phi < beta:
-            return _stance_point(phi, beta, step_length, stance_time)
+        if not phi < beta:  # the shared stance of `position_velocity`
+            sigma = (phi - beta) / (1.0 - beta)
+            return 0.5 * step_length - step_length * sigma, 0.0, -step_length / stance_time, 0.0
         x, z, dx_dtau, dz_dtau = self._swing_point(phi / beta, step_length, lift_height)
         return x, z, dx_dtau / swing_time, dz_dtau / swing_time
 

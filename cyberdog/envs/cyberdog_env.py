@@ -236,7 +236,7 @@ class CyberDogEnv(gym.Env):
         self.controller.set_speed(self.target_speed)
         self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng, draw=draw)
         self.last_torque = np.zeros(12)
-        self._foot_offset = np.zeros((4, 3))  # m, the foot-target offsets of the last action (action_mode="foot")
+        self._foot_offset = [(0.0, 0.0, 0.0)] * 4  # m, 4 × (x, y, z): the last action's foot-target offsets (foot mode)
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
         info = {"target_speed": self.target_speed}
         if draw is not None:
@@ -260,24 +260,28 @@ class CyberDogEnv(gym.Env):
         a = np.asarray(action, dtype=np.float64)
         if a.shape != (12,):
             raise ValueError(f"action must have shape (12,), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action must be finite, got {a.tolist()}")
-        mode = self.cfg.action_mode
-        self._last_action = clipped = np.minimum(np.maximum(a, -1.0), 1.0)  # = np.clip, in half the time
+        values = a.tolist()  # the action's checks and the foot offsets in floats: 12 numbers are too few for numpy
+        if not math.isfinite(sum(values)) and not all(map(math.isfinite, values)):
+            raise ValueError(f"action must be finite, got {values}")
+        clipped = [1.0 if x > 1.0 else -1.0 if x < -1.0 else x for x in values]  # np.clip to [-1, 1]
+        self._last_action = np.array(clipped)
         w, controller, dt = self.walker, self.controller, self.dt
-        foot = mode == "foot"
-        if foot:  # the action moves the foot targets; the controller's torque is applied as it is
+        if self.cfg.action_mode == "foot":  # the action moves the foot targets; the controller's torque is as is
             # first-order hold: the offset ramps from the last action's to this one's over the agent step, so
             # that the target path stays continuous (a 25 ms staircase of targets made the PID jerk: lowering
             # the swing feet by 1-3 cm that way cost 10-75 % more energy, measured)
-            start = self._foot_offset
-            self._foot_offset = clipped.reshape(4, 3) * self._foot_offset_scale
-            rate = (self._foot_offset - start) / self.cfg.control_dt  # m/s
+            sx, sy, sz = self._foot_offset_scale.tolist()
+            start, control_dt = self._foot_offset, self.cfg.control_dt
+            self._foot_offset = end = [(clipped[i] * sx, clipped[i + 1] * sy, clipped[i + 2] * sz)
+                                       for i in range(0, 12, 3)]  # m, 4 × (x, y, z)
+            rates = [((x1 - x0) / control_dt, (y1 - y0) / control_dt, (z1 - z0) / control_dt)
+                     for (x0, y0, z0), (x1, y1, z1) in zip(start, end)]  # m/s
             # the offset of controller period k (from 0) is start + rate·(k + 1)·dt: this action's at the last
-            controller.set_foot_offsets(start + rate * dt, rate, at_time=w.time)
+            controller.ramp_foot_offsets([(x0 + rx * dt, y0 + ry * dt, z0 + rz * dt)
+                                          for (x0, y0, z0), (rx, ry, rz) in zip(start, rates)], rates, w.time)
             tau_action = None
         else:
-            tau_action = clipped * self.cfg.action_scale
+            tau_action = self._last_action * self.cfg.action_scale
         k0 = w.steps
         for _ in range(self.decimation):  # the controller rate: keep this loop lean (bench/env_throughput.py)
             applied = w.step(tau_action)
