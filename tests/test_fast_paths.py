@@ -85,15 +85,16 @@ class ReferenceTrot:
 
 
 def random_states(seed, n):
-    """n random (t, q, dq, BodyFeedback) around the standing pose, times over several gait cycles."""
+    """n random (t, q, dq, BodyFeedback) around the standing pose, times over several gait cycles; every 11th
+    with a yaw error of several rad (the heading skew at its bound)."""
     rng = np.random.default_rng(seed)
     q_stand = kin.standing_joint_angles(ROBOT).ravel()
     for k in range(n):
         t = 0.0 if k == 0 else float(rng.uniform(0.0, 3.0))
-        yield (t, q_stand + rng.normal(0.0, 0.15, 12), rng.normal(0.0, 4.0, 12),
-               BodyFeedback(yaw=rng.normal(0, 0.1), lateral_offset=rng.normal(0, 0.05),
-                            forward_speed=None if k % 7 == 3 else float(rng.uniform(0.0, 1.6)),
-                            lateral_speed=rng.normal(0, 0.3)))
+        q, dq, yaw = q_stand + rng.normal(0.0, 0.15, 12), rng.normal(0.0, 4.0, 12), rng.normal(0, 0.1)
+        yield (t, q, dq, BodyFeedback(yaw=yaw * 30 if k % 11 == 5 else yaw, lateral_offset=rng.normal(0, 0.05),
+                                      forward_speed=None if k % 7 == 3 else float(rng.uniform(0.0, 1.6)),
+                                      lateral_speed=rng.normal(0, 0.3)))
 
 
 @pytest.mark.parametrize("trajectory, shape, options", [
@@ -351,6 +352,34 @@ def test_the_walkers_per_period_feedback_equals_the_state_snapshot():
             assert kin.lateral_velocity_body(r.base_quaternion, r.base_linear_velocity_world) == want.lateral_speed
             assert walker.state is s  # built once per period, when first asked
             assert np.array_equal(s.q, r.q) and np.array_equal(walker.q_rows.view()[-1], s.q)
+
+
+@pytest.mark.parametrize("case", ["ideal", "end stop", "added torque", "hardware"])
+def test_walker_run_equals_its_periods_one_by_one(case):
+    """`Walker.run(n)` (the env's loop) is n calls of `step`, to the bit: on the ideal robot (its own loop),
+    with an end stop narrow enough to act in some periods (those go through `step`), and where it hands every
+    period to `step` (an added torque, the hardware-like robot)."""
+    from cyberdog.control.joint_stop import JointStop
+    from cyberdog.loop.walker import Walker
+    cfg = walk_config(speed=1.2)
+    stop = JointStop(cfg.robot, 0.12, 200.0, 1.0) if case == "end stop" else None
+    hardware = C.HARDWARE_LIKE if case == "hardware" else None
+    extra = np.linspace(-0.5, 0.5, 12) if case == "added torque" else None
+    one, many = (Walker(cfg, joint_stop=stop, hardware=hardware, body_trace=False) for _ in range(2))
+    applied = []
+    for _ in range(30):  # 30 agent steps of 10 periods
+        for _ in range(9):
+            one.step(extra)
+        applied.append((one.step(extra), many.run(10, extra)))
+        assert np.array_equal(one.state.base_position, many.state.base_position)  # the snapshot of this period
+    for a, b in applied:
+        assert type(b) is np.ndarray and np.array_equal(a, b)
+    assert one.steps == many.steps == 300 and one.reading == many.reading
+    assert np.array_equal(one.tau.view(), many.tau.view()) and np.array_equal(one.q_rows.view(), many.q_rows.view())
+    if stop is not None:  # the end stop acted in some periods
+        assert any(stop.torque(q, np.zeros(12)) is not None for q in one.q_rows.view())
+    with pytest.raises(ValueError, match="periods"):
+        many.run(0)
 
 
 def test_joint_stop_is_off_inside_the_range_and_a_spring_damper_outside():

@@ -189,18 +189,24 @@ class TrotController:
 
     def _side_step_lengths(self, t: float, body: BodyFeedback) -> tuple[float, float]:
         """(S_left, S_right), m; advances the speed integral (once per call, as `step_lengths`)."""
+        # (min and max as conditional expressions, with the builtins' choice on ties: a per-period path)
         c = self.cfg.controller
         ramp = c.speed_ramp_time
-        v = self.speed if ramp <= 0 else self.speed * min(1.0, t / ramp)  # commanded_speed(t)
+        v = self.speed
+        if ramp > 0:
+            share = t / ramp
+            v = v * (share if share < 1.0 else 1.0)  # commanded_speed(t)
         if body.forward_speed is not None and c.speed_gain > 0:
             limit = c.max_speed_correction * v
             correction = self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.controller_dt
-            self.speed_correction = float(min(max(correction, -limit), limit))  # np.clip on a scalar
+            correction = -limit if -limit > correction else correction  # np.clip on a scalar
+            self.speed_correction = float(limit if limit < correction else correction)
         S = (v + self.speed_correction) * self._stance_time
         # heading set-point turns back toward the path (y = 0); positive yaw error → lengthen left steps
-        heading_error = body.yaw + c.lateral_gain * body.lateral_offset
-        skew = min(max(c.heading_gain * heading_error, -0.5), 0.5)
-        return max(S * (1.0 + skew), 0.0), max(S * (1.0 - skew), 0.0)
+        skew = c.heading_gain * (body.yaw + c.lateral_gain * body.lateral_offset)
+        skew = -0.5 if -0.5 > skew else 0.5 if 0.5 < skew else skew
+        left, right = S * (1.0 + skew), S * (1.0 - skew)
+        return (0.0 if 0.0 > left else left), (0.0 if 0.0 > right else right)
 
     def _foot_points(self, phases: list[float], S: tuple[float, float]) -> list[tuple[float, float, float, float]]:
         """Per leg (x, z, vx, vz) of the trajectory at its phase (in [0, 1)) and side's step length."""
@@ -251,7 +257,8 @@ class TrotController:
         phases = self.scheduler.leg_phase_list(t)
         S = self._side_step_lengths(t, body)
         # sideways foot placement against the body's sideways speed
-        dy = min(max(c.lateral_placement_gain * body.lateral_speed, -MAX_ATTITUDE_SHIFT), MAX_ATTITUDE_SHIFT)
+        dy = c.lateral_placement_gain * body.lateral_speed
+        dy = -MAX_ATTITUDE_SHIFT if -MAX_ATTITUDE_SHIFT > dy else MAX_ATTITUDE_SHIFT if MAX_ATTITUDE_SHIFT < dy else dy
         l1, l2, l3 = self._links
         stand, feedforward = self.stand_height, c.velocity_feedforward
         offsets, rates = self._shift(t, phases)

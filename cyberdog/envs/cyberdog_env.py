@@ -283,8 +283,7 @@ class CyberDogEnv(gym.Env):
         else:
             tau_action = self._last_action * self.cfg.action_scale
         k0 = w.steps
-        for _ in range(self.decimation):  # the controller rate: keep this loop lean (bench/env_throughput.py)
-            applied = w.step(tau_action)
+        applied = w.run(self.decimation, tau_action)  # the controller periods (bench/env_throughput.py times them)
         s = self._state = w.state
         self.last_torque = applied
         step_energy = w.energy(since=k0)  # Eq. (7)

@@ -1,8 +1,9 @@
 """`Walker`: robot + trot controller + hardware model, advanced one controller period at a time.
 
 Every loop of the project that steps the simulated CyberDog runs through `Walker.step`: the learning
-environment (`CyberDog-v0`, 10 steps per agent step at the default 400 Hz), the scripted walks of the
-trajectory comparison and the prototype (`cyberdog.analysis.walk`), the videos and the policy rollouts. One
+environment (`CyberDog-v0`, 10 steps per agent step at the default 400 Hz, in one `Walker.run` call), the
+scripted walks of the trajectory comparison and the prototype (`cyberdog.analysis.walk`), the videos and
+the policy rollouts. One
 step is one period of the joint controller (`SimConfig.controller_dt`, 2.5 ms by default):
 
 1. the robot's software reads its sensors (the hardware model: encoder noise, Kalman speed; the truth on the
@@ -194,6 +195,38 @@ class Walker:
             return None
         return self.sensing.velocity_estimate_world
 
+    def run(self, periods: int, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
+        """`periods` controller periods (≥ 1), each as `step(extra_torque)`; returns the motor torque applied in
+        the last (12,). The env's loop: the usual period (the ideal robot under its controller, no added torque,
+        no latency, nothing recorded) runs here with the walker's attributes looked up once, not per period."""
+        if periods < 1:
+            raise ValueError(f"periods must be >= 1, got {periods!r}")
+        if not (self.drive and self.sensing is None and extra_torque is None and self.delay.steps == 0
+                and not (self.body_trace or self.record or self.gait_metrics)):
+            for _ in range(periods):
+                applied = self.step(extra_torque)
+            return applied
+        robot, joint_stop, dt, start_y = self.robot, self.joint_stop, self.dt, self._start_y
+        command, driver_torque = self.controller.command, self.controller.driver_torque_list
+        robot_step, read, lateral_speed = robot.step_list, robot.read, kin.lateral_velocity_body
+        tau_rows, q_rows = self.tau, self.q_rows
+        for _ in range(periods):
+            r = self.reading
+            if joint_stop is not None and joint_stop.torque(r.q, r.dq) is not None:
+                applied = self.step()  # a joint beyond its range: the end stop's torque is added
+                continue
+            # what `step` does in the usual period, in the same order
+            k = self.steps
+            feedback = BodyFeedback(r.base_rpy[2], r.base_position[1] - start_y, r.base_linear_velocity_world[0],
+                                    lateral_speed(r.base_quaternion, r.base_linear_velocity_world))
+            applied = robot_step(driver_torque(command(k * dt, r.q, feedback), r.q, r.dq))
+            tau_rows.append(applied)  # a list: the array is made once, for the last period
+            self.steps = k + 1
+            self.reading = r = read()
+            self._state = None
+            q_rows.append(r.q)
+        return applied if type(applied) is np.ndarray else np.array(applied)
+
     def step(self, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
         """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
         torque applied (12,)."""
@@ -202,10 +235,9 @@ class Walker:
         if self.drive:
             if self.sensing is None:  # the truth, in floats: no arrays built at the controller rate
                 q, dq = r.q, r.dq
-                feedback = BodyFeedback(yaw=r.base_rpy[2], lateral_offset=r.base_position[1] - self._start_y,
-                                        forward_speed=r.base_linear_velocity_world[0],
-                                        lateral_speed=kin.lateral_velocity_body(r.base_quaternion,
-                                                                                r.base_linear_velocity_world))
+                feedback = BodyFeedback(r.base_rpy[2], r.base_position[1] - self._start_y,
+                                        r.base_linear_velocity_world[0],
+                                        kin.lateral_velocity_body(r.base_quaternion, r.base_linear_velocity_world))
             else:
                 s = self.state
                 q, dq, v_world = self.sensing.read(k, s, self.robot.foot_contacts)

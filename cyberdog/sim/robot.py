@@ -250,20 +250,24 @@ class Robot:
         velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
         """
         if type(torque_command) is list and len(torque_command) == N_JOINTS:  # the walker's: no array round trip
-            command = torque_command
-        else:
-            tau = np.asarray(torque_command, dtype=float)
-            if tau.shape != (N_JOINTS,):
-                raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
-            command = tau.tolist()  # the actuator law in floats: 12 values are too few for numpy's call overhead
-        if not math.isfinite(sum(command)) and not all(map(math.isfinite, command)):
-            raise ValueError(f"torque_command must be finite, got {command!r}")
-        motor, joint = self.actuator.joint_torque_list(command, self._joint_lists()[1])
+            return np.array(self.step_list(torque_command))
+        tau = np.asarray(torque_command, dtype=float)
+        if tau.shape != (N_JOINTS,):
+            raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
+        return np.array(self.step_list(tau.tolist()))  # the actuator law in floats: 12 values are too few for numpy
+
+    def step_list(self, torque_command: list) -> list:
+        """`step` for a list of 12 floats, returning the motor torque applied as a list (the walker's loop)."""
+        if len(torque_command) != N_JOINTS:
+            raise ValueError(f"torque_command must hold {N_JOINTS} numbers, got {len(torque_command)}")
+        if not math.isfinite(sum(torque_command)) and not all(map(math.isfinite, torque_command)):
+            raise ValueError(f"torque_command must be finite, got {torque_command!r}")
+        motor, joint = self.actuator.joint_torque_list(torque_command, self._joint_lists()[1])
         self._set_motors(self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, forces=joint)
         self._step_simulation()
         self._joint_cache = None
         self.step_count += 1
-        return np.array(motor)
+        return motor
 
     @property
     def time(self) -> float:
