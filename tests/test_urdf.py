@@ -146,6 +146,19 @@ def test_standing_touches_ground_with_feet_only(robot):
     assert np.abs(state.base_rpy[:2]).max() < 0.05
 
 
+@pytest.mark.parametrize("x", [99.95, 150.0, 2000.0])
+def test_the_ground_carries_the_robot_far_beyond_100_m(robot, x):
+    """pybullet_data's plane ends at x = 100 m, where walks longer than 100 m fell off; the ground goes on to
+    x = 2.1 km: standing there (and astride the seam at 100 m) the feet touch it and carry the body."""
+    robot.reset(base_position=(x, 0.0, CFG.body_height + 0.02))
+    q_stand = standing_joint_angles(CFG).reshape(12)
+    for _ in range(400):  # 1 s
+        state = robot.read_state()
+        robot.step(60.0 * (q_stand - state.q) - 2.0 * state.dq)
+    assert robot.foot_contacts().all()
+    assert robot.read_state().base_position[2] == pytest.approx(CFG.body_height, abs=0.025)
+
+
 def test_mass_scale(robot):
     nominal = robot.total_mass()
     robot.set_mass_scale(1.05)

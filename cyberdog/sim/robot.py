@@ -1,6 +1,7 @@
 """The CyberDog in its own PyBullet world: loading, joint map, actuator model, torque stepping, state reads.
 
-One `Robot` owns one `BulletClient` (never the global connection), a ground plane and the robot. It is the
+One `Robot` owns one `BulletClient` (never the global connection), the ground (`urdf/ground.urdf`: flat, 100 m
+behind and 2.1 km ahead of the start) and the robot. It is the
 only place in the project where pybullet is called. Facts it relies on (measured, `shared/robot/NOTES.md`):
 
 - TORQUE_CONTROL lasts for ONE stepSimulation, and repeated calls within a step add up: `step` applies the
@@ -54,6 +55,7 @@ with quiet_pybullet():  # without pybullet's build banner
 # wheel can walk; the repository's top-level urdf/ links to them. The package folder rather than
 # importlib.resources: PyBullet needs a real file path, and pip installs packages unzipped.
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
+GROUND_URDF = "ground.urdf"  # in PACKAGE_DIR / "urdf": pybullet_data's plane, extended ahead (see the file)
 REPO_ROOT = PACKAGE_DIR.parent  # a checkout's root; in an installed package, site-packages (never a match)
 SPAWN_CLEARANCE = 0.002  # m, default base height above robot.body_height so the feet start just off the ground
 N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)
@@ -158,7 +160,10 @@ class Robot:
         c.setGravity(0.0, 0.0, -sim.gravity)
         c.setPhysicsEngineParameter(fixedTimeStep=sim.controller_dt, numSubSteps=sim.physics_substeps,
                                     numSolverIterations=sim.solver_iterations, deterministicOverlappingPairs=1)
-        self.plane_id = c.loadURDF(str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True)
+        self.plane_id = c.loadURDF(str(PACKAGE_DIR / "urdf" / GROUND_URDF), useFixedBase=True)
+        # what the camera sees of the ground: pybullet_data's plane.urdf, its checkered look, colliding with nothing
+        ground_look = c.loadURDF(str(Path(pybullet_data.getDataPath()) / "plane.urdf"), useFixedBase=True)
+        c.setCollisionFilterGroupMask(ground_look, -1, 0, 0)
         c.changeDynamics(self.plane_id, -1, lateralFriction=sim.ground_friction)
         self.ground_friction = sim.ground_friction  # foot–ground coefficient now (set_ground_friction)
         self.body_id = c.loadURDF(str(urdf), [0.0, 0.0, robot.body_height], flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
