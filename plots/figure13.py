@@ -126,7 +126,9 @@ def prototype_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar]
 def walk_length(rows: list[dict]) -> str:
     """The prototype walks' distance in words (the median walked, rounded: every walk is asked for the same)."""
     d = [r["distance_m"] for r in rows if r["distance_m"] > 0]
-    return f"{float(np.median(d)):.0f} m" if d else "? m"
+    run_up = float(np.median([r.get("run_up_s", 0.0) for r in rows])) if rows else 0.0  # older rows: from a stand
+    return (f"{float(np.median(d)):.0f} m" if d else "? m") + (f" walks after a {run_up:g} s run-up" if run_up > 0
+                                                                else " walks")
 
 
 @styled
@@ -142,7 +144,7 @@ def draw(rows: list[dict], prototype_rows: list[dict] | None = None) -> Figure:
     if prototype_rows:
         p_speeds, pgroups, pstyles = prototype_groups(prototype_rows)
         bars(axes[1], p_speeds, pgroups, f"battery used per {PAPER_DISTANCE_M:g} m, Eq. (13) (% of the pack)",
-             f"(b) prototype in simulation: {walk_length(prototype_rows)} walks scaled to {PAPER_DISTANCE_M:g} m",
+             f"(b) prototype in simulation: {walk_length(prototype_rows)}, per {PAPER_DISTANCE_M:g} m",
              pstyles)
     fig.suptitle(f"Figure 13: energy against speed, by foot trajectory (faded, cross-hatched: the walk fell or "
                  f"missed the speed by > {100 * SPEED_BAND:g} %)", fontsize=10, y=1.0)

@@ -184,10 +184,24 @@ def test_run_prototype_rejects_bad_input_before_walking():
                           (dict(workers=0), "workers"), (dict(trajectories={}), "trajectories")]:
         with pytest.raises(ValueError, match=match):
             proto.run_prototype(**kwargs, log=lambda _: None)
+    with pytest.raises(ValueError, match="run_up_s"):
+        proto.run_prototype(run_up_s=-1.0, log=lambda _: None)
     with pytest.raises(TypeError, match="FootTrajectory"):
         proto.run_prototype({"x": "cycloid"}, log=lambda _: None)
     assert math.isfinite(proto.time_cap(100.0, 1.0, CFG))
     assert dataclasses.replace(C.HARDWARE_LIKE, seed=3).seed == 3
+
+
+def test_a_run_up_is_walked_before_the_measured_distance():
+    """With run_up_s the measured walk starts at speed: its distance, time and battery use are those after the
+    run-up."""
+    kw = dict(speeds=(1.2,), distance_m=2.0, modes=("ideal",), workers=1, log=lambda _: None)
+    (stand,), (run_up,) = proto.run_prototype({"cycloid": None}, **kw), proto.run_prototype(
+        {"cycloid": None}, run_up_s=1.5, **kw)
+    assert stand["run_up_s"] == 0.0 and run_up["run_up_s"] == 1.5 and run_up["reached"]
+    assert 2.0 <= run_up["distance_m"] < 2.01
+    assert run_up["time_s"] == pytest.approx(2.0 / 1.2, rel=0.1)  # at speed throughout
+    assert run_up["time_s"] < stand["time_s"] - 0.4  # the ramp from a stand is left out
 
 
 # ---- the prototype at scale: every learned seed, several hardware-like robots -------------------------------

@@ -108,3 +108,25 @@ def test_a_walk_whose_trot_asks_for_a_foot_beyond_reach_ends_as_a_fall(monkeypat
     monkeypatch.setattr(TrotController, "command", lambda self, *a, **k: command(self, *a, error=RuntimeError, **k))
     with pytest.raises(RuntimeError):
         walk(cfg, duration=1.0)
+
+
+def test_a_run_up_is_walked_but_left_out_of_the_result():
+    """walk(run_up=r): the same robot motion as a walk from a stand, with the first r seconds' time, energies
+    and distance left out of the result; a distance goal counts from the run-up's end."""
+    from conftest import walk_config
+    cfg = walk_config(speed=1.2)
+    whole, first = walk(cfg, 3.0, record=True), walk(cfg, 1.5)
+    rest = walk(cfg, 3.0, run_up=1.5, record=True)
+    assert rest.duration == pytest.approx(1.5) and not rest.fell
+    assert rest.energy == pytest.approx(whole.energy - first.energy, rel=1e-9)
+    assert rest.electrical_energy == pytest.approx(whole.electrical_energy - first.electrical_energy, rel=1e-9)
+    k = int(round(1.5 / cfg.sim.controller_dt))
+    x = whole.traces["base_position"][:, 0]  # at each period's start
+    assert rest.distance == pytest.approx(whole.distance - (x[k] - x[0]), abs=1e-12)
+    assert np.array_equal(rest.traces["tau"], whole.traces["tau"])  # the traces are the whole walk's
+    goal = walk(cfg, 20.0, distance=2.0, run_up=1.5)
+    assert 2.0 <= goal.distance < 2.0 + 1.2 * 2 * cfg.sim.controller_dt and goal.reached
+    assert goal.duration == pytest.approx(2.0 / 1.2, rel=0.1)  # at speed from the start of the measured part
+    for bad in (-0.1, 3.0, float("nan")):
+        with pytest.raises(ValueError, match="run_up"):
+            walk(cfg, 3.0, run_up=bad)

@@ -64,11 +64,12 @@ class _Job:
     foot_offsets: FootOffsetPath | None = None  # a commanded path's shift of the foot targets
     seed: str = ""  # the learned path's label this walk belongs to (a baseline: the one whose lift it matches)
     draw: int = 0  # which hardware-like robot: HardwareConfig.seed + draw (0 on the ideal robot)
+    run_up_s: float = 0.0  # s walked before the measured distance (see `run_prototype`)
 
 
-def time_cap(distance_m: float, speed: float, cfg: WalkConfig) -> float:
+def time_cap(distance_m: float, speed: float, cfg: WalkConfig, run_up_s: float = 0.0) -> float:
     """s: a walk slower than 2/3 of the command is abandoned (and reported as not reached)."""
-    return 1.5 * distance_m / speed + cfg.controller.speed_ramp_time + TIME_CAP_MARGIN_S
+    return run_up_s + 1.5 * distance_m / speed + cfg.controller.speed_ramp_time + TIME_CAP_MARGIN_S
 
 
 def _job_config(base: WalkConfig, name: str, trajectory: FootTrajectory | None, speed: float) -> WalkConfig:
@@ -82,8 +83,8 @@ def _run_job(job: _Job) -> dict:
     """One walk → one row (runs in a worker process)."""
     t0 = time.perf_counter()
     hw = job.hardware if job.mode == "hardware" else None
-    r = walk(job.cfg, time_cap(job.distance_m, job.speed, job.cfg), job.trajectory, hardware=hw,
-             distance=job.distance_m, foot_offsets=job.foot_offsets)
+    r = walk(job.cfg, time_cap(job.distance_m, job.speed, job.cfg, job.run_up_s), job.trajectory, hardware=hw,
+             distance=job.distance_m, foot_offsets=job.foot_offsets, run_up=job.run_up_s)
     e_cfg = job.cfg.energy
     ok = r.distance > 0 and r.electrical_energy > 0
     pct = en.battery_percent_used(r.electrical_energy, e_cfg)
@@ -93,7 +94,7 @@ def _run_job(job: _Job) -> dict:
         "robot": job.mode, "lift_height_m": job.cfg.gait.lift_height, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
         "mean_speed_mps": r.mean_speed,  # last half of the walk
         "average_speed_mps": r.distance / r.duration if r.duration > 0 else float("nan"),
-        "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
+        "run_up_s": job.run_up_s, "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
         "energy_J": r.energy,  # Eq. (7)
         "electrical_energy_J": r.electrical_energy,
         "electrical_cost_of_transport": (en.cost_of_transport(r.electrical_energy, job.cfg.robot.total_mass,
@@ -118,7 +119,8 @@ def run_prototype(trajectories: dict | None = None,
                   speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
-                  every_walk: bool = True, learned: LearnedSet | None = None, draws: int = 1) -> list[dict]:
+                  every_walk: bool = True, learned: LearnedSet | None = None, draws: int = 1,
+                  run_up_s: float = 0.0) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
 
     trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
@@ -131,6 +133,9 @@ def run_prototype(trajectories: dict | None = None,
     draws: hardware-like robots per walk: `hardware` with seed `hardware.seed + d` for d < draws (its mass
         draw and sensor noise), the same robots for every trajectory; the ideal robot is walked once.
     modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
+    run_up_s: s each walk walks from its stand before `distance_m` is measured (`walk(run_up=...)`): the start-up
+        (speed ramp, blend into a learned path) is then left out of the battery use, energies and time, as it is
+        of a range on a full charge, where it happens once in kilometres; 0 = the paper's walk from a stand.
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them).
     Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
@@ -139,6 +144,8 @@ def run_prototype(trajectories: dict | None = None,
     base_cfg = base_cfg or WalkConfig()
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
     speeds, modes = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws)
+    if not (math.isfinite(run_up_s) and run_up_s >= 0):
+        raise ValueError(f"run_up_s must be >= 0 s and finite, got {run_up_s!r}")
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = []
     for label in learned.labels if learned is not None else [""]:
@@ -147,14 +154,14 @@ def run_prototype(trajectories: dict | None = None,
         for v, path in paths.items():
             cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
             jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), float(distance_m), offsets,
-                          label, d) for mode, d in robots]
+                          label, d, float(run_up_s)) for mode, d in robots]
         for name, traj in trajectories.items():
             for v in speeds:
                 cfg = _job_config(base_cfg, name, traj, v)
                 if v in lifts:
                     cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
-                jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d)
-                         for mode, d in robots]
+                jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
+                              float(run_up_s)) for mode, d in robots]
     def line(row: dict) -> str:
         return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
                 f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "

@@ -26,7 +26,8 @@ from cyberdog.sim.robot import Robot
 
 def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | None = None,
          robot: Robot | None = None, record: bool = False, hardware: HardwareConfig | None = None,
-         distance: float | None = None, foot_offsets: FootOffsetPath | None = None) -> WalkResult:
+         distance: float | None = None, foot_offsets: FootOffsetPath | None = None, run_up: float = 0.0
+         ) -> WalkResult:
     """Walk at `cfg.gait.speed` with the trot controller; reuse `robot` if given.
 
     duration: s; the walk's length, or with `distance` its time cap.
@@ -37,6 +38,9 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
         a given `robot` must have been built with `hardware_walk_config(cfg, hardware).actuator`; its mass is
         set to the hardware's draw for the walk.
     record: keep the traces (t, tau, dq, power, q, base_position, contacts) in the result.
+    run_up: s walked first and left out of the result's time, distance, energies and speed (the start from a
+        stand: the speed ramp and the blend into a learned path); `distance` counts from its end, `duration`
+        (the time cap) includes it. A fall in the run-up is the walk's fall.
 
     The walk ends as a fall when the body falls (`Walker.fallen`) or when the trot asks for a foot target beyond
     the leg's reach (`UnreachableFootTarget`: a robot going down can make it step too far).
@@ -47,12 +51,19 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
         raise ValueError(f"distance must be None or > 0 m and finite, got {distance!r}")
     if hardware is not None and not isinstance(hardware, HardwareConfig):
         raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
+    if not (0.0 <= run_up < duration):
+        raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
     with Walker(cfg, TrotController(cfg, trajectory, foot_offsets), robot=robot, hardware=hardware,
                 record=record, gait_metrics=True) as walker:
         n_steps = int(round(duration / walker.dt))
-        goal_x = None if distance is None else walker.start[0] + distance
+        run_up_steps = int(round(run_up / walker.dt))
+        since, since_x, goal_x = 0, None, None
         fell = False
-        for _ in range(n_steps):
+        for k in range(n_steps):
+            if k == run_up_steps:  # the measured walk starts here
+                since, x = k, float(walker.state.base_position[0])
+                since_x = x if k > 0 else None
+                goal_x = None if distance is None else x + distance
             if goal_x is not None and walker.state.base_position[0] >= goal_x:
                 break  # the energy of exactly the steps that carried the body to the goal
             try:
@@ -63,7 +74,8 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
             if walker.fallen():
                 fell = True
                 break
-        result = walk_result(walker, walker.controller.speed, fell, target_distance=distance)
+        result = walk_result(walker, walker.controller.speed, fell, target_distance=distance, since=since,
+                             since_x=since_x)
     if not record:
         result.traces = {}
     return result

@@ -132,7 +132,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                       run.out, draws=args.prototype_draws, reference=reference)
+                       run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up)
     return run.finish()
 
 
@@ -154,7 +154,8 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
         proto_learned = learned if given else L.learned_trajectories(args, run.out, args.speeds, cfg=cfg,
                                                                      for_prototype=True)
         run_prototype_part(cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
-                           args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference)
+                           args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference,
+                           run_up_s=args.prototype_run_up)
     run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)

@@ -80,25 +80,32 @@ class WalkResult:
 
 
 def walk_result(walker, speed_command: float, fell: bool, target_distance: float | None = None,
-                score: float | None = None) -> WalkResult:
-    """The metrics of everything `walker` (a `cyberdog.loop.walker.Walker`) stepped since its reset."""
+                score: float | None = None, since: int = 0, since_x: float | None = None) -> WalkResult:
+    """The metrics of what `walker` (a `cyberdog.loop.walker.Walker`) stepped since its reset, or from controller
+    period `since` on (a run-up left out: time, distance, energies, speed, posture, slip and peaks count from
+    there, the body then at forward position `since_x`, m); `fell`, the lateral drift (from the path's start)
+    and the non-foot contacts are of the whole walk, and the traces are all of it."""
     cfg, dt = walker.cfg, walker.dt
     tr = walker.traces()
-    tau, dq = tr["tau"], tr["dq"]
     if not walker.body_trace:
         raise ValueError("walk_result needs the walker's body trace: build the Walker with body_trace=True")
-    body = walker.body.view()
+    if not 0 <= since <= len(tr["tau"]) or (since > 0) != (since_x is not None):
+        raise ValueError(f"since must be a period in [0, {len(tr['tau'])}] given with since_x (the body's x "
+                         f"then, m), got {since!r}, {since_x!r}")
+    tau, dq = tr["tau"][since:], tr["dq"][since:]
+    body = walker.body.view(since)
     vx, rpy, z = body[:, 0], body[:, 1:4], body[:, 4]
     n = len(tau)
     start, end = walker.start, walker.state.base_position
     e_joint = en.joint_energy(tau, dq, dt)
-    travelled = float(end[0] - start[0])  # m, forward
+    travelled = float(end[0] - (start[0] if since_x is None else since_x))  # m, forward
     mass = cfg.robot.total_mass * walker.robot.mass_scale  # kg, what the robot weighed in this walk
     cycles = n * dt / cfg.gait.period
     slip = float("nan")
-    if walker.gait_metrics and cycles > 0 and walker.slip_xy:
-        slip = float(en.foot_slip(np.reshape(walker.slip_xy, (-1, 4, 2)),
-                                  np.reshape(walker.slip_contacts, (-1, 4))).mean() / cycles)
+    first_sample = -(-since // walker.slip_sample_every)  # the slip samples taken from period `since` on
+    if walker.gait_metrics and cycles > 0 and walker.slip_xy[first_sample:]:
+        slip = float(en.foot_slip(np.reshape(walker.slip_xy[first_sample:], (-1, 4, 2)),
+                                  np.reshape(walker.slip_contacts[first_sample:], (-1, 4))).mean() / cycles)
     return WalkResult(
         speed_command=float(speed_command), duration=n * dt, fell=bool(fell),
         mean_speed=float(np.mean(vx[n // 2:])) if n else 0.0,
@@ -107,7 +114,7 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
         max_roll=float(np.max(np.abs(rpy[:, 0]))) if n else float("nan"),
         max_pitch=float(np.max(np.abs(rpy[:, 1]))) if n else float("nan"),
         distance=travelled, energy=float(e_joint.sum()), energy_per_joint=e_joint,
-        electrical_energy=walker.electrical_energy(), positive_work=en.positive_work(tau, dq, dt),
+        electrical_energy=walker.electrical_energy(since), positive_work=en.positive_work(tau, dq, dt),
         foot_slip_per_cycle=slip,
         cost_of_transport=(en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, travelled)
                            if travelled > 0 else float("nan")),  # undefined without forward travel
