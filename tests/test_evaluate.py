@@ -70,6 +70,8 @@ def test_reduced_run_writes_table5_figures_and_prototype(reduced_run):
     proto = json.loads((out / "prototype.json").read_text())
     # the shipped shape searched for the battery walks beside the common trajectories as a reference row
     assert {r["trajectory"] for r in proto} == {"learned", "cycloid", "straight", "searched"}
+    from cyberdog.evaluation.cli import DEFAULT_PROTOTYPE_RUN_UP
+    assert DEFAULT_PROTOTYPE_RUN_UP > 0 and all(r["run_up_s"] == DEFAULT_PROTOTYPE_RUN_UP for r in proto)
 
 
 def test_table5_decrement_is_eq12_on_its_own_energies(reduced_run):
