@@ -236,7 +236,7 @@ class CyberDogEnv(gym.Env):
         self.controller.set_speed(self.target_speed)
         self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng, draw=draw)
         self.last_torque = np.zeros(12)
-        self._foot_offset = [(0.0, 0.0, 0.0)] * 4  # m, 4 × (x, y, z): the last action's foot-target offsets (foot mode)
+        self._foot_offset = [(0.0, 0.0, 0.0)] * 4  # m, 4 × (x, y, z): the last action's foot offsets (foot mode)
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
         info = {"target_speed": self.target_speed}
         if draw is not None:

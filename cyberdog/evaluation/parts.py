@@ -114,7 +114,8 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
         return rows
     summary = summary_rows(rows)
     print(f"\nPrototype run, {len(learned)} seeds x {draws} hardware-like robots (battery % per 100 m, Eq. 13, "
-          f"mean ± 95 % CI across seeds; {distance_m:g} m walks after a {run_up_s:g} s run-up; in full: prototype.md):")
+          f"mean ± 95 % CI across seeds; {distance_m:g} m walks after a {run_up_s:g} s run-up; in full: "
+          f"prototype.md):")
     for mode in modes:
         cells = [f"{name} " + " / ".join(f"{r['battery_pct_per_100m_mean']:.2f}" for r in summary
                                          if r["trajectory"] == name and r["robot"] == mode)
