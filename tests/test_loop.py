@@ -12,6 +12,8 @@ from cyberdog.core import energy as en
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.loop.walker import Walker
 
+from conftest import walk_config
+
 PACKAGE = Path(__file__).resolve().parents[1] / "cyberdog"
 
 
@@ -114,3 +116,49 @@ def test_a_walker_without_its_body_trace_walks_the_same_and_refuses_a_walk_resul
                 with pytest.raises(ValueError, match="body_trace=True"):
                     walk_result(w, 1.0, fell=False)
     assert np.array_equal(taus[0], taus[1])
+
+
+def test_the_walkers_per_period_feedback_equals_the_state_snapshot():
+    """The walker builds the trot's body feedback from the float reading, not from the RobotState arrays:
+    the same four numbers, bit for bit, on a walk that sways and turns."""
+    from cyberdog.control.trot import BodyFeedback
+    from cyberdog.core import kinematics as kin
+
+    walker = Walker(C.WalkConfig())
+    for k in range(400):
+        walker.step()
+        if k % 50 == 49:
+            r, s = walker.reading, walker.state
+            want = BodyFeedback.from_state(s, walker.start)
+            assert r.base_rpy[2] == want.yaw and r.base_position[1] - float(walker.start[1]) == want.lateral_offset
+            assert r.base_linear_velocity_world[0] == want.forward_speed
+            assert kin.lateral_velocity_body(r.base_quaternion, r.base_linear_velocity_world) == want.lateral_speed
+            assert walker.state is s  # built once per period, when first asked
+            assert np.array_equal(s.q, r.q) and np.array_equal(walker.q_rows.view()[-1], s.q)
+
+
+@pytest.mark.parametrize("case", ["ideal", "end stop", "added torque", "hardware"])
+def test_walker_run_equals_its_periods_one_by_one(case):
+    """`Walker.run(n)` (the env's loop) is n calls of `step`, to the bit: on the ideal robot (its own loop),
+    with an end stop narrow enough to act in some periods (those go through `step`), and where it hands every
+    period to `step` (an added torque, the hardware-like robot)."""
+    from cyberdog.control.joint_stop import JointStop
+    cfg = walk_config(speed=1.2)
+    stop = JointStop(cfg.robot, 0.12, 200.0, 1.0) if case == "end stop" else None
+    hardware = C.HARDWARE_LIKE if case == "hardware" else None
+    extra = np.linspace(-0.5, 0.5, 12) if case == "added torque" else None
+    one, many = (Walker(cfg, joint_stop=stop, hardware=hardware, body_trace=False) for _ in range(2))
+    applied = []
+    for _ in range(30):  # 30 agent steps of 10 periods
+        for _ in range(9):
+            one.step(extra)
+        applied.append((one.step(extra), many.run(10, extra)))
+        assert np.array_equal(one.state.base_position, many.state.base_position)  # the snapshot of this period
+    for a, b in applied:
+        assert type(b) is np.ndarray and np.array_equal(a, b)
+    assert one.steps == many.steps == 300 and one.reading == many.reading
+    assert np.array_equal(one.tau.view(), many.tau.view()) and np.array_equal(one.q_rows.view(), many.q_rows.view())
+    if stop is not None:  # the end stop acted in some periods
+        assert any(stop.torque(q, np.zeros(12)) is not None for q in one.q_rows.view())
+    with pytest.raises(ValueError, match="periods"):
+        many.run(0)

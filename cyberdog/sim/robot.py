@@ -1,8 +1,7 @@
 """The CyberDog in its own PyBullet world: loading, joint map, actuator model, torque stepping, state reads.
 
-One `Robot` owns one `BulletClient` (never the global connection), the ground (`urdf/ground.urdf`: flat, 100 m
-behind and 2.1 km ahead of the start) and the robot. It is the
-only place in the project where pybullet is called. Facts it relies on (measured, `shared/robot/NOTES.md`):
+One `Robot` owns one `BulletClient` (never the global connection), the ground (`urdf/ground.urdf`) and the
+robot: the only place in the project where pybullet is called. Facts it relies on (measured, `shared/robot/NOTES.md`):
 
 - TORQUE_CONTROL lasts for ONE stepSimulation, and repeated calls within a step add up: `step` applies the
   torque exactly once and steps once. The default velocity motors are disabled at load.
@@ -254,7 +253,7 @@ class Robot:
         The actuator model clips the command and applies the torque–speed envelope at the current joint
         velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
         """
-        if type(torque_command) is list and len(torque_command) == N_JOINTS:  # the walker's: no array round trip
+        if type(torque_command) is list:  # no array round trip (step_list checks the length)
             return np.array(self.step_list(torque_command))
         tau = np.asarray(torque_command, dtype=float)
         if tau.shape != (N_JOINTS,):
