@@ -84,6 +84,8 @@ def test_robot_step_rejects_non_finite(robot, bad):
 def test_robot_step_rejects_wrong_shape(robot):
     with pytest.raises(ValueError, match="shape"):
         robot.step(np.zeros(11))
+    with pytest.raises(ValueError, match="12 numbers"):
+        robot.step([0.0] * 11)
 
 
 def test_robot_step_returns_clipped_motor_torque_without_friction(robot):
