@@ -3,8 +3,8 @@
 Every loop of the project that steps the simulated CyberDog runs through `Walker.step`: the learning
 environment (`CyberDog-v0`, 10 steps per agent step at the default 400 Hz, in one `Walker.run` call), the
 scripted walks of the trajectory comparison and the prototype (`cyberdog.analysis.walk`), the videos and
-the policy rollouts. One
-step is one period of the joint controller (`SimConfig.controller_dt`, 2.5 ms by default):
+the policy rollouts. One step is one period of the joint controller (`SimConfig.controller_dt`, 2.5 ms by
+default):
 
 1. the robot's software reads its sensors (the hardware model: encoder noise, Kalman speed; the truth on the
    ideal robot) and the trot controller computes its torque (trajectory + IK + PID), unless the controller is
