@@ -1,139 +1,15 @@
-"""Settings of the learning problem: reward (Eq. 10-11), state estimator, environment (Tables 3-4), agent, training."""
+"""Settings of the learning agent and its training: networks and losses (Section 3, Table 4), the two stages, the
+loop; and the experiment that joins them with the environment (`cyberdog.config.env`)."""
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from dataclasses import dataclass, field
 from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
-
-from cyberdog.config.robot import GaitConfig, HardwareConfig, RandomizationConfig, WalkConfig
-
-
-REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E
-
-
-ENERGY_MODELS = ("mechanical", "electrical")  # what the reward's energy term measures
-
-
-@dataclass(frozen=True)
-class RewardConfig:
-    """Weights of the reward terms, Eq. (10); defaults are the paper's Eq. (11): A…E = −2, −20, −50, 25, −0.2.
-
-    Each weight multiplies an unweighted term of `cyberdog.core.rewards`; a weight of 0 turns its term off.
-    Penalties (speed, y_offset, fuselage, energy) must be ≤ 0 and the keep-moving bonus ≥ 0, so that a sign
-    slip cannot reward the robot for drifting. Stage 1 of the paper's training ignores energy (E = 0,
-    `STAGE1_REWARD`); stage 2 adds it (`STAGE2_REWARD`).
-    """
-
-    speed: float = -2.0  # A, per (m/s)², on r_v = (v_target − v_x)²
-    y_offset: float = -20.0  # B, per m², on r_yoffset = y²
-    fuselage: float = -50.0  # C, per m², on r_Fuselage stable = (z − z_nominal)²
-    keep_moving: float = 25.0  # D, on r_Keep moving = Ts / Tf (sums to D over a full episode)
-    energy: float = -0.2  # E, per J, on r_E = Σ_ij ∫|τ_ij · θ̇_ij| dt over the step (Eq. 7)
-    z_nominal: float = 0.30  # m, body height the fuselage term measures from (= RobotConfig.body_height)
-    # what r_E measures: "mechanical" (Eq. 7, the paper's) or "electrical" (what the battery pays: copper loss,
-    # friction and driver efficiency of `cyberdog.core.energy.electrical_power`, about 3.5x Eq. 7 at 1 m/s)
-    energy_model: str = "mechanical"
-
-    @functools.cached_property
-    def weights(self) -> dict[str, float]:
-        """Weights by term name, in the order of Eq. (10) (made once: the config is frozen; do not modify)."""
-        return {n: getattr(self, n) for n in REWARD_TERM_NAMES}
-
-    def __post_init__(self) -> None:
-        for n in REWARD_TERM_NAMES:
-            v = getattr(self, n)
-            rule = ">= 0 and finite (a bonus)" if n == "keep_moving" else "<= 0 and finite (a penalty)"
-            ok = math.isfinite(v) and (v >= 0 if n == "keep_moving" else v <= 0)
-            _check(ok, f"RewardConfig.{n}", rule, v)
-        _check(0 < self.z_nominal <= 0.5 and math.isfinite(self.z_nominal), "RewardConfig.z_nominal",
-               "in (0, 0.5] m", self.z_nominal)
-        _check(self.energy_model in ENERGY_MODELS, "RewardConfig.energy_model", f"one of {ENERGY_MODELS}",
-               self.energy_model)
-
-
-STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0
-STAGE2_REWARD = RewardConfig()  # stage 2: Eq. (11) with the energy term, E = −0.2
-
-
-# ---------------------------------------------------------------------------------------------------------
-# The learning environment (paper Section 3, Tables 3-4)
-# ---------------------------------------------------------------------------------------------------------
-
-ACTION_MODES = ("torque", "residual", "foot")
-
-
-@dataclass(frozen=True)
-class EnvConfig:
-    """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
-
-    # robot, actuator, sim, gait, PID, controller, energy; the lift height is 0.10 m (not the paper's 0.15 m)
-    # so that the trot stays inside Table 4's ±45° joint range around the standing pose
-    walk: WalkConfig = field(default_factory=lambda: WalkConfig(gait=GaitConfig(lift_height=0.10)))
-    reward: RewardConfig = field(default_factory=RewardConfig)  # Eq. (11) weights (stage 2 by default)
-    control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)
-    episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
-    # "torque": the paper's, the action is the joint torque; "residual": torque added to the trot controller's;
-    # "foot": offsets of the trot controller's foot targets (the controller's IK + PID then track them)
-    action_mode: str = "residual"
-    action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
-    foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
-    foot_offset_scale_z: Optional[float] = None  # m per unit action on the vertical axis; None = foot_offset_scale
-    observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
-    #                                    in foot mode it is the offset the next action ramps from, which sets
-    #                                    the step's jerk and energy; without it the critics cannot see that cost
-    joint_range_deg: float = 45.0  # ± around the standing pose (Table 4 "joint control range")
-    joint_stop_stiffness: float = 200.0  # N·m/rad, virtual end stop beyond the joint range
-    joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
-    target_speed: float = 1.0  # m/s, commanded forward speed v_x (fixed unless a range is given)
-    target_speed_range: Tuple[float, ...] = ()  # (low, high) m/s: sample the command per episode; () = fixed
-    # the robot's hardware effects (joint friction, actuation latency, encoder and IMU noise, Kalman speed
-    # feedback, mass draw): the same model as the prototype walks'. In the env the mass is drawn per episode
-    # from the env's seed and the sensors are seeded per episode too (`HardwareConfig.seed` is not used)
-    hardware: HardwareConfig = field(default_factory=HardwareConfig)
-    # domain randomisation: the ranges each episode's robot is drawn from (friction, latency, mass, motor
-    # strength, PID gains, ground friction); the default is the nominal robot, every episode the same
-    randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
-    fall_height: float = 0.15  # m, body centre below this = fallen
-    fall_tilt_deg: float = 45.0  # |roll| or |pitch| above this = fallen
-
-    @property
-    def decimation(self) -> int:
-        """Controller periods (`walk.sim.controller_dt`) per agent step."""
-        return int(round(self.control_dt / self.walk.sim.controller_dt))
-
-    @property
-    def max_episode_steps(self) -> int:
-        return int(round(self.episode_time / self.control_dt))
-
-    def __post_init__(self) -> None:
-        _positive(self, "control_dt", "episode_time", "action_scale", "foot_offset_scale", "joint_range_deg",
-                  "fall_height", "fall_tilt_deg")
-        _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping")
-        dt = self.walk.sim.controller_dt
-        _check(abs(self.control_dt / dt - round(self.control_dt / dt)) < 1e-6 and self.control_dt >= dt,
-               "EnvConfig.control_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", self.control_dt)
-        hw_dt = self.hardware.estimator_dt
-        _check(abs(hw_dt / dt - round(hw_dt / dt)) < 1e-6 and hw_dt >= dt,
-               "EnvConfig.hardware.estimator_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", hw_dt)
-        _check(abs(self.hardware.latency_s / dt - round(self.hardware.latency_s / dt)) < 1e-6,
-               "EnvConfig.hardware.latency_s", f"a whole multiple of walk.sim.controller_dt ({dt} s)",
-               self.hardware.latency_s)
-        _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
-               self.action_mode)
-        _check(self.randomization.joint_friction_scale == (1.0, 1.0) or self.hardware.friction,
-               "EnvConfig.randomization.joint_friction_scale", "(1, 1) unless hardware.friction is on (the scale "
-               "acts on the simulated joint friction)", self.randomization.joint_friction_scale)
-        r = self.target_speed_range
-        _check(len(r) == 0 or (len(r) == 2 and 0 <= r[0] <= r[1]), "EnvConfig.target_speed_range",
-               "() or (low, high) with 0 <= low <= high (m/s)", r)
-        _check(self.foot_offset_scale_z is None or (math.isfinite(self.foot_offset_scale_z)
-                                                     and self.foot_offset_scale_z > 0),
-               "EnvConfig.foot_offset_scale_z", "None or a finite number > 0 (m)", self.foot_offset_scale_z)
-        _check(self.joint_range_deg <= 180, "EnvConfig.joint_range_deg", "in (0, 180]", self.joint_range_deg)
+from cyberdog.config.env import ENERGY_MODELS, STAGE1_REWARD, STAGE2_REWARD, EnvConfig, RewardConfig
+from cyberdog.config.robot import GaitConfig, WalkConfig
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -173,6 +49,10 @@ class AgentConfig:
     action_smoothness: float = 0.0  # actor loss += action_smoothness · mean((μ(s') − μ(s))²), the temporal
     #                                 smoothness term of CAPS (Mysore et al. 2021): a foot-mode policy that
     #                                 changes its offsets from step to step makes the PID jerk, which costs energy
+    trot_imitation: float = 0.0  # actor loss += trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²): a torque
+    #                             policy pulled toward the share of the trot controller's torque (in action
+    #                             units, EnvConfig.trot_reference) that the prior of weight w no longer gives
+    #                             (TD3+BC's regulariser, the trot as the behaviour); 0 = off
     actor_observation: Tuple[str, ...] = ()  # the observation groups the actor sees (names of CyberDog-v0's
     #                                          layout, e.g. ("target_speed", "gait_phase")); () = all. The
     #                                          critics always see the whole observation. An actor that sees
@@ -191,7 +71,7 @@ class AgentConfig:
                "AgentConfig.hidden_sizes", "one or more positive integers", self.hidden_sizes)
         _positive(self, "actor_lr", "critic_lr", "tau", "ou_dt")
         _non_negative(self, "policy_noise", "noise_clip", "exploration_sigma", "exploration_sigma_end",
-                      "ou_theta", "max_grad_norm", "action_l2", "action_smoothness")
+                      "ou_theta", "max_grad_norm", "action_l2", "action_smoothness", "trot_imitation")
         _check(0 <= self.gamma < 1, "AgentConfig.gamma", "in [0, 1)", self.gamma)
         _check(self.tau <= 1, "AgentConfig.tau", "in (0, 1]", self.tau)
         _check(int(self.policy_delay) == self.policy_delay and self.policy_delay >= 1, "AgentConfig.policy_delay",
@@ -229,6 +109,7 @@ class StageConfig:
     #                                     None = "mechanical" (Eq. 7). With buffer_between_stages="relabel" both
     #                                     stages must name the same model: the stored step energy is the model's
     action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
+    trot_imitation: Optional[float] = None  # the pull toward the trot's torque in this stage; None = the agent's
     actor_lr: Optional[float] = None  # the actor's learning rate in this stage; None = agent.actor_lr
     fresh_actor_optimizer: bool = False  # start the stage with a new Adam for the actor: the moments it kept
     #                                      were scaled to the previous stage's loss, and a larger gradient now
@@ -237,6 +118,9 @@ class StageConfig:
     critic_warmup_updates: int = 0  # the stage's first updates train the critics only (actor and targets
     #                                 wait), so that the critics learn this stage's reward before the actor
     #                                 follows them
+    critic_warmup_targets: bool = False  # during that warm-up the target networks follow (every policy_delay
+    #                                      updates), so that the critics evaluate the actor as it is over many
+    #                                      steps; False: they wait too (one step's reward over frozen targets)
 
     def __post_init__(self) -> None:
         _check(self.reward in ("stage1", "stage2"), "StageConfig.reward", "'stage1' or 'stage2'", self.reward)
@@ -264,6 +148,9 @@ class StageConfig:
                self.critic_warmup_updates)
         _check(self.action_l2 is None or (math.isfinite(self.action_l2) and self.action_l2 >= 0),
                "StageConfig.action_l2", "None (agent.action_l2) or a finite number >= 0", self.action_l2)
+        _check(self.trot_imitation is None or (math.isfinite(self.trot_imitation) and self.trot_imitation >= 0),
+               "StageConfig.trot_imitation", "None (agent.trot_imitation) or a finite number >= 0",
+               self.trot_imitation)
         for n in ("stop_score", "save_score"):
             _check(not math.isnan(getattr(self, n)), f"StageConfig.{n}", "a number (.inf allowed)",
                    getattr(self, n))
@@ -359,3 +246,20 @@ class ExperimentConfig:
     env: EnvConfig = field(default_factory=lambda: EnvConfig(walk=WalkConfig(gait=GaitConfig(lift_height=0.10))))
     agent: AgentConfig = field(default_factory=AgentConfig)
     train: TrainConfig = field(default_factory=TrainConfig)
+
+    def __post_init__(self) -> None:
+        env, s1 = self.env, self.train.stage1
+        if env.prior_weight > 0 and env.prior_decay_steps > 0:  # the prior must be gone before stage 1 ends
+            end = env.prior_decay_start + env.prior_decay_steps
+            _check(0 < s1.max_env_steps and end <= s1.max_env_steps, "EnvConfig.prior_decay_steps",
+                   f"such that prior_decay_start + prior_decay_steps <= train.stage1.max_env_steps "
+                   f"({s1.max_env_steps}; a step budget is needed): the prior's weight reaches 0 within stage 1, "
+                   f"and the policy alone is trained after it", env.prior_decay_steps)
+        imitates = self.agent.trot_imitation > 0 or any(
+            (getattr(self.train, f"stage{n}").trot_imitation or 0) > 0 for n in (1, 2))
+        _check(not imitates or env.trot_reference or env.prior_weight > 0, "EnvConfig.trot_reference",
+               "true (or a prior) when the actor imitates the trot (agent or stage trot_imitation > 0): the "
+               "reference is recorded per transition", env.trot_reference)
+        _check(env.prior_weight == 0 or env.prior_decay_steps > 0, "EnvConfig.prior_decay_steps",
+               "> 0 when training with a prior (EnvConfig.prior_weight > 0): its weight must decay to 0",
+               env.prior_decay_steps)

@@ -1,0 +1,170 @@
+"""Settings of the learning environment `CyberDog-v0`: the reward (Eq. 10-11) and the MDP (Tables 3-4), with the
+torque mode's documented departures (the drivers' damping, the decaying trot prior)."""
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from typing import Optional, Tuple
+
+from cyberdog.config._validate import _check, _non_negative, _positive
+
+from cyberdog.config.robot import GaitConfig, HardwareConfig, RandomizationConfig, WalkConfig
+
+
+REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E
+
+
+ENERGY_MODELS = ("mechanical", "electrical")  # what the reward's energy term measures
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """Weights of the reward terms, Eq. (10); defaults are the paper's Eq. (11): A…E = −2, −20, −50, 25, −0.2.
+
+    Each weight multiplies an unweighted term of `cyberdog.core.rewards`; a weight of 0 turns its term off.
+    Penalties (speed, y_offset, fuselage, energy) must be ≤ 0 and the keep-moving bonus ≥ 0, so that a sign
+    slip cannot reward the robot for drifting. Stage 1 of the paper's training ignores energy (E = 0,
+    `STAGE1_REWARD`); stage 2 adds it (`STAGE2_REWARD`).
+    """
+
+    speed: float = -2.0  # A, per (m/s)², on r_v = (v_target − v_x)²
+    y_offset: float = -20.0  # B, per m², on r_yoffset = y²
+    fuselage: float = -50.0  # C, per m², on r_Fuselage stable = (z − z_nominal)²
+    keep_moving: float = 25.0  # D, on r_Keep moving = Ts / Tf (sums to D over a full episode)
+    energy: float = -0.2  # E, per J, on r_E = Σ_ij ∫|τ_ij · θ̇_ij| dt over the step (Eq. 7)
+    z_nominal: float = 0.30  # m, body height the fuselage term measures from (= RobotConfig.body_height)
+    # what r_E measures: "mechanical" (Eq. 7, the paper's) or "electrical" (what the battery pays: copper loss,
+    # friction and driver efficiency of `cyberdog.core.energy.electrical_power`, about 3.5x Eq. 7 at 1 m/s)
+    energy_model: str = "mechanical"
+
+    @functools.cached_property
+    def weights(self) -> dict[str, float]:
+        """Weights by term name, in the order of Eq. (10) (made once: the config is frozen; do not modify)."""
+        return {n: getattr(self, n) for n in REWARD_TERM_NAMES}
+
+    def __post_init__(self) -> None:
+        for n in REWARD_TERM_NAMES:
+            v = getattr(self, n)
+            rule = ">= 0 and finite (a bonus)" if n == "keep_moving" else "<= 0 and finite (a penalty)"
+            ok = math.isfinite(v) and (v >= 0 if n == "keep_moving" else v <= 0)
+            _check(ok, f"RewardConfig.{n}", rule, v)
+        _check(0 < self.z_nominal <= 0.5 and math.isfinite(self.z_nominal), "RewardConfig.z_nominal",
+               "in (0, 0.5] m", self.z_nominal)
+        _check(self.energy_model in ENERGY_MODELS, "RewardConfig.energy_model", f"one of {ENERGY_MODELS}",
+               self.energy_model)
+
+
+STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0
+STAGE2_REWARD = RewardConfig()  # stage 2: Eq. (11) with the energy term, E = −0.2
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The learning environment (paper Section 3, Tables 3-4)
+# ---------------------------------------------------------------------------------------------------------
+
+ACTION_MODES = ("torque", "residual", "foot")
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
+
+    # robot, actuator, sim, gait, PID, controller, energy; the lift height is 0.10 m (not the paper's 0.15 m)
+    # so that the trot stays inside Table 4's ±45° joint range around the standing pose
+    walk: WalkConfig = field(default_factory=lambda: WalkConfig(gait=GaitConfig(lift_height=0.10)))
+    reward: RewardConfig = field(default_factory=RewardConfig)  # Eq. (11) weights (stage 2 by default)
+    control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)
+    episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
+    # "torque": the paper's, the action is the joint torque; "residual": torque added to the trot controller's;
+    # "foot": offsets of the trot controller's foot targets (the controller's IK + PID then track them)
+    action_mode: str = "residual"
+    action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
+    foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
+    foot_offset_scale_z: Optional[float] = None  # m per unit action on the vertical axis; None = foot_offset_scale
+    observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
+    #                                    in foot mode it is the offset the next action ramps from, which sets
+    #                                    the step's jerk and energy; without it the critics cannot see that cost
+    # torque mode only: the motor drivers' damping, τ = τ_action − joint_damping·q̇ at every controller period (the
+    # drivers' kd with kp = 0). 0 = the paper's pure torque. A documented departure (docs/torque_agent.md): a
+    # torque held over Ts = 25 ms cannot damp a light leg, and MathWorks' example, whose settings Table 4 copies,
+    # gives every joint 8 N·m·s/rad of damping. Here it is motor torque, so Eq. 7 books its work
+    joint_damping: float = 0.0  # N·m·s/rad
+    # torque mode only: a prior from the trot controller (trajectory + IK + PD at the state of the agent step,
+    # held over Ts like the action), added to the action's torque with a weight that decays linearly from
+    # `prior_weight` to exactly 0 over `prior_decay_steps` env steps of training (DecAP, arXiv 2310.05714).
+    # 0 = no prior (the paper's). Evaluation always runs without it (`cyberdog.rl.rollout`)
+    prior_weight: float = 0.0  # weight at the start of training (1 = the trot's whole torque)
+    prior_decay_start: int = 0  # env steps (all envs together) at the full weight before the decay begins
+    prior_decay_steps: int = 0  # env steps over which the weight then falls linearly to 0; 0 = it stays
+    prior_steps_done: int = 0  # env steps of the decay done before this env was made: the trainer sets it for
+    #                            each stage and resume (the weight is a function of the stage's env steps)
+    prior_step_stride: int = 1  # env steps of the decay per step of this env: the envs that collect in lock step
+    # torque mode only: report the trot controller's torque at each step's start state, in action units, as
+    # info["trot_action"] (computed anyway while the prior acts): what the actor may be pulled toward in training
+    # (AgentConfig.trot_imitation). It does not act on the robot
+    trot_reference: bool = False
+    joint_range_deg: float = 45.0  # ± around the standing pose (Table 4 "joint control range")
+    joint_stop_stiffness: float = 200.0  # N·m/rad, virtual end stop beyond the joint range
+    joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
+    target_speed: float = 1.0  # m/s, commanded forward speed v_x (fixed unless a range is given)
+    target_speed_range: Tuple[float, ...] = ()  # (low, high) m/s: sample the command per episode; () = fixed
+    # the robot's hardware effects (joint friction, actuation latency, encoder and IMU noise, Kalman speed
+    # feedback, mass draw): the same model as the prototype walks'. In the env the mass is drawn per episode
+    # from the env's seed and the sensors are seeded per episode too (`HardwareConfig.seed` is not used)
+    hardware: HardwareConfig = field(default_factory=HardwareConfig)
+    # domain randomisation: the ranges each episode's robot is drawn from (friction, latency, mass, motor
+    # strength, PID gains, ground friction); the default is the nominal robot, every episode the same
+    randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
+    fall_height: float = 0.15  # m, body centre below this = fallen
+    fall_tilt_deg: float = 45.0  # |roll| or |pitch| above this = fallen
+
+    @property
+    def decimation(self) -> int:
+        """Controller periods (`walk.sim.controller_dt`) per agent step."""
+        return int(round(self.control_dt / self.walk.sim.controller_dt))
+
+    @property
+    def max_episode_steps(self) -> int:
+        return int(round(self.episode_time / self.control_dt))
+
+    def __post_init__(self) -> None:
+        _positive(self, "control_dt", "episode_time", "action_scale", "foot_offset_scale", "joint_range_deg",
+                  "fall_height", "fall_tilt_deg")
+        _non_negative(self, "target_speed", "joint_stop_stiffness", "joint_stop_damping")
+        dt = self.walk.sim.controller_dt
+        _check(abs(self.control_dt / dt - round(self.control_dt / dt)) < 1e-6 and self.control_dt >= dt,
+               "EnvConfig.control_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", self.control_dt)
+        hw_dt = self.hardware.estimator_dt
+        _check(abs(hw_dt / dt - round(hw_dt / dt)) < 1e-6 and hw_dt >= dt,
+               "EnvConfig.hardware.estimator_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", hw_dt)
+        _check(abs(self.hardware.latency_s / dt - round(self.hardware.latency_s / dt)) < 1e-6,
+               "EnvConfig.hardware.latency_s", f"a whole multiple of walk.sim.controller_dt ({dt} s)",
+               self.hardware.latency_s)
+        _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
+               self.action_mode)
+        _check(self.randomization.joint_friction_scale == (1.0, 1.0) or self.hardware.friction,
+               "EnvConfig.randomization.joint_friction_scale", "(1, 1) unless hardware.friction is on (the scale "
+               "acts on the simulated joint friction)", self.randomization.joint_friction_scale)
+        r = self.target_speed_range
+        _check(len(r) == 0 or (len(r) == 2 and 0 <= r[0] <= r[1]), "EnvConfig.target_speed_range",
+               "() or (low, high) with 0 <= low <= high (m/s)", r)
+        _check(self.foot_offset_scale_z is None or (math.isfinite(self.foot_offset_scale_z)
+                                                     and self.foot_offset_scale_z > 0),
+               "EnvConfig.foot_offset_scale_z", "None or a finite number > 0 (m)", self.foot_offset_scale_z)
+        _check(self.joint_range_deg <= 180, "EnvConfig.joint_range_deg", "in (0, 180]", self.joint_range_deg)
+        _non_negative(self, "joint_damping", "prior_weight", "prior_decay_start", "prior_decay_steps",
+                      "prior_steps_done")
+        _check(self.prior_step_stride >= 1, "EnvConfig.prior_step_stride", ">= 1", self.prior_step_stride)
+        for name in ("joint_damping", "prior_weight", "trot_reference"):
+            _check(getattr(self, name) == 0 or self.action_mode == "torque", f"EnvConfig.{name}",
+                   "0 unless action_mode is 'torque' (the other modes run the trot controller's PD at the "
+                   "controller rate)", getattr(self, name))
+
+    def prior_weight_at(self, env_steps: int) -> float:
+        """The trot prior's weight after `env_steps` env steps of training (all envs together): `prior_weight`
+        for `prior_decay_start` steps, then linear to exactly 0 over `prior_decay_steps` (constant if that is 0)."""
+        if self.prior_weight == 0 or self.prior_decay_steps == 0:
+            return float(self.prior_weight)
+        into = max(0, env_steps - self.prior_decay_start)
+        return float(self.prior_weight) * max(0.0, 1.0 - into / self.prior_decay_steps)
