@@ -205,3 +205,25 @@ def test_gym_make_warns_when_the_default_reward_is_taken():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         gym.make("CyberDog-v0", reward="stage2").close()  # chosen: no warning
+
+
+@pytest.mark.parametrize("mode", ["residual", "foot", "torque"])
+def test_an_unreachable_foot_target_ends_the_episode_as_a_fall(mode, monkeypatch):
+    """The trot controller (residual and foot modes, the torque mode's prior) asking for a foot beyond the
+    leg's reach ends the episode as a fall, with the reason in `info`, instead of raising out of `step`."""
+    from cyberdog.core.kinematics import UnreachableFootTarget
+    extra = {"prior_weight": 1.0} if mode == "torque" else {}
+    env = CyberDogEnv(C.EnvConfig(action_mode=mode, control_dt=0.01, **extra), reward="stage1")
+    env.reset(seed=0)
+    assert not env.step(np.zeros(12))[2]
+    command = env.controller.command
+
+    def out_of_reach(*args, **kwargs):
+        if env.walker.steps >= 4:  # from the second agent step on
+            raise UnreachableFootTarget("unreachable foot target [0.0, 0.0, -0.5]: outside the leg's reach")
+        return command(*args, **kwargs)
+
+    monkeypatch.setattr(env.controller, "command", out_of_reach)
+    obs, reward, terminated, truncated, info = env.step(np.zeros(12))
+    assert terminated and not truncated and info["fallen"] and np.isfinite(reward) and np.isfinite(obs).all()
+    assert info["fall_reason"].startswith("unreachable foot target")

@@ -187,8 +187,9 @@ class TrotController:
         left, right = self._side_step_lengths(t, body)
         return np.array([left if is_left else right for is_left in LEG_IS_LEFT])
 
-    def _side_step_lengths(self, t: float, body: BodyFeedback) -> tuple[float, float]:
-        """(S_left, S_right), m; advances the speed integral (once per call, as `step_lengths`)."""
+    def _side_step_lengths(self, t: float, body: BodyFeedback, periods: int = 1) -> tuple[float, float]:
+        """(S_left, S_right), m; advances the speed integral by `periods` controller periods (once per call, as
+        `step_lengths`)."""
         # (min and max as conditional expressions, with the builtins' choice on ties: a per-period path)
         c = self.cfg.controller
         ramp = c.speed_ramp_time
@@ -198,7 +199,8 @@ class TrotController:
             v = v * (share if share < 1.0 else 1.0)  # commanded_speed(t)
         if body.forward_speed is not None and c.speed_gain > 0:
             limit = c.max_speed_correction * v
-            correction = self.speed_correction + c.speed_gain * (v - body.forward_speed) * self.cfg.sim.controller_dt
+            correction = self.speed_correction + c.speed_gain * (v - body.forward_speed) * (
+                self.cfg.sim.controller_dt if periods == 1 else periods * self.cfg.sim.controller_dt)
             correction = -limit if -limit > correction else correction  # np.clip on a scalar
             self.speed_correction = float(limit if limit < correction else correction)
         S = (v + self.speed_correction) * self._stance_time
@@ -250,12 +252,12 @@ class TrotController:
                     (a + d, b + e, c + f) for (a, b, c), (d, e, f) in zip(rates, path_rates)]
         return offsets, rates
 
-    def _leg_targets(self, t: float, body: BodyFeedback):
+    def _leg_targets(self, t: float, body: BodyFeedback, periods: int = 1):
         """Foot targets (4 × (x, y, z)), foot velocities (4 × (vx, vy, vz)), joint targets and joint speed
         targets (12 floats each) and the swing flags (4 bools) at time t, in plain Python values."""
         c = self.cfg.controller
         phases = self.scheduler.leg_phase_list(t)
-        S = self._side_step_lengths(t, body)
+        S = self._side_step_lengths(t, body, periods)
         # sideways foot placement against the body's sideways speed
         dy = c.lateral_placement_gain * body.lateral_speed
         dy = -MAX_ATTITUDE_SHIFT if -MAX_ATTITUDE_SHIFT > dy else MAX_ATTITUDE_SHIFT if MAX_ATTITUDE_SHIFT < dy else dy
@@ -308,11 +310,13 @@ class TrotController:
             return self._checked_torque(q_t, q, dq_t, dq, in_swing)
         return self.driver_torque(self.command(t, q, body), q, dq)
 
-    def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None) -> JointCommand:
+    def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None,
+                periods: int = 1) -> JointCommand:
         """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,
         an array or a list of floats): joint targets and speeds from the trajectory and IK, and the stance
-        feedforward torque."""
-        _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
+        feedforward torque. `periods`: the controller periods until the next call (the speed integral's time
+        step): 1 in the walker's loop, 10 for a command held over a 25 ms agent step (the torque-mode prior)."""
+        _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK, periods)
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
             self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(), in_swing)

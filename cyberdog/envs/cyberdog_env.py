@@ -13,6 +13,7 @@ from cyberdog import config as C
 from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import TrotController
 from cyberdog.core import rewards
+from cyberdog.core.kinematics import UnreachableFootTarget
 from cyberdog.loop.walker import Walker
 from cyberdog.sim.hardware import draw_mass_scale, draw_robot
 
@@ -92,7 +93,11 @@ class CyberDogEnv(gym.Env):
 
     **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
     `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
-    - `action_mode="torque"` (the paper's, Table 3): the action is the joint torque;
+    - `action_mode="torque"` (the paper's, Table 3): the action is the joint torque, held over the agent step;
+      two documented departures can be switched on (both off by default, see docs/torque_agent.md): the
+      drivers' damping `joint_damping` (−c·q̇ at every controller period, motor torque that Eq. 7 books), and a
+      prior from the trot controller whose weight decays to exactly 0 during training (`prior_weight`,
+      `prior_decay_steps`; DecAP): τ = 25·a + w·τ_trot, τ_trot computed at the agent step's state and held;
     - `action_mode="residual"` (default): the action is added to the torque of the diagonal trot controller
       (trajectory + IK + PID), so that a policy learns corrections to a walking gait — practical on a CPU;
     - `action_mode="foot"`: the action shifts the trot controller's foot targets by up to
@@ -150,8 +155,9 @@ class CyberDogEnv(gym.Env):
     `RewardConfig(keep_moving=300)` as the presets' stage 2 (walking +70, falling −47).
 
     **Episode end.** `terminated` when the body falls below `fall_height` (0.15 m), tilts beyond
-    `fall_tilt_deg` (45°) in roll or pitch, or the state is not finite; `truncated` only by the time limit
-    of the registration.
+    `fall_tilt_deg` (45°) in roll or pitch, the state is not finite, or the trot controller (residual mode, or
+    the torque mode's prior) asks for a foot beyond the leg's reach (a robot going down); `info["fall_reason"]`
+    says which. `truncated` only by the time limit of the registration.
 
     **Options** (keyword arguments of `gymnasium.make("CyberDog-v0", ...)`): `config` (an `EnvConfig`),
     `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array", or "human": a PyBullet window;
@@ -203,7 +209,7 @@ class CyberDogEnv(gym.Env):
                                                   cfg.joint_stop_stiffness, cfg.joint_stop_damping),
                              drive=cfg.action_mode != "torque", gui=(render_mode == "human"),
                              fall_height=cfg.fall_height, fall_tilt=np.deg2rad(cfg.fall_tilt_deg),
-                             body_trace=False)  # the env reads the state, not the walk's per-period body trace
+                             body_trace=False, joint_damping=cfg.joint_damping)  # the env reads the state, not the walk's per-period body trace
         self.robot, self.controller = self.walker.robot, self.walker.controller
         layout = observation_layout(cfg)
         low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
@@ -213,6 +219,7 @@ class CyberDogEnv(gym.Env):
         z_scale = cfg.foot_offset_scale if cfg.foot_offset_scale_z is None else cfg.foot_offset_scale_z
         self._foot_offset_scale = np.array([cfg.foot_offset_scale, cfg.foot_offset_scale, z_scale])  # m, x y z
         self._state = None
+        self._steps_taken = 0  # env steps since construction (all episodes): the trot prior's decay counts them
 
     # ----------------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -282,15 +289,58 @@ class CyberDogEnv(gym.Env):
             tau_action = None
         else:
             tau_action = self._last_action * self.cfg.action_scale
+        prior_weight = self.prior_weight
+        self._steps_taken += 1
         k0 = w.steps
-        applied = w.run(self.decimation, tau_action)  # the controller periods (bench/env_throughput.py times them)
+        trot_action = None
+        try:
+            if prior_weight > 0 or self.cfg.trot_reference:  # the trot's torque at this step's state, held
+                trot = self._trot_torque_or_none(must=prior_weight > 0)
+                if trot is not None:
+                    trot_action = np.clip(trot / self.cfg.action_scale, -1.0, 1.0)
+                    if prior_weight > 0:
+                        tau_action = tau_action + prior_weight * trot
+            applied = w.run(self.decimation, tau_action)  # the controller periods (bench/env_throughput.py)
+        except UnreachableFootTarget as e:  # the trot asks for a foot beyond the leg's reach: the robot is going down
+            return self._end_unreachable(k0, str(e))
         s = self._state = w.state
         self.last_torque = applied
         step_energy = w.energy(since=k0)  # Eq. (7)
         step_electrical = w.electrical_energy(since=k0) if self.cfg.reward.energy_model == "electrical" else None
-        return self._finish_step(s, step_energy, step_electrical)
+        obs, reward, terminated, truncated, info = self._finish_step(s, step_energy, step_electrical, prior_weight)
+        if trot_action is not None:
+            info["trot_action"] = trot_action
+        return obs, reward, terminated, truncated, info
 
-    def _finish_step(self, s, step_energy: float, step_electrical: float | None = None):
+    def _trot_torque_or_none(self, must: bool) -> np.ndarray | None:
+        """N·m (12,), the trot controller's torque at the state read now, for the agent step (its speed integral
+        advances by the step's periods). A foot target out of reach raises if the torque `must` act (the prior),
+        else gives None (a reference only: the robot is not driven by it)."""
+        try:
+            return self.walker.trot_torque(self.decimation)
+        except UnreachableFootTarget:
+            if must:
+                raise
+            return None
+
+    @property
+    def prior_weight(self) -> float:
+        """The trot prior's weight for the next step (torque mode; `EnvConfig.prior_weight_at`): 0 without one."""
+        cfg = self.cfg
+        return cfg.prior_weight_at(cfg.prior_steps_done + cfg.prior_step_stride * self._steps_taken)
+
+    def _end_unreachable(self, k0: int, why: str):
+        """The step in which the trot controller asked for a foot beyond the leg's reach: the episode ends as a
+        fall (`terminated`, `info["fall_reason"]`), with the energy of the periods that did run."""
+        s = self._state = self.walker.state
+        step_energy = self.walker.energy(since=k0)
+        electrical = (self.walker.electrical_energy(since=k0) if self.cfg.reward.energy_model == "electrical"
+                      else None)
+        obs, reward, _, truncated, info = self._finish_step(s, step_energy, electrical, self.prior_weight)
+        info.update(fallen=True, fall_reason=f"unreachable foot target ({why})")
+        return obs, reward, True, truncated, info
+
+    def _finish_step(self, s, step_energy: float, step_electrical: float | None = None, prior_weight: float = 0.0):
         cfg = self.cfg
         v_true = float(s.base_linear_velocity_world[0])
         v_used = self._forward_speed_used(s)
@@ -309,7 +359,11 @@ class CyberDogEnv(gym.Env):
                 "step_electrical_energy_J": step_electrical,
                 "forward_speed": v_true, "forward_speed_used": v_used, "target_speed": self.target_speed,
                 "velocity_estimate": self.walker.velocity_estimate_world, "fallen": bool(fallen),
-                "time": self.t}
+                "time": self.t, "prior_weight": prior_weight}
+        if fallen:
+            info["fall_reason"] = "fell (body height or tilt)"
+        elif not finite:
+            info["fall_reason"] = "non-finite state"
         if self.render_mode == "human":
             self.render()
         return self._observation(), reward, terminated, False, info

@@ -79,6 +79,9 @@ class Walker:
         contacts and foot slip; body_trace: keep the body's speed, attitude and height at every step (what
         `cyberdog.loop.result.walk_result` reads; the env, which reads none of it, leaves it off).
     fall_height, fall_tilt: m, rad: what `fallen` means.
+    joint_damping: N·m·s/rad, the motor drivers' damping −c·q̇ added at every period on the joint speed read then
+        (the drivers' kd with kp = 0: the torque-mode env's `EnvConfig.joint_damping`); motor torque, so the
+        energy books its work.
 
     After each step, `reading` holds the robot's state in floats (`Robot.read`, what the controller's per-period
     path uses) and `state` the same as a `RobotState` of arrays, built when first asked.
@@ -87,7 +90,8 @@ class Walker:
     def __init__(self, cfg: WalkConfig, controller: TrotController | None = None, robot: Robot | None = None,
                  hardware: HardwareConfig | None = None, joint_stop: JointStop | None = None, drive: bool = True,
                  record: bool = False, gait_metrics: bool = False, gui: bool = False,
-                 fall_height: float = FALL_HEIGHT, fall_tilt: float = FALL_TILT, body_trace: bool = True) -> None:
+                 fall_height: float = FALL_HEIGHT, fall_tilt: float = FALL_TILT, body_trace: bool = True,
+                 joint_damping: float = 0.0) -> None:
         if hardware is not None and not isinstance(hardware, HardwareConfig):
             raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
         self.cfg = cfg = hardware_walk_config(cfg, hardware)
@@ -99,6 +103,9 @@ class Walker:
         self.controller = controller or TrotController(cfg)
         self.hardware = hardware
         self.joint_stop, self.drive = joint_stop, drive
+        if not (joint_damping >= 0 and np.isfinite(joint_damping)):
+            raise ValueError(f"joint_damping must be >= 0 N·m·s/rad and finite, got {joint_damping!r}")
+        self.joint_damping = float(joint_damping)  # N·m·s/rad, the drivers' damping on the joint speed read now
         self.record, self.gait_metrics, self.body_trace = record, gait_metrics, body_trace
         self.fall_height, self.fall_tilt = fall_height, fall_tilt
         self.dt = cfg.sim.controller_dt  # s, one `step`
@@ -195,6 +202,15 @@ class Walker:
             return None
         return self.sensing.velocity_estimate_world
 
+    def trot_torque(self, periods: int = 1) -> np.ndarray:
+        """N·m (12,): the trot controller's torque (trajectory + IK + PD + feedforward) at the state the robot's
+        software reads now, without stepping; `periods`: the controller periods it will be held (the torque-mode
+        env's prior, held over an agent step: its speed integral advances by as many)."""
+        s = self.state
+        q, dq = self.sensed_joints(s)
+        command = self.controller.command(self.time, q, self.body_feedback(s, self.velocity_estimate_world), periods)
+        return self.controller.driver_torque(command, q, dq)
+
     def run(self, periods: int, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
         """`periods` controller periods (≥ 1), each as `step(extra_torque)`; returns the motor torque applied in
         the last (12,). The env's loop: the usual period (the ideal robot under its controller, no added torque,
@@ -202,7 +218,7 @@ class Walker:
         if periods < 1:
             raise ValueError(f"periods must be >= 1, got {periods!r}")
         if not (self.drive and self.sensing is None and extra_torque is None and self.delay.steps == 0
-                and not (self.body_trace or self.record or self.gait_metrics)):
+                and not self.joint_damping and not (self.body_trace or self.record or self.gait_metrics)):
             for _ in range(periods):
                 applied = self.step(extra_torque)
             return applied
@@ -250,6 +266,8 @@ class Walker:
             tau = self.controller.driver_torque_list(command, q, dq)  # the usual period, without the queue
         else:
             tau = self._driver_torque(self.delay.push((command, extra_torque, stop)), q, dq)
+        if self.joint_damping:  # the drivers' damping acts on the joint speed of this period, after the latency
+            tau = np.asarray(tau, dtype=float) - self.joint_damping * np.asarray(r.dq if dq is None else dq)
         s = self.state if self.body_trace or self.record else None  # this period's start, before the step
         applied = self.robot.step(tau)
         self.tau.append(applied)
