@@ -143,7 +143,7 @@ def test_non_finite_update_stops_training_with_a_diagnostic_checkpoint(tmp_path,
     cfg = C.override(_tiny(), ["train.init_random_frames=0", "train.stage1.max_env_steps=100"])
     trainer = Trainer(cfg, tmp_path, stages=(1,), progress=False)
 
-    def broken_update(batch, actor=True):
+    def broken_update(batch, actor=True, targets=None):
         raise NonFiniteError("Q-value is not finite (NaN or inf); training stopped")
 
     monkeypatch.setattr(trainer.agent, "update", broken_update)
@@ -272,11 +272,11 @@ def test_a_stage_can_set_its_own_action_penalty(tmp_path):
     seen = []
     update = trainer.agent.update
 
-    def recording_update(batch, actor=True):
+    def recording_update(batch, actor=True, targets=None):
         opt = trainer.agent.actor_optimizer
         seen.append((trainer.c["stage"], trainer.agent.action_l2, opt.param_groups[0]["lr"],
                      max((int(st["step"]) for st in opt.state.values()), default=0)))
-        return update(batch, actor)
+        return update(batch, actor, targets)
 
     trainer.agent.update = recording_update
     trainer.run()

@@ -29,6 +29,7 @@ from cyberdog.config import AgentConfig
 from cyberdog.envs.cyberdog_env import observation_typical_magnitude
 from cyberdog.rl.fast_td3 import FastTD3Losses
 from cyberdog.rl.networks import make_actor, make_critic
+from cyberdog.rl.replay import TROT_ACTION_KEY
 
 
 class NonFiniteError(RuntimeError):
@@ -167,6 +168,8 @@ class Agent:
         self.policy = make_exploration(cfg, self.actor, action_size).to(self.device)
         self.policy_delay = cfg.policy_delay if cfg.algorithm == "td3" else 1
         self.action_l2 = cfg.action_l2  # the trainer sets a stage's own (StageConfig.action_l2)
+        self.trot_imitation = cfg.trot_imitation  # the trainer sets a stage's own (StageConfig.trot_imitation)
+        self.imitation_scale = 1.0  # 1 − the trot prior's weight now (the trainer sets it before each round)
         td3 = isinstance(self.loss, TD3Loss)
         self._value_loss = self.loss.value_loss if td3 else self.loss.loss_value
         self._actor_loss = self.loss.actor_loss if td3 else self.loss.loss_actor
@@ -187,9 +190,11 @@ class Agent:
             torch.nn.utils.clip_grad_norm_(params, self.cfg.max_grad_norm, foreach=True)
         optimizer.step()
 
-    def update(self, batch: TensorDictBase, actor: bool = True) -> dict[str, torch.Tensor]:
+    def update(self, batch: TensorDictBase, actor: bool = True, targets: bool | None = None) -> dict[str, torch.Tensor]:
         """One critic update; actor + soft target update every `policy_delay`-th call (if `actor`; with
-        `actor=False` the critics alone learn, e.g. while they catch up with a new reward).
+        `actor=False` the critics alone learn, e.g. while they catch up with a new reward, and the targets follow
+        only if `targets` (default: as `actor`): the critics then evaluate the actor as it is, their values
+        propagating through the targets, instead of regressing on one step's reward over frozen targets).
 
         Returns the metrics as detached 0-d tensors (critic_loss, actor_loss, q_mean, q_max); convert them with
         `metrics_to_float` when logging. Raises `NonFiniteError` before any step that would write NaN/inf."""
@@ -204,55 +209,60 @@ class Agent:
         self._step(self.critic_optimizer, value_loss, self.critic_params)
         self.updates += 1
         if actor and self.updates % self.policy_delay == 0:
-            if self._fast is not None:
-                actor_loss = self._fast_actor_loss(batch)
-            else:
-                actor_loss, _ = self._actor_loss(batch)
-                if self.action_l2 > 0 or self.cfg.action_smoothness > 0:
-                    actor_loss = actor_loss + self._action_penalties(batch)
+            actor_loss = self._actor_objective(batch)
             _finite(actor_loss=actor_loss)
             self._step(self.actor_optimizer, actor_loss, self.actor_params)
             self.target_updater.step()
             self.actor_updates += 1
             self._last_actor_loss = actor_loss.detach()
+        elif targets and self.updates % self.policy_delay == 0:  # the actor waits; the targets follow
+            self.target_updater.step()
         return {"critic_loss": value_loss.detach(), "actor_loss": self._last_actor_loss, "q_mean": q.mean(),
                 "q_max": q.max()}
 
-    def _fast_actor_loss(self, batch: TensorDictBase) -> torch.Tensor:
-        """The actor loss plus `_action_penalties`, by `FastTD3Losses`: μ(s) (and μ(s') for the smoothness
-        term) in one forward pass, shared by the loss and the penalties."""
-        fast, obs = self._fast, batch["observation"]
-        smooth = self.cfg.action_smoothness > 0
-        if smooth:
-            now, nxt = fast.actor_actions(torch.cat([obs, batch["next", "observation"]])).chunk(2)
-        else:
-            now = fast.actor_actions(obs)
-        loss = fast.actor_loss(obs, now)
-        if self.action_l2 > 0:
-            loss = loss + self.action_l2 * now.pow(2).mean()
-        if smooth:
-            loss = loss + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
-        return loss
-
-    def _action_penalties(self, batch: TensorDictBase) -> torch.Tensor:
-        """`action_l2 · mean(μ(s)²) + action_smoothness · mean((μ(s') − μ(s))²)` over the batch, through the
-        loss's own actor parameters (those the optimizer steps).
-
-        The first keeps a residual policy near zero, i.e. near the trot controller, unless the critic's
-        gradient says otherwise: without it the actor ran to the ±1 bounds within a few thousand updates,
-        where the critic (trained on actions near 0) only extrapolates (measured, see configs/quick_residual.yaml).
-        The second is CAPS's temporal smoothness term (Mysore et al. 2021): consecutive actions should be
-        close, because a jump of the foot targets makes the PID jerk."""
+    def _actor_objective(self, batch: TensorDictBase) -> torch.Tensor:
+        """The actor loss (−Q₁(s, μ(s)), by `FastTD3Losses` or the TorchRL loss's own) plus `_penalties`, with
+        μ(s) (and μ(s') for the smoothness term) from one forward pass through the loss's actor parameters."""
         obs = batch["observation"]
         smooth = self.cfg.action_smoothness > 0
-        if smooth:  # one forward pass for s and s'
-            obs = torch.cat([obs, batch["next", "observation"]])
-        with self.loss.actor_network_params.to_module(self.loss.actor_network):
-            action = self.loss.actor_network(TensorDict({"observation": obs}, batch_size=obs.shape[:1]))["action"]
-        if not smooth:
-            return self.action_l2 * action.pow(2).mean()
-        now, nxt = action.chunk(2)
-        return self.action_l2 * now.pow(2).mean() + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
+        both = torch.cat([obs, batch["next", "observation"]]) if smooth else obs
+        if self._fast is not None:
+            actions = self._fast.actor_actions(both)
+        else:
+            with self.loss.actor_network_params.to_module(self.loss.actor_network):
+                actions = self.loss.actor_network(TensorDict({"observation": both},
+                                                             batch_size=both.shape[:1]))["action"]
+        now, nxt = actions.chunk(2) if smooth else (actions, None)
+        if self._fast is not None:
+            loss = self._fast.actor_loss(obs, now)
+        else:
+            loss, _ = self._actor_loss(batch)
+        return self._with_penalties(loss, now, nxt, batch)
+
+    def _with_penalties(self, loss: torch.Tensor, now: torch.Tensor, nxt: torch.Tensor | None,
+                        batch: TensorDictBase) -> torch.Tensor:
+        """`loss` (−Q) plus, in this order, over the batch's actions μ(s) (`now`) and μ(s') (`nxt`):
+        - `action_l2 · mean(μ(s)²)`: keeps a residual policy near the trot controller unless the critic's
+          gradient says otherwise (without it the actor ran to the ±1 bounds within a few thousand updates,
+          where the critic, trained on actions near 0, only extrapolates: configs/quick_residual.yaml);
+        - `action_smoothness · mean((μ(s') − μ(s))²)`: CAPS's temporal term (Mysore et al. 2021): a jump of
+          the foot targets makes the PID jerk;
+        - `trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²)` over the transitions with a reference: pulls a
+          torque policy toward the share of the trot controller's torque a_trot (stored per transition,
+          `EnvConfig.trot_reference`) that the prior of weight w (`imitation_scale` = 1 − w) no longer gives;
+          TD3+BC's regulariser (Fujimoto & Gu 2021) with the trot as the behaviour."""
+        if self.action_l2 > 0:
+            loss = loss + self.action_l2 * now.pow(2).mean()
+        if nxt is not None:
+            loss = loss + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
+        if self.trot_imitation > 0:
+            reference = batch[TROT_ACTION_KEY]
+            known = torch.isfinite(reference).all(-1)
+            if known.any():
+                target = torch.nan_to_num(reference) * self.imitation_scale
+                error = (now - target).pow(2).mean(-1)
+                loss = loss + self.trot_imitation * (error * known).sum() / known.sum()
+        return loss
 
     def set_actor_lr(self, lr: float, fresh: bool = False) -> None:
         """The actor's learning rate from now on; `fresh=True` also drops Adam's moments (a new optimizer)."""

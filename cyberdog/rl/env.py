@@ -19,11 +19,15 @@ from cyberdog.config import REWARD_TERM_NAMES, EnvConfig, RewardConfig
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.rl.stop import ignore_stop_signals
 
-INFO_KEYS = tuple(f"reward_{n}" for n in REWARD_TERM_NAMES) + ("energy_J", "forward_speed")
+INFO_KEYS = tuple(f"reward_{n}" for n in REWARD_TERM_NAMES) + ("energy_J", "forward_speed", "prior_weight",
+                                                                 "trot_action")
+INFO_SHAPES = {"trot_action": (12,)}  # the others are scalars
+NO_REFERENCE = np.full(12, np.nan, dtype=np.float32)
 
 
 class FlatInfo(gym.Wrapper):
-    """Replaces `info` with flat float entries: weighted reward terms, step energy (J) and forward speed."""
+    """Replaces `info` with flat float entries: weighted reward terms, step energy (J), forward speed and the
+    trot prior's weight (torque mode; 0 without one)."""
 
     def _flat(self, info: dict) -> dict:
         weighted = info.get("reward_weighted", {})
@@ -32,7 +36,13 @@ class FlatInfo(gym.Wrapper):
         # stored per transition so that rewards can be relabelled with another energy weight
         flat["energy_J"] = info.get("reward_terms", {}).get("energy", 0.0)
         flat["forward_speed"] = info.get("forward_speed", 0.0)
-        return {k: np.float32(v) for k, v in flat.items()}
+        flat["prior_weight"] = info.get("prior_weight", 0.0)
+        flat = {k: np.float32(v) for k, v in flat.items()}
+        # the trot controller's torque at the step's start state, in action units (NaN where the env did not
+        # compute it: EnvConfig.trot_reference off, a reset, or a foot target out of the leg's reach)
+        reference = info.get("trot_action")
+        flat["trot_action"] = NO_REFERENCE if reference is None else np.asarray(reference, dtype=np.float32)
+        return flat
 
     def reset(self, **kwargs):
         obs, info = self.env.reset(**kwargs)
@@ -54,7 +64,7 @@ def make_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, device: 
              track_init: bool = False) -> TransformedEnv:
     """TorchRL env; `track_init` adds the "is_init" flag Ornstein–Uhlenbeck noise needs."""
     base = GymWrapper(make_gym_env(env_cfg, reward), device=device)
-    spec = {k: Unbounded(shape=(), dtype=torch.float32, device=device) for k in INFO_KEYS}
+    spec = {k: Unbounded(shape=INFO_SHAPES.get(k, ()), dtype=torch.float32, device=device) for k in INFO_KEYS}
     base.set_info_dict_reader(default_info_dict_reader(list(INFO_KEYS), spec=spec))
     env = TransformedEnv(base)
     if track_init:

@@ -14,7 +14,8 @@ from cyberdog.config import REWARD_TERM_NAMES
 COLUMNS = (("stage", "episode", "stage_episode", "env_steps", "length", "score")
            + tuple(f"reward_{n}" for n in REWARD_TERM_NAMES)
            + ("energy_J", "mean_speed", "window_mean_score", "actor_loss", "critic_loss", "q_mean", "q_max",
-              "updates", "env_steps_per_s", "updates_per_s", "wall_time_s"))
+              "updates", "env_steps_per_s", "updates_per_s", "wall_time_s",
+              "fell", "prior_weight"))  # 1 if the episode ended in a fall; the trot prior's mean weight in it
 TIMING_COLUMNS = ("env_steps_per_s", "updates_per_s", "wall_time_s")  # differ between identical reruns
 
 
@@ -86,6 +87,11 @@ class EpisodeLogger:
             return
         lines = self.path.read_bytes().split(b"\n")[:-1]  # complete lines; a partial last line is dropped
         header = ",".join(COLUMNS).encode()
+        older = lines[0].rstrip(b"\r").split(b",") if lines else []
+        if lines and older != header.split(b",") and older == header.split(b",")[:len(older)]:
+            # a run logged by a version with fewer columns: they are appended, empty in its earlier rows
+            missing = b"," * (len(COLUMNS) - len(older))
+            lines = [header] + [line.rstrip(b"\r") + missing for line in lines[1:]]
         if lines and lines[0].rstrip(b"\r") != header:
             raise ValueError(f"{self.path}: its first line is not the metrics header this code writes (a file of "
                              f"another version, or damaged); move it aside to resume with a new one")

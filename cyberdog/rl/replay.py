@@ -49,9 +49,13 @@ def sample_batches(rb: TensorDictReplayBuffer, n: int, batch_size: int) -> Itera
         n -= k
 
 
-def transitions(batch: TensorDictBase) -> TensorDictBase:
-    """The keys a transition keeps, flattened to one batch dimension."""
-    return batch.select(*TRANSITION_KEYS).reshape(-1)
+TROT_ACTION_KEY = ("next", "trot_action")  # the trot controller's torque at the transition's s, in action units
+#                                           (torque mode; kept only when the actor imitates it: AgentConfig)
+
+
+def transitions(batch: TensorDictBase, extra_keys=()) -> TensorDictBase:
+    """The keys a transition keeps (and `extra_keys`), flattened to one batch dimension."""
+    return batch.select(*TRANSITION_KEYS, *extra_keys).reshape(-1)
 
 def buffer_state(rb: TensorDictReplayBuffer) -> dict:
     """Contents (in storage order) and write cursor, as a plain dict of tensors."""
@@ -61,8 +65,9 @@ def buffer_state(rb: TensorDictReplayBuffer) -> dict:
     cursor = int(rb._writer._cursor) if n else 0
     return {"size": n, "cursor": cursor, "capacity": int(storage.max_size), "data": data}
 
-def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
-    """Refill an empty buffer from `buffer_state`; raises ValueError if the capacities differ."""
+def load_buffer_state(rb: TensorDictReplayBuffer, state: dict, extra_keys=()) -> None:
+    """Refill an empty buffer from `buffer_state`; raises ValueError if the capacities differ or a key the run
+    keeps (`TRANSITION_KEYS` and `extra_keys`) is missing."""
     if int(state["capacity"]) != int(rb._storage.max_size):
         raise ValueError(f"replay buffer capacity in checkpoint ({state['capacity']}) differs from config "
                          f"(train.buffer_size={rb._storage.max_size})")
@@ -71,7 +76,7 @@ def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
     if n == 0:
         return
     data = TensorDict(state["data"], batch_size=[n])
-    missing = [k for k in TRANSITION_KEYS if k not in data.keys(include_nested=True)]
+    missing = [k for k in (*TRANSITION_KEYS, *extra_keys) if k not in data.keys(include_nested=True)]
     if missing:
         raise ValueError(f"the stored transitions lack {missing} (a checkpoint of an older version); "
                          f"start a new run, or continue that one with the version that wrote it")
@@ -81,4 +86,4 @@ def load_buffer_state(rb: TensorDictReplayBuffer, state: dict) -> None:
         raise ValueError(f"replay buffer restored {len(rb)} transitions, checkpoint has {n}")
 
 __all__ = ["make_replay_buffer", "sample_batches", "transitions", "buffer_state", "load_buffer_state",
-           "TRANSITION_KEYS"]
+           "TRANSITION_KEYS", "TROT_ACTION_KEY"]

@@ -69,7 +69,9 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     if not duration > 0:
         raise ValueError(f"duration must be > 0 s, got {duration!r}")
     cfg = env_config or actor.config.env
-    cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=())
+    # the policy alone: a torque policy trained with the trot prior (EnvConfig.prior_weight) is judged without it
+    cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=(),
+                              prior_weight=0.0, prior_decay_steps=0, prior_steps_done=0)
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
         # the env's simulation loop keeps every controller period: state, body, applied torque, contacts, and the

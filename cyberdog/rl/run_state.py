@@ -14,12 +14,13 @@ from cyberdog.rl.replay import buffer_state, load_buffer_state
 
 class RunState:
     """The save and restore half of the trainer, on its attributes (cfg, run_dir, stages, c, agent, rb,
-    scores, best_score, logger)."""
+    scores, best_score, logger, prior_weight). Every file records the trot prior's weight when it was written
+    (torque mode; 0 without one): an actor saved while it was above 0 walked with its help."""
 
     def _state(self) -> dict:
         return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": dict(self.c),
                 "agent": self.agent.state_dict(), "replay": buffer_state(self.rb), "rng": rng_state(),
-                "scores": list(self.scores), "best_score": self.best_score}
+                "scores": list(self.scores), "best_score": self.best_score, "prior_weight": self.prior_weight}
 
     def save(self, name: str = "checkpoint.pt") -> Path:
         self.logger.flush()
@@ -53,7 +54,8 @@ class RunState:
                 "counters": {**self.c, "finished": True}, "agent": agent,
                 "actor": self.agent.actor.state_dict(), "stage": stage, "score": score,
                 "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
-                "stage_updates": self.c["stage_updates"], "scores": list(self.scores), "best_score": self.best_score}
+                "stage_updates": self.c["stage_updates"], "scores": list(self.scores), "best_score": self.best_score,
+                "prior_weight": self.prior_weight}
 
     def _restore(self, state: dict, path) -> None:
         try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
@@ -63,7 +65,7 @@ class RunState:
         extension = budget_extension(saved, C.to_dict(self.cfg), int(state["counters"]["stage"]), path)
         self._load_agent(state, path)
         try:
-            load_buffer_state(self.rb, state["replay"])
+            load_buffer_state(self.rb, state["replay"], self.extra_transition_keys)
         except (ValueError, KeyError, RuntimeError) as e:
             raise CheckpointError(f"{path}: replay buffer cannot be restored: {e}") from e
         self.stages = list(state["stages"])
@@ -73,6 +75,11 @@ class RunState:
         set_rng_state(state["rng"])
         if extension:
             self._extend(extension)
+        c = self.c
+        prior = f", trot prior's weight {self.prior_weight:.4f}" if self.cfg.env.prior_weight > 0 else ""
+        print(f"resuming {path}: stage {c['stage']} at env step {c['stage_env_steps']} of the stage "
+              f"({c['env_steps']} in all), episode {c['episodes']}, {self.agent.updates} updates{prior}",
+              file=sys.stderr, flush=True)
 
     def _extend(self, changes: dict) -> None:
         """Continue the current stage under a raised budget. If the run had finished, its stage-final files
@@ -93,7 +100,8 @@ class RunState:
     def _save_actor(self, name: str, score: float) -> None:
         save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
                      "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
-                     "stage_updates": self.c["stage_updates"]}, self.run_dir / name)
+                     "stage_updates": self.c["stage_updates"], "prior_weight": self.prior_weight},
+                    self.run_dir / name)
 
 
 __all__ = ["RunState"]

@@ -31,6 +31,7 @@ writes no stage-final files.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 import sys
@@ -50,7 +51,7 @@ from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import load_checkpoint, remove_stale_temporaries, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
-from cyberdog.rl.replay import make_replay_buffer, relabel_rewards, sample_batches, transitions
+from cyberdog.rl.replay import TROT_ACTION_KEY, make_replay_buffer, relabel_rewards, sample_batches, transitions
 from cyberdog.rl.run_state import RunState
 from cyberdog.rl.stop import StopSignals, TrainingInterrupted
 from cyberdog.runlock import RunFolderError, RunLock
@@ -111,6 +112,7 @@ class Trainer(RunState):
         self.c = dict(stage=self.stages[0], env_steps=0, stage_env_steps=0, episodes=0, stage_episodes=0,
                       stage_updates=0, update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
         self.scores: deque = deque(maxlen=tc.score_window)
+        self.recent: deque = deque(maxlen=100)  # (length, fell) of the latest episodes, for the progress line
         self.best_score = -math.inf
         self.logger = None
         self.run_dir.mkdir(parents=True, exist_ok=True)
@@ -221,6 +223,7 @@ class Trainer(RunState):
         c = self.c
         seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
         self.agent.action_l2 = self.cfg.agent.action_l2 if sc.action_l2 is None else sc.action_l2
+        self.agent.trot_imitation = self.cfg.agent.trot_imitation if sc.trot_imitation is None else sc.trot_imitation
         self.agent.set_actor_lr(self.cfg.agent.actor_lr if sc.actor_lr is None else sc.actor_lr,
                                 fresh=sc.fresh_actor_optimizer and c["stage_env_steps"] == 0)
         threads = torch.get_num_threads()  # closing a ParallelEnv raises them by its worker count: restored below
@@ -238,7 +241,7 @@ class Trainer(RunState):
                 t_env += collector.last_collect_time if is_async else time.perf_counter() - t0
                 if not torch.isfinite(batch["action"]).all():
                     raise NonFiniteError("action is not finite (NaN or inf); training stopped")
-                self.rb.extend(transitions(batch))
+                self.rb.extend(transitions(batch, self.extra_transition_keys))
                 n = batch.numel()
                 self.agent.policy[-1].step(n)  # anneal the exploration noise
                 c["env_steps"] += n
@@ -253,8 +256,7 @@ class Trainer(RunState):
                          "updates_per_s": n_upd / t_upd if t_upd > 0 else math.nan}
                 self._bookkeep(batch, episodes, stage, sc, rates)
                 bar.update(min(n, max(0, budget - bar.n)))
-                bar.set_postfix(ep=c["stage_episodes"], score=f"{np.mean(self.scores) if self.scores else 0:.2f}",
-                                upd_s=f"{rates['updates_per_s']:.0f}", refresh=False)
+                bar.set_postfix(self._progress_fields(rates), refresh=False)
                 if c["env_steps"] - c["last_checkpoint"] >= tc.checkpoint_every:
                     self.save()
                 self._stop_if_asked()  # the batch is stored, learned from and logged: a safe point
@@ -269,16 +271,53 @@ class Trainer(RunState):
             collector.shutdown()
             torch.set_num_threads(threads)
 
+    def _progress_fields(self, rates: dict) -> dict:
+        """The progress line: what tells learning from failing (episode length and falls over the latest 100
+        episodes), not only the score; the trot prior's weight while there is one."""
+        recent = list(self.recent)
+        fields = {"ep": self.c["stage_episodes"], "score": f"{np.mean(self.scores) if self.scores else 0:.2f}",
+                  "len": f"{np.mean([n for n, _ in recent]) if recent else 0:.0f}",
+                  "falls": f"{np.mean([f for _, f in recent]) * 100 if recent else 0:.0f}%"}
+        if self.cfg.env.prior_weight > 0:
+            fields["prior"] = f"{self.prior_weight:.3f}"
+        fields["upd_s"] = f"{rates['updates_per_s']:.0f}"
+        return fields
+
     def _collector(self, reward, seed: int, random_frames: int):
         """The stage's collector: the env(s) in a worker process one batch ahead of the updates ("async"), or
         here, with the policy on self.device acting on the observations of all envs at once."""
-        tc = self.cfg.train
+        tc, env_cfg = self.cfg.train, self._collection_env()
         if tc.collection == "async":
-            return ProcessCollector(self.cfg.env, reward, seed, self.cfg.agent, self.agent.policy,
+            return ProcessCollector(env_cfg, reward, seed, self.cfg.agent, self.agent.policy,
                                     self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
                                     tc.num_envs)
-        return make_collector(make_env_for_collection(self.cfg.env, reward, seed, tc.num_envs), self.agent.policy,
+        return make_collector(make_env_for_collection(env_cfg, reward, seed, tc.num_envs), self.agent.policy,
                               tc.frames_per_batch, random_frames, self.device)
+
+    @property
+    def extra_transition_keys(self) -> tuple:
+        """What a transition keeps beyond TRANSITION_KEYS: the trot's torque when the actor is pulled toward it."""
+        tc, agent = self.cfg.train, self.cfg.agent
+        imitates = agent.trot_imitation > 0 or any((getattr(tc, f"stage{n}").trot_imitation or 0) > 0 for n in (1, 2))
+        return (TROT_ACTION_KEY,) if imitates else ()
+
+    def _collection_env(self) -> C.EnvConfig:
+        """The env config the stage collects in: the trot prior (torque mode, `EnvConfig.prior_weight`) decays
+        over stage 1's env steps, so its envs start where the stage's counter stands (a resume goes on with the
+        same weight) and each counts `num_envs` steps per step of its own; later stages have no prior."""
+        env = self.cfg.env
+        if env.prior_weight == 0:
+            return env
+        if self.c["stage"] != 1:
+            return dataclasses.replace(env, prior_weight=0.0, prior_decay_steps=0, prior_steps_done=0)
+        return dataclasses.replace(env, prior_steps_done=self.c["stage_env_steps"],
+                                   prior_step_stride=self.cfg.train.num_envs)
+
+    @property
+    def prior_weight(self) -> float:
+        """The trot prior's weight now (0 without one, and in every stage after the first)."""
+        env = self._collection_env()
+        return env.prior_weight_at(env.prior_steps_done)
 
     def _random_frames_left(self, stage: int) -> int:
         """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent)."""
@@ -292,10 +331,13 @@ class Trainer(RunState):
                              self.c["stage_env_steps"]):
             return 0
         n, self.c["update_credit"] = C.update_credit(self.c["update_credit"], frames, tc.updates_per_frame)
-        warmup = getattr(tc, f"stage{self.c['stage']}").critic_warmup_updates
+        sc = getattr(tc, f"stage{self.c['stage']}")
+        warmup = sc.critic_warmup_updates
         metrics = []
+        self.agent.imitation_scale = 1.0 - self.prior_weight
         for b in sample_batches(self.rb, n, tc.batch_size):
-            metrics.append(self.agent.update(b, actor=self.c["stage_updates"] >= warmup))
+            warm = self.c["stage_updates"] >= warmup
+            metrics.append(self.agent.update(b, actor=warm, targets=warm or sc.critic_warmup_targets))
             self.c["stage_updates"] += 1
         if n:  # tensors until here: one conversion per round of updates, not four per update
             self.last = metrics_to_float(metrics)
@@ -304,7 +346,7 @@ class Trainer(RunState):
 
     @staticmethod
     def _new_episode() -> dict:
-        return {"length": 0, "score": 0.0, "energy_J": 0.0, "speed_sum": 0.0,
+        return {"length": 0, "score": 0.0, "energy_J": 0.0, "speed_sum": 0.0, "prior_sum": 0.0, "fell": 0,
                 **{f"reward_{n}": 0.0 for n in REWARD_TERM_NAMES}}
 
     def _bookkeep(self, batch, episodes: list[dict], stage: int, sc: C.StageConfig, rates: dict) -> None:
@@ -314,7 +356,8 @@ class Trainer(RunState):
         time-major (step t of every env, then t+1), which is also the order of the logged `env_steps`."""
         n_envs = len(episodes)
         nxt = batch["next"]
-        cols = {k: nxt[k].reshape(n_envs, -1).tolist() for k in ["reward", "energy_J", "forward_speed"]
+        cols = {k: nxt[k].reshape(n_envs, -1).tolist() for k in ["reward", "energy_J", "forward_speed",
+                                                                   "prior_weight", "terminated"]
                 + [f"reward_{n}" for n in REWARD_TERM_NAMES]}
         done = nxt["done"].reshape(n_envs, -1).tolist()
         first_step = self.c["env_steps"] - n_envs * len(done[0])
@@ -324,9 +367,11 @@ class Trainer(RunState):
                 ep["score"] += cols["reward"][i][t]
                 ep["energy_J"] += cols["energy_J"][i][t]
                 ep["speed_sum"] += cols["forward_speed"][i][t]
+                ep["prior_sum"] += cols["prior_weight"][i][t]
                 for n in REWARD_TERM_NAMES:
                     ep[f"reward_{n}"] += cols[f"reward_{n}"][i][t]
                 if done[i][t]:
+                    ep["fell"] = int(bool(cols["terminated"][i][t]))  # fallen or non-finite, not the time limit
                     self._episode_end(ep, stage, sc, rates, first_step + t * n_envs + i + 1)
                     ep.update(self._new_episode())
 
@@ -335,13 +380,17 @@ class Trainer(RunState):
         c["episodes"] += 1
         c["stage_episodes"] += 1
         self.scores.append(ep["score"])
-        row = {**{k: v for k, v in ep.items() if k != "speed_sum"}, **self.last, **rates,
+        self.recent.append((ep["length"], ep["fell"]))
+        row = {**{k: v for k, v in ep.items() if k not in ("speed_sum", "prior_sum")}, **self.last, **rates,
                "stage": stage, "episode": c["episodes"], "stage_episode": c["stage_episodes"],
                "env_steps": env_steps, "mean_speed": ep["speed_sum"] / ep["length"],
+               "prior_weight": ep["prior_sum"] / ep["length"],
                "window_mean_score": float(np.mean(self.scores)), "updates": self.agent.updates,
                "wall_time_s": time.time()}
         self.logger.log(row)
         c["csv_rows"] = self.logger.rows
+        if row["prior_weight"] > 0:  # the trot prior helped: not the policy's own score (no best or saved actor)
+            return
         if ep["score"] > self.best_score:
             self.best_score = ep["score"]
             self._save_actor(f"stage{stage}_best_actor.pt", ep["score"])

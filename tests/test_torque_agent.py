@@ -1,0 +1,250 @@
+"""The paper's action space (joint torques, Table 3) and what helps a torque policy learn: the drivers' damping
+and the trot prior whose weight decays to exactly zero (DecAP). The contract of the torque-mode env (scaling,
+limits, Table 4's ±45° stops), the prior's schedule in the env, the trainer, its checkpoints and the resume,
+and the evaluation of the policy alone."""
+import csv
+
+import numpy as np
+import pytest
+import torch
+from tensordict import TensorDict
+
+from conftest import metrics_rows, stop_after, tiny
+from cyberdog import config as C
+from cyberdog.control.trot import TrotController
+from cyberdog.core import kinematics as kin
+from cyberdog.envs.cyberdog_env import CyberDogEnv
+from cyberdog.loop.walker import Walker
+from cyberdog.rl.agent import Agent
+from cyberdog.rl.checkpoint import load_checkpoint
+from cyberdog.rl.logger import COLUMNS, EpisodeLogger
+from cyberdog.rl.rollout import load_actor, rollout
+from cyberdog.rl.trainer import Trainer
+
+TORQUE = dict(action_mode="torque", control_dt=0.01)  # 4 controller periods per agent step: quick tests
+
+
+def torque_env(**kw) -> CyberDogEnv:
+    return CyberDogEnv(C.EnvConfig(**{**TORQUE, **kw}), reward="stage1")
+
+
+# ---- the torque-mode env's contract ---------------------------------------------------------------------
+def test_the_action_is_the_joint_torque_scaled_by_table4s_limit():
+    env = torque_env()
+    env.reset(seed=0)
+    action = np.linspace(-0.3, 0.3, 12)
+    env.step(action)
+    # every period of the step applied 25 N·m per unit action (joints inside the range: no end stop)
+    np.testing.assert_allclose(env.walker.tau.view(), np.tile(25.0 * action, (env.decimation, 1)), atol=1e-9)
+
+
+def test_no_torque_reaches_a_joint_beyond_the_limit_with_prior_and_damping():
+    env = torque_env(prior_weight=1.0, joint_damping=3.0)
+    env.reset(seed=0)
+    for sign in (1.0, -1.0) * 10:
+        env.step(np.full(12, sign))
+    applied = env.walker.tau.view()
+    assert np.abs(applied).max() <= env.cfg.walk.actuator.torque_limit + 1e-9
+    assert np.abs(applied).max() > 20.0  # the limit was reached, not avoided
+
+
+def test_the_joint_range_end_stop_holds_a_joint_pushed_at_full_torque():
+    """Table 4's ±45°: a hip driven at the full 25 N·m for 0.6 s is caught by the end stop's spring a few
+    degrees beyond the range (it swings in with speed); without the stop it turns on to the URDF limit."""
+    q_stand = kin.standing_joint_angles(C.RobotConfig()).ravel()
+    reach = {}
+    for stiffness in (200.0, 0.0):
+        env = torque_env(joint_stop_stiffness=stiffness, joint_stop_damping=2.0 if stiffness else 0.0,
+                         fall_height=0.001, fall_tilt_deg=180.0)
+        env.reset(seed=0)
+        action = np.zeros(12)
+        action[1] = -1.0  # LF hip
+        q = []
+        for _ in range(60):
+            env.step(action)
+            q.append(env.walker.reading.q[1])
+        reach[stiffness] = np.abs(np.array(q) - q_stand[1]).max()
+    assert np.deg2rad(45.0) < reach[200.0] <= np.deg2rad(45.0 + 15.0)
+    assert reach[0.0] > np.deg2rad(90.0)
+
+
+def test_joint_damping_is_motor_torque_whose_work_eq7_books():
+    """The drivers' damping: −c·q̇ on the joint speed read at each period, applied as motor torque, so that the
+    damper's work is in the energy (a damper in the joint model instead would hide it)."""
+    walker = Walker(C.WalkConfig(), TrotController(C.WalkConfig()), drive=False, joint_damping=3.0,
+                    fall_height=0.0, fall_tilt=np.pi)
+    walker.step(np.zeros(12))  # the body settles: the joints move
+    for _ in range(20):
+        dq = np.array(walker.reading.dq)
+        applied = walker.step(np.zeros(12))
+        np.testing.assert_allclose(applied, np.clip(-3.0 * dq, -25.0, 25.0), atol=1e-9)
+    assert walker.energy() > 0.0  # with no action at all: the damper's work
+
+
+def test_damping_and_prior_are_refused_outside_torque_mode():
+    for field in ("joint_damping", "prior_weight"):
+        with pytest.raises(ValueError, match=f"EnvConfig.{field}"):
+            C.EnvConfig(action_mode="residual", **{field: 1.0})
+
+
+# ---- the prior's schedule -------------------------------------------------------------------------------
+def test_the_prior_weight_decays_linearly_to_exactly_zero():
+    cfg = C.EnvConfig(action_mode="torque", prior_weight=1.0, prior_decay_steps=400)
+    assert [cfg.prior_weight_at(k) for k in (0, 100, 200, 400, 401, 10 ** 9)] == [1.0, 0.75, 0.5, 0.0, 0.0, 0.0]
+    assert C.EnvConfig(action_mode="torque", prior_weight=0.5).prior_weight_at(10 ** 9) == 0.5  # no decay
+    held = C.EnvConfig(action_mode="torque", prior_weight=1.0, prior_decay_start=100, prior_decay_steps=400)
+    assert [held.prior_weight_at(k) for k in (0, 100, 300, 500, 501)] == [1.0, 1.0, 0.5, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("stride", [1, 2])
+def test_the_env_counts_the_decay_across_episodes_and_envs(stride):
+    decay = 2 + 5 * stride  # the sixth step's weight is exactly 0
+    env = torque_env(prior_weight=1.0, prior_decay_steps=decay, prior_steps_done=2, prior_step_stride=stride)
+    weights = []
+    for episode in range(3):
+        env.reset(seed=episode)
+        for _ in range(2):
+            weights.append(env.step(np.zeros(12))[4]["prior_weight"])
+    expected = [max(0.0, 1.0 - (2 + stride * k) / decay) for k in range(6)]
+    assert weights == expected and weights[-1] == 0.0
+
+
+def test_with_the_prior_at_one_the_robot_gets_the_trot_torque_held_and_at_zero_nothing():
+    env = torque_env(prior_weight=1.0)
+    env.reset(seed=0)
+    trot = env.walker.trot_torque()
+    env.step(np.zeros(12))
+    np.testing.assert_allclose(env.walker.tau.view(), np.tile(np.clip(trot, -25, 25), (env.decimation, 1)),
+                               atol=1e-9)
+    pure = torque_env(prior_weight=0.0)
+    pure.reset(seed=0)
+    pure.step(np.zeros(12))
+    assert not pure.walker.tau.view().any()  # no controller under the paper's action
+
+
+def test_the_prior_walks_the_robot_where_the_policy_alone_does_not():
+    """What the prior is for: at weight 1 (and the drivers' damping) a zero action walks 3 s forward; without
+    it nothing drives the legs and the robot sinks onto its end stops where it stands."""
+    distance = {}
+    for w in (1.0, 0.0):
+        env = CyberDogEnv(C.EnvConfig(action_mode="torque", joint_damping=3.0, prior_weight=w), reward="stage1")
+        env.reset(seed=0)
+        for _ in range(120):
+            assert not env.step(np.zeros(12))[2]
+        distance[w] = env.walker.reading.base_position[0] - env.walker.start[0]
+    assert distance[1.0] > 1.0 and abs(distance[0.0]) < 0.1
+
+
+# ---- the trainer: the schedule over stage 1, checkpoints, resume, evaluation ------------------------------
+PRIOR = ["env.action_mode=torque", "env.joint_damping=2.0", "env.prior_weight=1.0", "env.prior_decay_steps=200",
+         "train.stage1.max_env_steps=300", "train.checkpoint_every=100"]
+
+
+def test_a_prior_that_outlasts_stage1_is_refused():
+    with pytest.raises(ValueError, match="prior_decay_steps"):
+        tiny(PRIOR, "env.prior_decay_steps=400")
+    with pytest.raises(ValueError, match="prior_decay_start"):
+        tiny(PRIOR, "env.prior_decay_start=150")
+    with pytest.raises(ValueError, match="prior_decay_steps"):
+        tiny(PRIOR, "env.prior_decay_steps=0")
+
+
+def test_the_prior_decays_over_stage1_is_saved_and_resumes_and_the_stage_ends_without_it(tmp_path):
+    cfg = tiny(PRIOR)
+    stop_after(Trainer(cfg, tmp_path / "run", stages=(1, 2), progress=False), 100)  # after its checkpoint at 100
+    state = load_checkpoint(tmp_path / "run" / "checkpoint.pt")
+    assert state["counters"]["stage_env_steps"] == 100 and state["prior_weight"] == pytest.approx(0.5)
+    resumed = Trainer(cfg, tmp_path / "run", resume=True, progress=False)
+    assert resumed.prior_weight == pytest.approx(0.5) and resumed._collection_env().prior_steps_done == 100
+    resumed.run()
+    rows = metrics_rows(tmp_path / "run")
+    weights = [float(r["prior_weight"]) for r in rows if r["stage"] == "1"]
+    assert weights[0] > 0.9 and all(a >= b for a, b in zip(weights, weights[1:]))  # falls across the resume
+    assert all(float(r["prior_weight"]) == 0.0 for r in rows if r["stage"] == "2")
+    assert {r["fell"] for r in rows} <= {"0", "1"}
+    final = load_checkpoint(tmp_path / "run" / "stage1_final.pt")
+    assert final["prior_weight"] == 0.0 and final["counters"]["stage_env_steps"] == 300
+    assert torch.load(tmp_path / "run" / "stage2_final_actor.pt", weights_only=True)["prior_weight"] == 0.0
+
+
+def test_the_evaluated_torque_policy_runs_with_no_trot_controller(tmp_path, monkeypatch):
+    Trainer(tiny(PRIOR), tmp_path, stages=(1,), progress=False).run()
+    actor = load_actor(tmp_path / "stage1_final_actor.pt")
+    assert actor.config.env.prior_weight == 1.0  # trained with the prior ...
+    calls = []
+    monkeypatch.setattr(TrotController, "command", lambda *a, **k: calls.append(a) or pytest.fail("controller"))
+    result = rollout(actor, speed=1.0, duration=0.3)
+    assert calls == [] and len(result.traces["tau"]) > 0  # ... judged without it
+
+
+def test_a_metrics_file_of_an_older_version_gains_the_new_columns_on_resume(tmp_path):
+    old = COLUMNS[:-2]
+    with open(tmp_path / "metrics.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=old)
+        w.writeheader()
+        for i in range(3):
+            w.writerow({k: i for k in old})
+    EpisodeLogger(tmp_path, rows=2, purge_step=0, tensorboard=False).close()
+    rows = list(csv.DictReader(open(tmp_path / "metrics.csv")))
+    assert list(rows[0]) == list(COLUMNS) and len(rows) == 2
+    assert rows[1]["episode"] == "1" and rows[1]["fell"] == "" and rows[1]["prior_weight"] == ""
+
+
+# ---- the pull toward the trot's torque (TD3+BC's regulariser) and the critics' warm-up ---------------------
+def _batch(n: int = 8, reference=None) -> TensorDict:
+    g = torch.Generator().manual_seed(3)
+    return TensorDict({"observation": torch.randn(n, 50, generator=g), "action": torch.rand(n, 12, generator=g) * 2 - 1,
+                       "next": {"observation": torch.randn(n, 50, generator=g), "reward": torch.randn(n, 1, generator=g),
+                                "done": torch.zeros(n, 1, dtype=torch.bool),
+                                "terminated": torch.zeros(n, 1, dtype=torch.bool),
+                                "trot_action": torch.rand(n, 12, generator=g) * 2 - 1 if reference is None
+                                else reference}}, [n])
+
+
+def test_the_imitation_term_is_the_distance_to_the_share_the_prior_no_longer_gives():
+    agent = Agent(C.AgentConfig(hidden_sizes=(16,), trot_imitation=2.0), 50, 12)
+    agent.imitation_scale = 0.25  # a prior at 0.75
+    b = _batch()
+    b["next", "trot_action"][3] = float("nan")  # no reference for this transition (e.g. a reset): left out
+    now = torch.rand(8, 12) * 2 - 1
+    got = agent._with_penalties(torch.tensor(1.5), now, None, b)
+    keep = [i for i in range(8) if i != 3]
+    expected = 1.5 + 2.0 * ((now[keep] - 0.25 * b["next", "trot_action"][keep]) ** 2).mean()
+    assert float(got) == pytest.approx(float(expected), rel=1e-6)
+
+
+def test_a_strong_pull_makes_the_actor_output_the_trot_torque():
+    b = _batch(64)
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(64, 64), trot_imitation=1000.0, policy_delay=1, actor_lr=3e-3), 50, 12)
+    for _ in range(300):
+        agent.update(b)
+    with torch.no_grad():
+        out = agent.actor(b.select("observation").clone())["action"]
+    error = (out - b["next", "trot_action"]).abs().mean()
+    assert error < 0.1 < (b["next", "trot_action"]).abs().mean()
+
+
+@pytest.mark.parametrize("targets", [True, False])
+def test_a_warm_up_with_targets_evaluates_the_actor_as_it_is(targets):
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(16,), policy_delay=1), 50, 12)
+    before = {k: v.clone() for k, v in agent.loss.state_dict().items()}
+    agent.update(_batch(), actor=False, targets=targets)
+    after = agent.loss.state_dict()
+    moved = {prefix: any(not torch.equal(before[k], after[k]) for k in before if k.startswith(prefix))
+             for prefix in ("actor_network_params", "qvalue_network_params", "target_qvalue_network_params")}
+    assert moved == {"actor_network_params": False, "qvalue_network_params": True,
+                     "target_qvalue_network_params": targets}
+
+
+def test_imitation_needs_the_reference_and_keeps_it_per_transition(tmp_path):
+    with pytest.raises(ValueError, match="EnvConfig.trot_reference"):
+        tiny("env.action_mode=torque", "agent.trot_imitation=1.0")
+    cfg = tiny("env.action_mode=torque", "env.trot_reference=true", "train.stage2.trot_imitation=1.0",
+               "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100")
+    trainer = Trainer(cfg, tmp_path, progress=False)
+    trainer.run()
+    stored = trainer.rb[:]["next", "trot_action"]
+    assert stored.shape == (100, 12) and torch.isfinite(stored).all() and stored.abs().max() <= 1.0
+    assert load_checkpoint(tmp_path / "checkpoint.pt")["replay"]["data"]["next"]["trot_action"].shape == (100, 12)
