@@ -1,0 +1,38 @@
+"""The closed-loop check of trained policies: what counts as walking, and the stage-2 reduction."""
+import math
+
+import pytest
+
+from cyberdog.analysis.policy_check import check_jobs, stage_reductions
+
+
+def row(label, stage, speed, energy, walks=True, duration=10.0):
+    return {"label": label, "stage": stage, "speed_command_mps": speed, "energy_J": energy, "walks": walks,
+            "duration_s": duration}
+
+
+def test_the_reduction_is_stage2_against_stage1_at_the_same_speed():
+    rows = [row("s0", 1, 1.0, 1000.0), row("s0", 2, 1.0, 900.0), row("s0", 1, 1.4, 2000.0),
+            row("s0", 2, 1.4, 2500.0, walks=False), row("s1", 1, 1.0, 800.0)]  # s1 has no stage 2
+    got = {(r["label"], r["speed_command_mps"]): r for r in stage_reductions(rows)}
+    assert set(got) == {("s0", 1.0), ("s0", 1.4)}
+    assert got["s0", 1.0]["reduction_pct"] == pytest.approx(10.0) and got["s0", 1.0]["both_walk"]
+    assert got["s0", 1.4]["reduction_pct"] == pytest.approx(-25.0) and not got["s0", 1.4]["both_walk"]
+
+
+def test_walks_of_different_durations_give_no_reduction():
+    """A walk that fell is shorter: its energy is not comparable."""
+    got = stage_reductions([row("s0", 1, 1.0, 1000.0), row("s0", 2, 1.0, 300.0, walks=False, duration=2.5)])
+    assert math.isnan(got[0]["reduction_pct"]) and not got[0]["both_walk"]
+
+
+def test_bad_requests_fail_before_any_walk(tmp_path):
+    actor = tmp_path / "stage1_final_actor.pt"
+    actor.write_bytes(b"")
+    with pytest.raises(ValueError, match="speeds"):
+        check_jobs({"s0": {1: actor}}, [0.0], 10.0)
+    with pytest.raises(ValueError, match="duration"):
+        check_jobs({"s0": {1: actor}}, [1.0], -1.0)
+    with pytest.raises(FileNotFoundError, match="stage 2"):
+        check_jobs({"s0": {1: actor, 2: tmp_path / "missing.pt"}}, [1.0], 10.0)
+    assert len(check_jobs({"s0": {1: actor}}, [1.0, 1.2, 1.4], 10.0)) == 3
