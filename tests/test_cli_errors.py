@@ -123,3 +123,12 @@ def test_the_video_of_a_learned_path_names_its_seed(tmp_path, monkeypatch, capsy
     assert evaluate.main(["video", "--video-duration", "0.1", "--out", str(tmp_path / "v")]) == 0
     assert recorded["label"] == "learned, seed0" and recorded["path"].name == "trot_learned_seed0_1mps.gif"
     assert "the learned, seed0 trajectory" in capsys.readouterr().out
+
+
+def test_a_mistyped_sub_command_is_one_line_naming_the_closest(capsys):
+    from cyberdog.evaluation.cli import parse_args
+    with pytest.raises(SystemExit) as exit_:
+        parse_args(["comapre", "--learned", "x"])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and len(err.splitlines()) == 1
+    assert "unknown sub-command 'comapre'" in err and "did you mean 'compare'" in err

@@ -7,7 +7,9 @@ any long work starts, with one-line errors naming the option.
 from __future__ import annotations
 
 import argparse
+import difflib
 import math
+import sys
 from pathlib import Path
 
 from cyberdog.config import LEG_NAMES, add_override_option
@@ -315,6 +317,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     An option the sub-command does not take ends the program (status 2) with a line naming the sub-commands
     that do take it."""
     argv = list(argv)
+    if argv and not argv[0].startswith("-") and argv[0] not in COMMANDS:  # a word where a sub-command goes
+        close = difflib.get_close_matches(argv[0], COMMANDS, n=1)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        print(f"evaluate.py: error: unknown sub-command '{argv[0]}' (one of {', '.join(COMMANDS)}){hint}",
+              file=sys.stderr)
+        raise SystemExit(2)
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
         argv.insert(0, DEFAULT_COMMAND)
     top = build_parser()
