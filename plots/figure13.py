@@ -26,9 +26,10 @@ Bar = tuple[float, float, bool]  # (value, 95 % CI half-width or nan, counts)
 
 
 def bars(ax, speeds, groups: dict[str, list[Bar]], ylabel: str, title: str,
-         styles: dict[str, tuple[str, str | None]]) -> None:
+         styles: dict[str, tuple[str, str | None]], legend_columns: int = 2) -> None:
     """Grouped bars: per speed one bar per group; `styles` gives each group's colour and hatch; a bar that
-    does not count is faded and cross-hatched."""
+    does not count is faded and cross-hatched. The legend goes under the panel, in `legend_columns` columns
+    (panel (a)'s long labels take one, so that its legend stays under its own panel)."""
     keys = list(groups)
     width = 0.8 / max(1, len(keys))
     x = np.arange(len(speeds))
@@ -45,7 +46,7 @@ def bars(ax, speeds, groups: dict[str, list[Bar]], ylabel: str, title: str,
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+    ax.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=legend_columns)
 
 
 def simulation_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar]], dict[str, tuple]]:
@@ -140,7 +141,7 @@ def draw(rows: list[dict], prototype_rows: list[dict] | None = None) -> Figure:
     speeds, groups, styles = simulation_groups(rows)
     duration = max((r["duration_s"] for r in rows if r["set"] == "paper"), default=math.nan)
     bars(axes[0], speeds, groups, "energy over the walk, Eq. (7) (kJ)",
-         f"(a) simulation, {duration:g} s walks (Table 5)", styles)
+         f"(a) simulation, {duration:g} s walks (Table 5)", styles, legend_columns=1)
     if prototype_rows:
         p_speeds, pgroups, pstyles = prototype_groups(prototype_rows)
         bars(axes[1], p_speeds, pgroups, f"battery used per {PAPER_DISTANCE_M:g} m, Eq. (13) (% of the pack)",

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.image import imread
 
 import plots
@@ -167,6 +168,15 @@ def test_figure13_fades_every_prototype_walk_off_the_speed_band_and_says_it_scal
         assert (bar.get_alpha() or 1.0) == (1.0 if counts else FADED_ALPHA)
     assert not all(figure13.prototype_counts(r) for r in proto)
     assert "20 m walks" in fig.axes[1].get_title() and "100 m" in fig.axes[1].get_title()
+
+
+def test_figure13s_two_legends_do_not_overlap():
+    """Drawn from the shipped inputs (the README's figure): the left panel's legend stays clear of the right's."""
+    rows = json.loads((SHIPPED_INPUTS / "comparison.json").read_text())
+    fig = figure13.draw(rows, json.loads((SHIPPED_INPUTS / "prototype.json").read_text()))
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    left, right = (ax.get_legend().get_window_extent(renderer) for ax in fig.axes[:2])
+    assert left.x1 < right.x0, (left, right)
 
 
 def test_figure6_names_its_run_and_labels_the_raw_scores(tmp_path):
