@@ -24,3 +24,24 @@ def test_a_resumed_stage_counts_its_pause_as_one_typical_episode():
     assert later["episodes"] == 15 and later["env_steps"] == 6000
     assert later["wall_time_s"] == 14 * 10.0 + 8.0 and later["pauses_excluded"] == 1
     assert ship_result.stage_summary(episode_rows(steady), 1) == {}
+
+
+def test_no_shipped_result_names_a_path_of_the_machine_that_made_it():
+    """Provenance travels: every text file under results/ names files relative to the repository (or by run
+    folder), never an absolute path."""
+    import re
+    root = Path(__file__).resolve().parents[1] / "results"
+    absolute = re.compile(r'["\s=](/(?:work|home|root|tmp|Users|mnt|data)/[^"\s]*)')
+    found = [(str(f.relative_to(root)), m.group(1)) for f in root.rglob("*") if f.suffix in (".json", ".md", ".csv",
+                                                                                            ".yaml", ".txt")
+             for m in absolute.finditer(f.read_text(errors="replace"))]
+    assert found == []
+
+
+def test_portable_paths_are_relative_to_the_folder_or_name_the_run():
+    from cyberdog.provenance import portable_command, portable_path
+    assert portable_path("/repo/runs/s0/stage2_final_actor.pt", root="/repo") == "runs/s0/stage2_final_actor.pt"
+    assert portable_path("/scratch/me/runs/long_s0/stage2_final_actor.pt", root="/repo") == \
+        "long_s0/stage2_final_actor.pt"
+    assert portable_command(["--out", "/repo/runs/x", "--result=/repo/r.json", "--speeds", "1.0"], root="/repo") == \
+        "--out runs/x --result=r.json --speeds 1.0"

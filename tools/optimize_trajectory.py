@@ -42,6 +42,7 @@ from cyberdog.analysis.compare import WalkJob, reduction, run_jobs, walk_config 
 from cyberdog.analysis.report import json_safe  # noqa: E402
 from cyberdog.config import HARDWARE_LIKE, GaitConfig, WalkConfig  # noqa: E402
 from cyberdog.core.trajectories import SampledTrajectory  # noqa: E402
+from cyberdog.provenance import portable_command, portable_path  # noqa: E402
 
 TABLE_COLUMNS = ["speed_command_mps", "trajectory", "energy_J", "energy_per_100m_kJ", "mean_speed_mps", "fell",
                  "status", "D_t_pct", "E_min_trajectory", "D_t_vs_cycloid_pct", "electrical_energy_J",
@@ -178,14 +179,14 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     gait = GaitConfig(speed=args.speeds[0], lift_height=args.lift_height)
-    command = "python tools/optimize_trajectory.py " + " ".join(sys.argv[1:] if argv is None else argv)
+    command = "python tools/optimize_trajectory.py " + portable_command(sys.argv[1:] if argv is None else argv)
     summary: dict = {"command": command, "lift_height_m": args.lift_height, "speeds_mps": args.speeds, **git_state()}
     if args.replay_only is not None:
         optimized = SampledTrajectory.load(args.replay_only)
         h = optimized.provenance.get("lift_height_m", optimized.lift_height)
         if abs(h - args.lift_height) > 1e-6:
             sys.exit(f"{args.replay_only} was optimised at H = {h} m, not --lift-height {args.lift_height} m")
-        summary.update({"replayed_file": str(args.replay_only), "replayed_provenance": optimized.provenance})
+        summary.update({"replayed_file": portable_path(args.replay_only), "replayed_provenance": optimized.provenance})
     else:
         print(f"optimising the foot-path shape at H = {args.lift_height} m, speeds {args.speeds} m/s, "
               f"{args.duration} s walks measured from {args.measure_from} s, ≤ {args.max_evals} evaluations, "

@@ -18,6 +18,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from cyberdog.provenance import portable_path
+
 REPO = Path(__file__).resolve().parents[1]
 FILES = {"stage1_final_actor.pt": "stage1_actor.pt", "stage2_final_actor.pt": "stage2_actor.pt",
          "config.yaml": "config.yaml", "metrics.csv": "metrics.csv"}
@@ -75,7 +77,7 @@ def main(argv=None) -> int:
         rows = list(csv.DictReader(f))
     import yaml
     cfg = yaml.safe_load((args.run_dir / "config.yaml").read_text())
-    meta = {"seed": cfg["train"]["seed"], "source_run": str(args.run_dir), "git_commit": git_commit(),
+    meta = {"seed": cfg["train"]["seed"], "source_run": portable_path(args.run_dir), "git_commit": git_commit(),
             "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
             "actors": "stage<N>_actor.pt = stage<N>_final_actor.pt of the run (the agent at the end of the stage)"}
     (args.out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")

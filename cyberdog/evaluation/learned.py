@@ -16,6 +16,7 @@ from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
+from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
@@ -114,7 +115,7 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
         seed = actor.config.train.seed
         found = {}
         for speed in extraction_speeds(env, speeds, args.policy_speed, log):
-            prov = {"policy": str(path), "seed": seed, "policy_meta": actor.meta}
+            prov = {"policy": portable_path(path), "seed": seed, "policy_meta": actor.meta}
             extract = _extract_commanded if kind == "commanded" else _extract_measured
             found[speed] = extract(actor, path, speed, args, prov, cfg, log)
         results.append((kind, found))
