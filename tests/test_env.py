@@ -13,8 +13,9 @@ from cyberdog.envs.cyberdog_env import CyberDogEnv
 @pytest.fixture(scope="module")
 def residual_episode():
     """One full 10 s episode at 1.0 m/s with zero residual action and the estimated, noisy velocity."""
-    env = gym.make("CyberDog-v0", hardware=C.HardwareConfig(estimated_velocity=True, imu_noise=True,
-                                                            joint_angle_noise_std=0.002, joint_velocity_noise_std=0.05))
+    hardware = C.HardwareConfig(estimated_velocity=True, imu_noise=True, joint_angle_noise_std=0.002,
+                                joint_velocity_noise_std=0.05)
+    env = gym.make("CyberDog-v0", config=C.EnvConfig(hardware=hardware), reward="stage2")  # residual mode
     env.reset(seed=0)
     speeds, estimates, rewards, infos = [], [], [], []
     steps, terminated, truncated = 0, False, False
@@ -168,11 +169,9 @@ def test_rgb_array_rendering_works_headless():
     assert frame.std() > 1.0  # not a blank image
 
 
-def _score(reward, action) -> tuple[float, bool]:
-    import warnings
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        env = gym.make("CyberDog-v0", **({} if reward is None else {"reward": reward}))
+def _score(task: str, action, **options) -> tuple[float, bool]:
+    """The score of 400 steps (or until a fall) of `action` held, and whether it fell."""
+    env = gym.make(task, **options)
     try:
         env.reset(seed=0)
         total = 0.0
@@ -187,24 +186,38 @@ def _score(reward, action) -> tuple[float, bool]:
 
 
 @pytest.mark.slow
-def test_the_default_task_rewards_falling_and_the_documented_settings_reward_walking():
-    """What docs/environment.md and the warning say: with the paper's stage-2 reward (the default) falling beats
-    the walking trot; with reward='stage1' or the presets' keep-moving bonus walking wins."""
-    walk, fall = np.zeros(12, dtype=np.float32), np.ones(12, dtype=np.float32)
-    for reward, walking_wins in ((None, False), ("stage1", True), (C.RewardConfig(keep_moving=300.0), True)):
-        walked, fell_walking = _score(reward, walk)
-        fallen, fell = _score(reward, fall)
-        assert not fell_walking and fell
-        assert (walked > fallen) == walking_wins, (reward, walked, fallen)
+def test_the_registered_task_rewards_walking_and_the_papers_rewards_falling():
+    """What the registration says: on CyberDog-v0 the trot (zero foot shift) walks and scores above a walk that
+    falls (every foot shifted back by the most); on CyberDogPaper-v0 (Eq. 11) a robot thrown over by full torque
+    scores above one that walks (the trot controller's torque held over each step, the drivers' damping on)."""
+    walked, fell_walking = _score("CyberDog-v0", np.zeros(12, dtype=np.float32))
+    fallen, fell = _score("CyberDog-v0", np.full(12, -1.0, dtype=np.float32))
+    assert not fell_walking and fell and walked > fallen, (walked, fallen)
+    trot = C.EnvConfig(action_mode="torque", prior_weight=1.0, joint_damping=3.0)
+    walked, fell_walking = _score("CyberDogPaper-v0", np.zeros(12, dtype=np.float32), config=trot, reward="stage2")
+    fallen, fell = _score("CyberDogPaper-v0", np.ones(12, dtype=np.float32), reward="stage2")
+    assert not fell_walking and fell and fallen > walked, (walked, fallen)
 
 
-def test_gym_make_warns_when_the_default_reward_is_taken():
-    with pytest.warns(UserWarning, match="falling early scores higher than walking"):
-        gym.make("CyberDog-v0").close()
-    import warnings
+def test_gym_make_warns_about_the_papers_reward_and_not_about_the_shipped_task():
+    with pytest.warns(UserWarning, match="learns to fall"):
+        gym.make("CyberDogPaper-v0").close()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        gym.make("CyberDog-v0", reward="stage2").close()  # chosen: no warning
+        gym.make("CyberDogPaper-v0", reward="stage2").close()  # chosen: no warning
+        gym.make("CyberDog-v0").close()
+
+
+@pytest.mark.parametrize("task, mode, size", [("CyberDog-v0", "foot", 62), ("CyberDogPaper-v0", "torque", 50)])
+def test_both_registered_tasks_pass_the_checker(task, mode, size):
+    from gymnasium.utils.env_checker import check_env
+    env = gym.make(task, reward="stage2")  # a reward chosen: the paper task does not warn (the checker remakes it)
+    assert env.unwrapped.cfg.action_mode == mode and env.observation_space.shape == (size,)
+    assert env.spec.max_episode_steps == 400
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env.unwrapped, skip_render_check=True)
+    env.close()
 
 
 @pytest.mark.parametrize("mode", ["residual", "foot", "torque"])
