@@ -1,5 +1,6 @@
 """Prototype experiment in simulation (paper Section 4.2): hardware-like robot options, distance walks, battery."""
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -164,16 +165,28 @@ def test_battery_percent_is_eq13_and_range_is_consistent(rows):
             en.range_at_full_charge(r["electrical_energy_J"], r["distance_m"], e))
 
 
-def test_eq12_reductions_and_gap_table_from_synthetic_rows():
+def test_eq12_reductions_and_gap_table_from_synthetic_rows(tmp_path):
+    """Every reduction in prototype_gaps is against the cheaper common trajectory on the same robot (never the
+    searched reference shape, even when it is cheaper), and the sim-to-real gap compares one quantity (battery
+    per metre) on the two robots. Read back from the written report."""
     def row(name, robot, e_mech, pct):
         return {"trajectory": name, "speed_mps": 1.0, "robot": robot, "distance_m": 100.0, "energy_J": e_mech,
-                "electrical_energy_J": 10 * e_mech, "battery_used_pct": pct, "range_full_charge_m": 9500 / pct}
+                "electrical_energy_J": 10 * e_mech, "battery_used_pct": pct, "range_full_charge_m": 9500 / pct,
+                "fell": False, "reached": True, "mean_speed_mps": 1.0}
     rows = proto.add_gaps([row("learned", "ideal", 880.0, 2.0), row("learned", "hardware", 900.0, 2.73),
-                           row("cycloid", "ideal", 1000.0, 2.5), row("cycloid", "hardware", 1100.0, 3.0)])
-    gaps = {g["trajectory"]: g for g in proto.gap_rows(rows)}
-    assert gaps["learned"]["reduction_sim_pct"] == pytest.approx(12.0)  # (1000 − 880) / 1000
-    assert gaps["learned"]["reduction_proto_pct"] == pytest.approx(9.0)  # (3.0 − 2.73) / 3.0
-    assert gaps["learned"]["sim_to_real_gap_pp"] == pytest.approx(3.0)  # the paper's 3 %
+                           row("cycloid", "ideal", 1000.0, 2.5), row("cycloid", "hardware", 1100.0, 3.0),
+                           row("straight", "ideal", 1200.0, 2.4), row("straight", "hardware", 1300.0, 3.3),
+                           row("searched", "ideal", 700.0, 1.5), row("searched", "hardware", 750.0, 1.9)])
+    proto.write_prototype(rows, tmp_path)
+    gaps = {g["trajectory"]: g for g in json.loads((tmp_path / "prototype_gaps.json").read_text())}
+    learned = gaps["learned"]
+    assert (learned["reference_ideal"], learned["reference_hardware"]) == ("straight", "cycloid")
+    assert learned["battery_reduction_ideal_pct"] == pytest.approx(100 * (2.4 - 2.0) / 2.4)
+    assert learned["battery_reduction_hardware_pct"] == pytest.approx(9.0)  # (3.0 − 2.73) / 3.0
+    assert learned["sim_to_real_gap_pp"] == pytest.approx(100 * (2.4 - 2.0) / 2.4 - 9.0)
+    assert learned["eq7_reduction_ideal_pct"] == pytest.approx(12.0)  # (1000 − 880) / 1000, Table 5's measure
+    assert gaps["searched"]["battery_reduction_hardware_pct"] == pytest.approx(100 * (3.0 - 1.9) / 3.0)
+    assert gaps["cycloid"]["battery_reduction_hardware_pct"] == pytest.approx(0.0)  # the reference itself
     assert gaps["cycloid"]["mechanical_gap_pct"] == pytest.approx(10.0)
     assert en.energy_reduction(1845.1, 1623.6) == pytest.approx(0.12, abs=0.001)  # Table 5 at 1 m/s
 
