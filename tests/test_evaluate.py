@@ -166,6 +166,23 @@ def test_decrement_uses_the_cheaper_valid_baseline_of_the_same_set():
     assert "mean ± 95 % CI over 2 seeds" in md and "(miss: 1.00 m/s)" in md
 
 
+def test_table5_labels_a_seeds_row_with_each_walks_own_lift():
+    """A seed whose paths differ in lift from speed to speed (commanded paths): the paper-protocol row, which holds
+    all three, names the three lifts in the columns' order, not the first one."""
+    walks = []
+    for i, (v, lift) in enumerate(((1.0, 0.093), (1.2, 0.086), (1.4, 0.083))):
+        for j, (traj, energy, h) in enumerate((("learned", 900.0, lift), ("cycloid", 1000.0, 0.15),
+                                               ("straight", 1100.0, 0.15), ("cycloid", 1000.0, lift),
+                                               ("straight", 1100.0, lift))):
+            walks.append({**walk_row(10 * i + j, traj, energy, h, seed="seed0" if traj == "learned" else ""),
+                          "speed_command_mps": v})
+    md = t5.table5_markdown(cmp.comparison_rows(walks, paper_lift=0.15))
+    labels = [line.split("|")[1].strip() for line in md.splitlines() if line.startswith("| Learned trajectory")]
+    assert "Learned trajectory (H = 0.093 / 0.086 / 0.083 m) [seed0]" in labels
+    assert {"Learned trajectory (H = 0.093 m) [seed0]", "Learned trajectory (H = 0.086 m) [seed0]",
+            "Learned trajectory (H = 0.083 m) [seed0]"} <= set(labels)  # the matched-lift groups: one each
+
+
 def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_lift():
     learned = learned_set(seed0=[commanded(1.0, -0.01, 0), commanded(1.2, -0.02, 0)])
     jobs = cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.2))

@@ -101,12 +101,15 @@ def _lift_group_lines(set_name: str, set_rows: list[dict], lift: float, all_seed
                                          and _same(r["lift_height_m"], lift) for r in set_rows)]
         lines.append(_line(f"*control: baselines at the learned lift height H = {lift:.3f} m*", [""] * len(speeds)))
     base = [r for r in set_rows if r["trajectory"] in BASELINES and _same(r["lift_height_m"], lift)]
-    group = base + [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds]
+    group = base + [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds
+                    and (set_name != "same_lift" or _same(r["lift_height_m"], lift))]  # matched: its own walks
     for s in seeds:
         lr = [_pick(group, "learned", s, v) for v in speeds]
-        h = next(r["lift_height_m"] for r in lr if r)
+        # each walk's own lift, in the columns' order: one number when the seed's paths share it
+        lifts = list(dict.fromkeys(f"{r['lift_height_m']:.3f}" for r in lr if r))
+        h = lifts[0] if len(lifts) == 1 else " / ".join(f"{r['lift_height_m']:.3f}" if r else "–" for r in lr)
         tag = f" [{s}]" if s else ""
-        lines.append(_line(f"Learned trajectory (H = {h:.3f} m){tag}", [_cell(r) if r else "" for r in lr]))
+        lines.append(_line(f"Learned trajectory (H = {h} m){tag}", [_cell(r) if r else "" for r in lr]))
     for name in BASELINES:
         br = [_pick(group, name, "", v) for v in speeds]
         first = next((r for r in br if r), None)
