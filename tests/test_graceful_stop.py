@@ -61,3 +61,30 @@ def test_a_stop_signal_checkpoints_every_logged_step_and_the_resume_loses_nothin
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert metrics_rows(run_dir)[:len(rows)] == rows  # nothing logged before the stop was cut back
     assert counters(run_dir) == uninterrupted
+
+
+def test_a_stop_signal_ends_a_round_of_updates_after_the_update_in_hand_and_the_resume_pays_the_rest(tmp_path):
+    """Under load one round of updates takes minutes: a signal stops it within one update; the updates it owed
+    are kept as a credit in the checkpoint, and the resumed run makes them before anything else."""
+    from conftest import tiny
+    from cyberdog.rl.trainer import Trainer
+
+    cfg = tiny(["train.init_random_frames=0", "train.stage1.max_env_steps=100", "train.updates_per_frame=1.0",
+                "train.frames_per_batch=100", "train.batch_size=8"])
+    trainer = Trainer(cfg, tmp_path, stages=(1,), progress=False)
+    update, made = trainer.agent.update, []
+
+    def update_then_signal(*args, **kwargs):
+        made.append(1)
+        if len(made) == 3:
+            trainer._stop.signum = signal.SIGINT  # as the handler does
+        return update(*args, **kwargs)
+
+    trainer.agent.update = update_then_signal
+    with pytest.raises(Exception, match="SIGINT|stopped"):
+        trainer.run()
+    state = torch.load(tmp_path / "checkpoint.pt", weights_only=True)
+    assert len(made) == 3 and state["counters"]["stage_updates"] == 3
+    assert state["counters"]["update_credit"] == pytest.approx(97.0)
+    resumed = Trainer(cfg, tmp_path, resume=True, progress=False).run()
+    assert resumed["updates"] == 100  # what the stage owes at 1 update per env step: none lost

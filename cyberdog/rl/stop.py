@@ -1,6 +1,7 @@
 """Graceful stop of a training: SIGINT (Ctrl-C) and SIGTERM (what a cluster scheduler sends) end it at the
-next safe point, after the batch in hand is stored, learned from and logged, with a checkpoint that holds every
-env step logged, so that `train.py --resume` loses nothing.
+next safe point, within an update of the signal: the batch in hand is stored and logged, the updates it
+still owes are kept as a credit that the resume pays first, and a checkpoint holds every env step logged, so
+that `train.py --resume` loses nothing.
 
 The trainer's process catches the signals (`StopSignals`); processes that only step envs for it ignore them
 (`ignore_stop_signals`), so that a Ctrl-C in the terminal, which reaches the whole process group, does not
@@ -43,7 +44,7 @@ class StopSignals:
         if self.signum is not None:  # the second signal: stop now
             raise KeyboardInterrupt
         self.signum = signum
-        print(f"\n{signal.Signals(signum).name}: stopping at the next safe point (after this batch) with a "
+        print(f"\n{signal.Signals(signum).name}: stopping at the next safe point (after the update in hand) with a "
               f"checkpoint; send it again to stop at once", flush=True)
 
     def __enter__(self) -> "StopSignals":

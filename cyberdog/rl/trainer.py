@@ -14,7 +14,8 @@ the right reward. A stage's first `critic_warmup_updates` updates train the crit
 
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage; written and
 read by `cyberdog.rl.run_state.RunState`) hold the agent, optimizers, counters, RNG states and the replay
-buffer, so `resume=True` continues a run killed at any moment. SIGINT and SIGTERM do not kill it: the batch in hand is stored, learned from and logged, a
+buffer, so `resume=True` continues a run killed at any moment. SIGINT and SIGTERM do not kill it: the round of updates stops after the update in hand (the updates
+it still owed are kept as a credit, paid first by the resume), the batch in hand is stored and logged, a
 checkpoint is written and `run()` raises `cyberdog.rl.stop.TrainingInterrupted`, so that the resume loses no
 step that was logged. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
 buffer but it is not logged as an episode. A resume may raise the current stage's budget (`max_env_steps`,
@@ -218,6 +219,8 @@ class Trainer(RunState):
 
     def _run_stage(self, stage: int) -> None:
         tc, sc = self.cfg.train, getattr(self.cfg.train, f"stage{stage}")
+        if self.c["update_credit"] >= 1:  # a run stopped within a round of updates: it owes them (at most a batch's)
+            self._updates(0)
         if self._stage_done(sc):
             return
         c = self.c
@@ -335,7 +338,11 @@ class Trainer(RunState):
         warmup = sc.critic_warmup_updates
         metrics = []
         self.agent.imitation_scale = 1.0 - self.prior_weight
-        for b in sample_batches(self.rb, n, tc.batch_size):
+        for done, b in enumerate(sample_batches(self.rb, n, tc.batch_size)):
+            if self._stop.signum is not None:  # a stop signal: the round's other updates are owed, not lost
+                self.c["update_credit"] += n - done
+                n = done
+                break
             warm = self.c["stage_updates"] >= warmup
             metrics.append(self.agent.update(b, actor=warm, targets=warm or sc.critic_warmup_targets))
             self.c["stage_updates"] += 1
