@@ -11,6 +11,7 @@ from cyberdog.analysis.extract import (ExtractionError, cycle_rows, debounce, ex
                                        touch_downs)
 from cyberdog.core import kinematics as kin
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
+from cyberdog.provenance import portable_path
 
 DT = 0.001  # s
 PERIOD = 0.4  # s, 0.2 s swing + 0.2 s stance
@@ -163,7 +164,8 @@ def test_evaluate_extract_from_a_policy(tmp_path, capsys):
                           "--speed-tolerance", "0.3", "--out", str(out)]) == 0
     traj = SampledTrajectory.load(out / "learned" / "seed0.json")
     p = traj.provenance
-    assert p["policy"] == str(actor) and p["seed"] == 0 and p["speed_command_mps"] == 1.0
+    assert p["policy"] == portable_path(actor) and not p["policy"].startswith("/")  # provenance that travels
+    assert p["seed"] == 0 and p["speed_command_mps"] == 1.0
     assert abs(p["cycle_speed_mps"] - 1.0) <= 0.3 and p["speed_tolerance"] == 0.3
     assert 0.07 < traj.lift_height < 0.13  # the env's trot lifts 0.10 m
     rows = json.loads((out / "learned" / "seed0_cycles.json").read_text())
@@ -283,7 +285,8 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
         calls.append((None if hardware is None else hardware.seed, distance))
         fell = hardware is not None and hardware.seed == seeds[-1]
         return SimpleNamespace(fell=fell, duration=14.0, speed_ok=True, mean_speed=1.2, distance=100.0,
-                               electrical_energy=2000.0 + (0.0 if hardware is None else hardware.seed))
+                               electrical_energy=2000.0 + (0.0 if hardware is None else hardware.seed),
+                               dropped_shifts=1 if distance else 0)
 
     monkeypatch.setattr(replay_check, "replay_walk", stand_in)
     verdict = replay_check.replay_verdict(path, 1.2)
@@ -294,6 +297,7 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
     check = replay_check.replay_check(path, 1.2)
     assert check.status == "ok"
     assert check.electrical_J_per_m == pytest.approx((2000.0 + sum(seeds[:-1]) / len(seeds[:-1])) / 100.0)
+    assert check.dropped_shifts == len(seeds)  # the walks' dropped foot shifts, summed (one per 100 m walk here)
     monkeypatch.setattr(replay_check, "replay_walk",
-                        lambda *a, **k: SimpleNamespace(fell=False, speed_ok=False, mean_speed=0.9))
+                        lambda *a, **k: SimpleNamespace(fell=False, speed_ok=False, mean_speed=0.9, dropped_shifts=0))
     assert replay_check.replay_verdict(path, 1.2) == "ideal robot, 10 s: speed miss (0.900 m/s)"

@@ -162,3 +162,33 @@ def test_walker_run_equals_its_periods_one_by_one(case):
         assert any(stop.torque(q, np.zeros(12)) is not None for q in one.q_rows.view())
     with pytest.raises(ValueError, match="periods"):
         many.run(0)
+
+
+def test_a_dropped_foot_shift_is_not_traced_as_applied_and_is_counted():
+    """A shifted foot target out of the leg's reach sends the unshifted target, at the unshifted speed: the
+    record (`last_foot_offsets`, the walker's foot_offsets trace) holds no shift for that leg, and the
+    controller and the walk result count it."""
+    from cyberdog.control.trot import BodyFeedback, TrotController
+    from cyberdog.loop.result import walk_result
+    cfg = C.WalkConfig()
+    ctrl = TrotController(cfg)
+    offsets = np.array([[0.0, 0.0, -0.5], [0.01, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # LF: 0.5 m down
+    rates = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    ctrl.set_foot_offsets(offsets, rates)
+    q = np.zeros(12)
+    ctrl.command(0.5, q, BodyFeedback(forward_speed=1.0))
+    assert ctrl.dropped_shifts == 1
+    assert ctrl.last_foot_offsets[0] == (0.0, 0.0, 0.0) and ctrl.last_foot_offsets[1] == (0.01, 0.0, 0.0)
+    plain = TrotController(cfg)
+    plain.command(0.5, q, BodyFeedback(forward_speed=1.0))
+    assert ctrl.last_foot_targets[0] == plain.last_foot_targets[0]  # what the robot got: the unshifted target
+    ctrl.reset()
+    assert ctrl.dropped_shifts == 0
+
+    walker = Walker(cfg, TrotController(cfg), record=True)
+    walker.controller.set_foot_offsets(offsets)
+    for _ in range(40):
+        walker.step()
+    traced = walker.traces()["foot_offsets"]
+    assert not traced[:, 0].any() and np.allclose(traced[:, 1], [0.01, 0.0, 0.0])
+    assert walk_result(walker, 1.0, False).dropped_shifts == 40

@@ -44,6 +44,7 @@ class ReplayCheck:
 
     status: str  # "ok", or the first walk that failed and why ("ideal robot, 100 m: fell at 3.20 s")
     electrical_J_per_m: float | None = None  # J/m, mean over the hardware-like check walks (None unless "ok")
+    dropped_shifts: int = 0  # leg-periods of the check's walks whose shifted foot target was out of reach
 
 
 def replay_walk(path: LearnedPath, speed: float, cfg: WalkConfig | None = None, duration: float = REPLAY_CHECK_S,
@@ -78,15 +79,16 @@ def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None)
              (f"ideal robot, {CHECK_DISTANCE_M:g} m", cap, None, CHECK_DISTANCE_M)]
     walks += [(f"hardware-like robot (seed {seed}), {CHECK_DISTANCE_M:g} m", cap,
                dataclasses.replace(HARDWARE_LIKE, seed=seed), CHECK_DISTANCE_M) for seed in HARDWARE_CHECK_SEEDS]
-    per_metre = []
+    per_metre, dropped = [], 0
     for name, duration, hardware, distance in walks:
         r = replay_walk(path, speed, cfg, duration, hardware, distance)
+        dropped += r.dropped_shifts
         status = walk_status(r)
         if status != "ok":
-            return ReplayCheck(f"{name}: {status}")
+            return ReplayCheck(f"{name}: {status}", dropped_shifts=dropped)
         if hardware is not None:
             per_metre.append(r.electrical_energy / r.distance)
-    return ReplayCheck("ok", sum(per_metre) / len(per_metre))
+    return ReplayCheck("ok", sum(per_metre) / len(per_metre), dropped)
 
 
 def replay_verdict(path: LearnedPath, speed: float, cfg: WalkConfig | None = None) -> str:

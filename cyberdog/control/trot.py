@@ -107,6 +107,7 @@ class TrotController:
         self.body_weight = self.robot.total_mass * cfg.sim.gravity  # N
         self.speed = cfg.gait.speed
         self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
+        self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (see reset)
         self.foot_offsets: list[tuple[float, float, float]] | None = None  # m, see set_foot_offsets
         self.foot_offset_rates: list[tuple[float, float, float]] | None = None  # m/s
         self.foot_offset_time: float | None = None  # s, when the offsets held `foot_offsets` (None: held still)
@@ -126,6 +127,7 @@ class TrotController:
     def reset(self) -> None:
         self.pid.reset()
         self.speed_correction = 0.0
+        self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (the unshifted one went)
         self.foot_offsets = self.foot_offset_rates = self.foot_offset_time = None
         self.last_foot_targets = self.last_foot_offsets = None
 
@@ -264,6 +266,7 @@ class TrotController:
         l1, l2, l3 = self._links
         stand, feedforward = self.stand_height, c.velocity_feedforward
         offsets, rates = self._shift(t, phases)
+        applied = offsets  # the shifts the robot gets (a copy is made only if one is dropped)
         ik = kin.leg_inverse_kinematics_velocity
         feet, foot_vels, q_t, dq_t = [], [], [], []
         for leg, (x, z, vx, vz) in enumerate(self._foot_points(phases, S)):
@@ -271,27 +274,31 @@ class TrotController:
             y, z = side * l1 + dy, z - stand
             vy = 0.0
             if offsets is None:
-                fx, fy, fz = x, y, z
+                fx, fy, fz, wx, wy, wz = x, y, z, vx, vy, vz
             else:
                 ox, oy, oz = offsets[leg]
-                fx, fy, fz = x + ox, y + oy, z + oz
+                fx, fy, fz, wx, wy, wz = x + ox, y + oy, z + oz, vx, vy, vz
                 if rates is not None:
                     rx, ry, rz = rates[leg]
-                    vx, vy, vz = vx + rx, vy + ry, vz + rz
+                    wx, wy, wz = vx + rx, vy + ry, vz + rz
             try:
-                a, h, k, da, dh, dk = ik(fx, fy, fz, vx, vy, vz, side, l1, l2, l3)
+                a, h, k, da, dh, dk = ik(fx, fy, fz, wx, wy, wz, side, l1, l2, l3)
             except ValueError:
                 if offsets is None:  # unreachable: the array function raises with its full message
                     kin.inverse_kinematics(np.array([(p[0], s * l1 + dy, p[1] - stand) for p, s in
                                                      zip(self._foot_points(phases, S), LEG_SIDE)]), self.robot)
                     raise
-                fx, fy, fz = x, y, z  # a shifted target out of reach: the unshifted one
-                a, h, k, da, dh, dk = ik(fx, fy, fz, vx, vy, vz, side, l1, l2, l3)
+                # a shifted target out of reach: the unshifted one, at the unshifted speed; the record says so
+                fx, fy, fz, wx, wy, wz = x, y, z, vx, vy, vz
+                a, h, k, da, dh, dk = ik(fx, fy, fz, wx, wy, wz, side, l1, l2, l3)
+                applied = list(offsets) if applied is offsets else applied
+                applied[leg] = (0.0, 0.0, 0.0)
+                self.dropped_shifts += 1
             feet.append((fx, fy, fz))
-            foot_vels.append((vx, vy, vz))
+            foot_vels.append((wx, wy, wz))
             q_t += (a, h, k)
             dq_t += (da, dh, dk) if feedforward else (0.0, 0.0, 0.0)
-        self.last_foot_targets, self.last_foot_offsets = feet, offsets
+        self.last_foot_targets, self.last_foot_offsets = feet, applied
         beta = self._swing_fraction
         return feet, foot_vels, q_t, dq_t, [phase < beta for phase in phases]
 

@@ -147,8 +147,9 @@ def _rollout(actor, path: Path, speed: float, args, rollout_seed: int, log):
 
     t0 = time.perf_counter()
     r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=rollout_seed, env_config=actor.config.env)
+    dropped = f", {r.dropped_shifts} foot shifts out of reach (dropped)" if r.dropped_shifts else ""
     log(f"rollout {path} at {speed:g} m/s (env seed {rollout_seed}): {r.duration:.1f} s, mean {r.mean_speed:.3f} "
-        f"m/s, E={r.energy:.0f} J, fell={r.fell} ({time.perf_counter() - t0:.0f} s)")
+        f"m/s, E={r.energy:.0f} J, fell={r.fell}{dropped} ({time.perf_counter() - t0:.0f} s)")
     return r
 
 
@@ -176,7 +177,8 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             candidate = {"rollout_seed": args.rollout_seed + k, "cycle": cycle}
             try:
                 ex = commanded_from_rollout(r, actor.config.env, cycle, args.speed_tolerance,
-                                            provenance={**prov, "rollout_seed": args.rollout_seed + k})
+                                            provenance={**prov, "rollout_seed": args.rollout_seed + k,
+                                                        "rollout_dropped_shifts": r.dropped_shifts})
             except ExtractionError as err:
                 rejected.append({**candidate, "status": f"no path: {err}"})
                 continue
@@ -201,8 +203,13 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
     ex.path.provenance["replay_check"] = {
         "status": check.status, "rejected": rejected, "candidates": [c for _, _, c in passed],
         "selected_by": "least electrical energy per metre on the hardware-like check robots",
+        "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
         "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
         "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS)}
+    in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
+    if check.dropped_shifts or in_rollout:
+        log(f"  foot shifts out of reach, dropped (the unshifted target sent): {in_rollout} leg-periods in the "
+            f"rollout, {check.dropped_shifts} in the replay check")
     if len(passed) > 1:
         log(f"  kept the {ex.path.provenance.get('cycle', args.cycle)} path of env seed "
             f"{ex.path.provenance['rollout_seed']}, the cheapest of {len(passed)} candidates")

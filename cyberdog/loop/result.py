@@ -38,6 +38,8 @@ class WalkResult:
     mass_scale: float = 1.0  # link mass scale the robot walked with (hardware-like: a ±u draw)
     hardware: HardwareConfig | None = None  # the hardware-like effects, None = the ideal robot
     score: float | None = None  # sum of the env's rewards, for a policy rollout (None for a scripted walk)
+    dropped_shifts: int = 0  # leg-periods in which a shifted foot target was out of reach and the unshifted
+    #                          one was sent instead (a learned path's or a policy's shift the robot never got)
 
     @property
     def reached(self) -> bool:
@@ -120,4 +122,5 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
                            if travelled > 0 else float("nan")),  # undefined without forward travel
         peak_torque=float(np.max(np.abs(tau))) if n else 0.0, peak_joint_speed=float(np.max(np.abs(dq))) if n else 0.0,
         non_foot_contacts=sorted(walker.non_foot_contacts), target_distance=target_distance,
-        mass_scale=walker.robot.mass_scale, hardware=walker.hardware, score=score, traces=tr)
+        mass_scale=walker.robot.mass_scale, hardware=walker.hardware, score=score, traces=tr,
+        dropped_shifts=int(walker.controller.dropped_shifts))
