@@ -193,8 +193,10 @@ def test_a_metrics_file_of_an_older_version_gains_the_new_columns_on_resume(tmp_
 # ---- the pull toward the trot's torque (TD3+BC's regulariser) and the critics' warm-up ---------------------
 def _batch(n: int = 8, reference=None) -> TensorDict:
     g = torch.Generator().manual_seed(3)
-    return TensorDict({"observation": torch.randn(n, 50, generator=g), "action": torch.rand(n, 12, generator=g) * 2 - 1,
-                       "next": {"observation": torch.randn(n, 50, generator=g), "reward": torch.randn(n, 1, generator=g),
+    return TensorDict({"observation": torch.randn(n, 50, generator=g),
+                       "action": torch.rand(n, 12, generator=g) * 2 - 1,
+                       "next": {"observation": torch.randn(n, 50, generator=g),
+                                "reward": torch.randn(n, 1, generator=g),
                                 "done": torch.zeros(n, 1, dtype=torch.bool),
                                 "terminated": torch.zeros(n, 1, dtype=torch.bool),
                                 "trot_action": torch.rand(n, 12, generator=g) * 2 - 1 if reference is None

@@ -85,8 +85,8 @@ class EnvConfig:
     observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
     #                                    in foot mode it is the offset the next action ramps from, which sets
     #                                    the step's jerk and energy; without it the critics cannot see that cost
-    # torque mode only: the motor drivers' damping, τ = τ_action − joint_damping·q̇ at every controller period (the
-    # drivers' kd with kp = 0). 0 = the paper's pure torque. A documented departure (docs/torque_agent.md): a
+    # torque mode only: the motor drivers' damping, τ = τ_action − joint_damping·q̇ at every controller period
+    # (the drivers' kd with kp = 0). 0 = the paper's pure torque. A documented departure (docs/torque_agent.md): a
     # torque held over Ts = 25 ms cannot damp a light leg, and MathWorks' example, whose settings Table 4 copies,
     # gives every joint 8 N·m·s/rad of damping. Here it is motor torque, so Eq. 7 books its work
     joint_damping: float = 0.0  # N·m·s/rad

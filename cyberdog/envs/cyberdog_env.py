@@ -97,7 +97,9 @@ class CyberDogEnv(gym.Env):
       two documented departures can be switched on (both off by default, see docs/torque_agent.md): the
       drivers' damping `joint_damping` (−c·q̇ at every controller period, motor torque that Eq. 7 books), and a
       prior from the trot controller whose weight decays to exactly 0 during training (`prior_weight`,
-      `prior_decay_steps`; DecAP): τ = 25·a + w·τ_trot, τ_trot computed at the agent step's state and held;
+      `prior_decay_steps`; DecAP): τ = 25·a + w·τ_trot, τ_trot computed at the agent step's state and held.
+      `info["prior_weight"]` is the weight the step used; with `trot_reference` (or a prior) `info["trot_action"]`
+      is τ_trot in action units (clipped to ±1), what a learner may pull its actor toward;
     - `action_mode="residual"` (default): the action is added to the torque of the diagonal trot controller
       (trajectory + IK + PID), so that a policy learns corrections to a walking gait — practical on a CPU;
     - `action_mode="foot"`: the action shifts the trot controller's foot targets by up to
@@ -209,7 +211,8 @@ class CyberDogEnv(gym.Env):
                                                   cfg.joint_stop_stiffness, cfg.joint_stop_damping),
                              drive=cfg.action_mode != "torque", gui=(render_mode == "human"),
                              fall_height=cfg.fall_height, fall_tilt=np.deg2rad(cfg.fall_tilt_deg),
-                             body_trace=False, joint_damping=cfg.joint_damping)  # the env reads the state, not the walk's per-period body trace
+                             body_trace=False,  # the env reads the state, not the walk's per-period body trace
+                             joint_damping=cfg.joint_damping)
         self.robot, self.controller = self.walker.robot, self.walker.controller
         layout = observation_layout(cfg)
         low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
@@ -302,7 +305,7 @@ class CyberDogEnv(gym.Env):
                         tau_action = tau_action + prior_weight * trot
             applied = w.run(self.decimation, tau_action)  # the controller periods (bench/env_throughput.py)
         except UnreachableFootTarget as e:  # the trot asks for a foot beyond the leg's reach: the robot is going down
-            return self._end_unreachable(k0, str(e))
+            return self._end_unreachable(k0, str(e), prior_weight)
         s = self._state = w.state
         self.last_torque = applied
         step_energy = w.energy(since=k0)  # Eq. (7)
@@ -329,14 +332,14 @@ class CyberDogEnv(gym.Env):
         cfg = self.cfg
         return cfg.prior_weight_at(cfg.prior_steps_done + cfg.prior_step_stride * self._steps_taken)
 
-    def _end_unreachable(self, k0: int, why: str):
+    def _end_unreachable(self, k0: int, why: str, prior_weight: float):
         """The step in which the trot controller asked for a foot beyond the leg's reach: the episode ends as a
         fall (`terminated`, `info["fall_reason"]`), with the energy of the periods that did run."""
         s = self._state = self.walker.state
         step_energy = self.walker.energy(since=k0)
         electrical = (self.walker.electrical_energy(since=k0) if self.cfg.reward.energy_model == "electrical"
                       else None)
-        obs, reward, _, truncated, info = self._finish_step(s, step_energy, electrical, self.prior_weight)
+        obs, reward, _, truncated, info = self._finish_step(s, step_energy, electrical, prior_weight)
         info.update(fallen=True, fall_reason=f"unreachable foot target ({why})")
         return obs, reward, True, truncated, info
 

@@ -14,11 +14,12 @@ the right reward. A stage's first `critic_warmup_updates` updates train the crit
 
 Checkpoints (`checkpoint.pt`, every `train.checkpoint_every` env steps and at the end of each stage; written and
 read by `cyberdog.rl.run_state.RunState`) hold the agent, optimizers, counters, RNG states and the replay
-buffer, so `resume=True` continues a run killed at any moment. SIGINT and SIGTERM do not kill it: the round of updates stops after the update in hand (the updates
-it still owed are kept as a credit, paid first by the resume), the batch in hand is stored and logged, a
-checkpoint is written and `run()` raises `cyberdog.rl.stop.TrainingInterrupted`, so that the resume loses no
-step that was logged. A resumed run starts a fresh episode: the interrupted episode's transitions stay in the
-buffer but it is not logged as an episode. A resume may raise the current stage's budget (`max_env_steps`,
+buffer, so `resume=True` continues a run killed at any moment. SIGINT and SIGTERM do not kill it: the round
+of updates stops after the update in hand (the updates it still owed are kept as a credit, paid first by the
+resume), the batch in hand is stored and logged, a checkpoint is written and `run()` raises
+`cyberdog.rl.stop.TrainingInterrupted`, so that the resume loses no step that was logged. A resumed run
+starts a fresh episode: the interrupted episode's transitions stay in the buffer but it is not logged as an
+episode. A resume may raise the current stage's budget (`max_env_steps`,
 `max_episodes`; nothing else may differ): the stage goes on, and a finished one keeps its earlier stage-final
 files as `stage<N>_final*_<steps>steps.pt`. Only `checkpoint.pt` carries the replay buffer and the Adam
 moments: the stage-final files (`stage<N>_final.pt`: networks, targets, counters; `stage<N>_final_actor.pt`:
