@@ -102,3 +102,23 @@ def test_bad_ranges_are_refused_with_the_field_named():
         C.RandomizationConfig(latency_periods=(-1, 1))
     with pytest.raises(ValueError, match="joint_friction_scale.*hardware.friction"):
         C.EnvConfig(randomization=C.RandomizationConfig(joint_friction_scale=(0.5, 1.5)))
+
+
+def test_a_range_left_nominal_keeps_the_hardwares_latency_and_mass_and_a_set_range_must_contain_them():
+    """One robot by one rule: randomising only the PD gains keeps HARDWARE_LIKE's 2.5 ms latency and its mass
+    draw (they were silently replaced by the draw's defaults, 0 periods and 1); a set range that would drop the
+    hardware's value is refused naming both fields."""
+    env = CyberDogEnv(C.EnvConfig(hardware=C.HARDWARE_LIKE, randomization=C.RandomizationConfig(kp_factor=(0.8, 1.2))),
+                      reward="stage1")
+    _, info = env.reset(seed=0)
+    draw = info["robot_draw"]
+    assert draw["latency_periods"] == 1 and draw["mass_scale"] != 1.0
+    assert abs(draw["mass_scale"] - 1.0) <= C.HARDWARE_LIKE.mass_uncertainty
+    assert env.walker.delay.steps == 1 and env.robot.mass_scale == draw["mass_scale"]
+    env.close()
+    with pytest.raises(ValueError, match="randomization.latency_periods.*hardware.latency_s"):
+        C.EnvConfig(hardware=C.HARDWARE_LIKE, randomization=C.RandomizationConfig(latency_periods=(2, 3)))
+    with pytest.raises(ValueError, match="randomization.mass_scale.*hardware.mass_uncertainty"):
+        C.EnvConfig(hardware=C.HARDWARE_LIKE, randomization=C.RandomizationConfig(mass_scale=(1.0, 1.2)))
+    C.EnvConfig(hardware=C.HARDWARE_LIKE, randomization=C.RandomizationConfig(latency_periods=(0, 1),
+                                                                              mass_scale=(0.9, 1.15)))  # contains both

@@ -153,6 +153,16 @@ class EnvConfig:
                                                      and self.foot_offset_scale_z > 0),
                "EnvConfig.foot_offset_scale_z", "None or a finite number > 0 (m)", self.foot_offset_scale_z)
         _check(self.joint_range_deg <= 180, "EnvConfig.joint_range_deg", "in (0, 180]", self.joint_range_deg)
+        r, hw = self.randomization, self.hardware
+        periods = int(round(hw.latency_s / dt))
+        _check(r.latency_periods == (0, 0) or r.latency_periods[0] <= periods <= r.latency_periods[1],
+               "EnvConfig.randomization.latency_periods", f"(0, 0) (the hardware's own latency: EnvConfig.hardware."
+               f"latency_s = {hw.latency_s} s, {periods} periods) or a range that contains {periods}: a drawn "
+               "latency replaces the hardware's", r.latency_periods)
+        _check(r.mass_scale == (1.0, 1.0) or r.mass_scale[0] <= 1 - hw.mass_uncertainty <= 1 + hw.mass_uncertainty
+               <= r.mass_scale[1], "EnvConfig.randomization.mass_scale", "(1, 1) (the hardware's own mass draw: "
+               f"EnvConfig.hardware.mass_uncertainty = ±{hw.mass_uncertainty}) or a range that contains "
+               f"1 ± {hw.mass_uncertainty}: a drawn mass replaces the hardware's", r.mass_scale)
         _non_negative(self, "joint_damping", "prior_weight", "prior_decay_start", "prior_decay_steps",
                       "prior_steps_done")
         _check(self.prior_step_stride >= 1, "EnvConfig.prior_step_stride", ">= 1", self.prior_step_stride)

@@ -309,8 +309,10 @@ class RandomizationConfig:
     (their ranges, for robots of similar size, in brackets). Each range is (low, high), drawn uniformly
     and independently per episode from the env's generator (`cyberdog.sim.hardware.draw_robot`); a range
     with low = high is that value, and the defaults are the nominal robot (no randomisation). It acts on top
-    of `HardwareConfig`, which says which effects exist: the friction scale needs `friction` on, and the
-    drawn mass and latency replace `mass_uncertainty`'s draw and `latency_s`.
+    of `HardwareConfig`, which says which effects exist, by one rule (`cyberdog.sim.hardware.resolve_draw`): the
+    friction scale needs `friction` on; a mass or latency range left at its default keeps the hardware's
+    `mass_uncertainty` draw and `latency_s`, and a range that is set replaces them and must contain them
+    (`EnvConfig` refuses one that does not, naming both fields).
 
     [G] marks a guess for this robot; every range of `configs/quick_speeds_battery.yaml` contains the
     prototype's hardware-like robot (`HARDWARE_LIKE`: scales 1, one period of latency, mass within ±5 %).

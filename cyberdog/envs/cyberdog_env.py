@@ -15,7 +15,7 @@ from cyberdog.control.trot import TrotController
 from cyberdog.core import rewards
 from cyberdog.core.kinematics import UnreachableFootTarget
 from cyberdog.loop.walker import Walker
-from cyberdog.sim.hardware import draw_mass_scale, draw_robot
+from cyberdog.sim.hardware import draw_mass_scale, draw_robot, resolve_draw
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
 PAPER_REWARD_WARNING = (
@@ -243,6 +243,8 @@ class CyberDogEnv(gym.Env):
         # domain randomisation: this episode's robot, drawn after the other draws (so that an env without
         # it repeats its episodes exactly as before)
         draw = draw_robot(cfg.randomization, self.np_random) if cfg.randomization.enabled else None
+        if draw is not None:  # one robot: the ranges left nominal keep the hardware's latency and mass draw
+            draw = resolve_draw(draw, cfg.randomization, self.walker.latency_steps, mass_scale)
         self.controller.set_speed(self.target_speed)
         self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng, draw=draw)
         self.last_torque = np.zeros(12)

@@ -141,8 +141,7 @@ class Walker:
         d = draw if draw is not None else RobotDraw(latency_periods=self.latency_steps)
         if draw is not None:
             mass_scale = draw.mass_scale
-        if mass_scale is not None:
-            self.robot.set_mass_scale(mass_scale)
+        self.robot.set_mass_scale(1.0 if mass_scale is None else mass_scale)  # the ideal robot: its own mass
         self.robot.actuator.set_scales(d.joint_friction_scale, d.motor_strength)
         self.robot.set_ground_friction(self.cfg.sim.ground_friction * d.ground_friction_scale)
         self.controller.pid.set_gain_factors(d.kp_factor, d.kd_factor)

@@ -70,6 +70,22 @@ def draw_robot(ranges: RandomizationConfig, rng: np.random.Generator) -> RobotDr
     return RobotDraw(**values)
 
 
+def resolve_draw(draw: RobotDraw, ranges: RandomizationConfig, latency_periods: int,
+                 mass_scale: float | None) -> RobotDraw:
+    """The one robot an episode walks, from a randomisation draw and the hardware's own effects, by one rule:
+    a range left at its nominal value (no randomisation of that effect) keeps the hardware's value (its
+    `latency_periods`; its `mass_scale` draw, None = 1), a range that is set replaces it. A set range that
+    does not contain the hardware's value is refused where the config is made (`EnvConfig`), so that no
+    effect is dropped without a word."""
+    nominal = RandomizationConfig()
+    changes = {}
+    if ranges.latency_periods == nominal.latency_periods:
+        changes["latency_periods"] = latency_periods
+    if ranges.mass_scale == nominal.mass_scale and mass_scale is not None:
+        changes["mass_scale"] = mass_scale
+    return dataclasses.replace(draw, **changes) if changes else draw
+
+
 def hardware_walk_config(cfg: WalkConfig, hw: HardwareConfig | None) -> WalkConfig:
     """`cfg` with the actuator's joint friction set by `hw.friction` (unchanged when hw is None).
 
@@ -176,5 +192,6 @@ class HardwareSensing:
         return q, dq, (self.estimator.velocity if self.hw.estimated_velocity else None)
 
 
-__all__ = ["CommandDelay", "HardwareSensing", "RobotDraw", "draw_mass_scale", "draw_robot", "hardware_walk_config",
+__all__ = ["CommandDelay", "HardwareSensing", "RobotDraw", "draw_mass_scale", "draw_robot", "resolve_draw",
+           "hardware_walk_config",
            "seeded_streams", "whole_steps"]

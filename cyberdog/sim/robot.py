@@ -369,8 +369,8 @@ class Robot:
         """Scale every link's mass and inertia by `scale` relative to the URDF (e.g. 0.95..1.05)."""
         if not (math.isfinite(scale) and 0.5 <= scale <= 2.0):
             raise ValueError(f"mass scale must be in [0.5, 2.0], got {scale!r}")
-        for link, (mass, inertia) in self._nominal_dynamics.items():
-            self.client.changeDynamics(self.body_id, link, mass=mass * scale,
+        for link, (mass, inertia) in self._nominal_dynamics.items() if scale != self.mass_scale else ():
+            self.client.changeDynamics(self.body_id, link, mass=mass * scale,  # (unchanged: nothing to do)
                                        localInertiaDiagonal=[i * scale for i in inertia])
         self.mass_scale = float(scale)
 
