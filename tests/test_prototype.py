@@ -281,3 +281,16 @@ def test_the_searched_shape_is_a_reference_row_not_a_common_trajectory():
     without = [r for r in rows if r["trajectory"] != "searched"]
     assert "battery_vs_searched_pct_mean" not in next(
         r for r in summary.summary_rows(without) if r["trajectory"] == "learned")
+
+
+def test_a_learned_rows_lift_height_is_its_paths_own_like_its_baselines():
+    """One meaning per column: a learned row's lift_height_m is the path's own lift, the same as the common
+    trajectories matched to it; the trot under a commanded path has its H in trot_lift_height_m."""
+    learned = learned_set(seed0=[commanded(1.0, -0.01, 0)])
+    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.3, modes=("ideal",), learned=learned,
+                               trajectories={"cycloid": None}, workers=1, log=lambda *_: None)
+    own = learned.path("seed0", 1.0).lift_height
+    by = {r["trajectory"]: r for r in rows}
+    assert by["learned"]["lift_height_m"] == pytest.approx(own) == by["cycloid"]["lift_height_m"]
+    assert own < 0.1 and by["learned"]["trot_lift_height_m"] == pytest.approx(0.1)
+    assert by["cycloid"]["trot_lift_height_m"] is None

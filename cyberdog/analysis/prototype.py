@@ -65,6 +65,7 @@ class _Job:
     seed: str = ""  # the learned path's label this walk belongs to (a baseline: the one whose lift it matches)
     draw: int = 0  # which hardware-like robot: HardwareConfig.seed + draw (0 on the ideal robot)
     run_up_s: float = 0.0  # s walked before the measured distance (see `run_prototype`)
+    lift_height: float | None = None  # m, the path's own lift (a learned path); None: the config's trajectory's
 
 
 def time_cap(distance_m: float, speed: float, cfg: WalkConfig, run_up_s: float = 0.0) -> float:
@@ -91,7 +92,11 @@ def _run_job(job: _Job) -> dict:
     start_pct = 100.0 * e_cfg.usable_fraction
     return {
         "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
-        "robot": job.mode, "lift_height_m": job.cfg.gait.lift_height, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        "robot": job.mode, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        # one meaning in every row: the lift height of the foot path walked (a learned path's own); the trot a
+        # commanded path shifts has its own, under its own name
+        "lift_height_m": job.cfg.gait.lift_height if job.lift_height is None else job.lift_height,
+        "trot_lift_height_m": job.cfg.gait.lift_height if job.foot_offsets is not None else None,
         "mean_speed_mps": r.mean_speed,  # last half of the walk
         "average_speed_mps": r.distance / r.duration if r.duration > 0 else float("nan"),
         "run_up_s": job.run_up_s, "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
@@ -154,7 +159,7 @@ def run_prototype(trajectories: dict | None = None,
         for v, path in paths.items():
             cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
             jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), float(distance_m), offsets,
-                          label, d, float(run_up_s)) for mode, d in robots]
+                          label, d, float(run_up_s), float(path.lift_height)) for mode, d in robots]
         for name, traj in trajectories.items():
             for v in speeds:
                 cfg = _job_config(base_cfg, name, traj, v)
