@@ -294,8 +294,10 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
     assert calls == [(None, None), (None, 100.0)] + [(seed, 100.0) for seed in seeds]
     # all walk: the energy per metre is the mean over the hardware-like walks only
     monkeypatch.setattr(replay_check, "HARDWARE_CHECK_SEEDS", seeds[:-1])
-    check = replay_check.replay_check(path, 1.2)
+    lines = []
+    check = replay_check.replay_check(path, 1.2, log=lines.append)
     assert check.status == "ok"
+    assert len(lines) == 2 + len(seeds) - 1 and lines[0] == "replay check, ideal robot, 10 s: ok"  # a line a walk
     assert check.electrical_J_per_m == pytest.approx((2000.0 + sum(seeds[:-1]) / len(seeds[:-1])) / 100.0)
     assert check.dropped_shifts == len(seeds)  # the walks' dropped foot shifts, summed (one per 100 m walk here)
     monkeypatch.setattr(replay_check, "replay_walk",

@@ -76,3 +76,18 @@ def test_workers_are_checked():
     for bad in (0, -1, 2.5, "2", True):
         with pytest.raises(ValueError, match="workers"):
             resolve_workers(bad, 4)
+
+
+def test_a_brief_progress_log_never_goes_quiet_for_more_than_its_limit(monkeypatch):
+    """With a line only at each quarter, 180 slow walks printed every 45 (minutes apart under load): a result
+    arriving QUIET_LIMIT_S after the last line is logged too."""
+    from cyberdog.analysis import parallel
+    clock = [0.0]
+    monkeypatch.setattr(parallel.time, "perf_counter", lambda: clock[0])
+    lines = []
+    on_result = parallel.progress_log(180, lambda r: str(r), lines.append, every_job=False)
+    for done in range(1, 11):  # ten results, 4 s apart: 36 s in all, no quarter reached
+        clock[0] += 4.0
+        on_result(done - 1, done, done)
+    assert [line.split("]")[0] for line in lines] == ["[4/180", "[8/180"]  # at 16 s and 32 s
+    assert parallel.QUIET_LIMIT_S == 15.0

@@ -147,17 +147,25 @@ def milestone(done: int, total: int, parts: int = 4) -> bool:
     return done == total or done * parts // total != (done - 1) * parts // total
 
 
+QUIET_LIMIT_S = 15.0  # s: a brief progress log still prints a line at the first result after this long
+
+
 def progress_log(total: int, line: Callable[[Any], str], log: Callable[[str], None] = print,
                  every_job: bool = True) -> Callable[[int, Any, int], None]:
     """An `on_result` callback that logs `[done/total] <line(result)> (… s; elapsed …, ETA …)` for every job,
-    or with `every_job=False` at each quarter of them (`milestone`). `line` formats one result; the result's
-    own "wall_s" (seconds) is shown where it has one. The clock starts when the callback is made."""
+    or with `every_job=False` at each quarter of them (`milestone`) and at the first result after
+    `QUIET_LIMIT_S` without a line (long work never goes quiet for long on a loaded machine). `line` formats
+    one result; the result's own "wall_s" (seconds) is shown where it has one. The clock starts when the
+    callback is made."""
     t0 = time.perf_counter()
+    last = [t0]  # when the latest line was logged
 
     def on_result(_i: int, result: Any, done: int) -> None:
-        if not (every_job or milestone(done, total)):
+        now = time.perf_counter()
+        if not (every_job or milestone(done, total) or now - last[0] >= QUIET_LIMIT_S):
             return
-        elapsed = time.perf_counter() - t0
+        last[0] = now
+        elapsed = now - t0
         eta = elapsed / done * (total - done)
         wall = f"{result['wall_s']:.0f} s; " if isinstance(result, dict) and "wall_s" in result else ""
         log(f"[{done}/{total}] {line(result)}  ({wall}elapsed {elapsed:.0f} s, ETA {eta:.0f} s)")
@@ -175,4 +183,4 @@ def map_in_processes(fn: Callable[[Any], Any], jobs: Sequence, workers: int | No
         return run(fn, jobs, on_result=on_result, describe=describe)
 
 
-__all__ = ["ProcessMap", "available_cores", "map_in_processes", "milestone", "progress_log", "resolve_workers"]
+__all__ = ["QUIET_LIMIT_S", "ProcessMap", "available_cores", "map_in_processes", "milestone", "progress_log", "resolve_workers"]

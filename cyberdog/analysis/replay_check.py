@@ -69,10 +69,11 @@ def replay_status(path: LearnedPath, speed: float, cfg: WalkConfig | None = None
     return walk_status(replay_walk(path, speed, cfg, duration, hardware, distance))
 
 
-def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None) -> ReplayCheck:
+def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None, log=None) -> ReplayCheck:
     """Every walk of the module docstring (the quickest first), stopping at the first that fails: status "ok"
     and the mean electrical energy per metre of the hardware-like walks, or the first failure, prefixed with
-    its walk ("ideal robot, 100 m: fell at 3.20 s")."""
+    its walk ("ideal robot, 100 m: fell at 3.20 s"). `log` (a callable) gets a line per walk: eight walks of
+    up to 100 m are minutes on a loaded machine."""
     cfg = cfg or WalkConfig()
     cap = time_cap(CHECK_DISTANCE_M, speed, cfg)
     walks = [("ideal robot, 10 s", REPLAY_CHECK_S, None, None),
@@ -84,6 +85,8 @@ def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None)
         r = replay_walk(path, speed, cfg, duration, hardware, distance)
         dropped += r.dropped_shifts
         status = walk_status(r)
+        if log is not None:
+            log(f"replay check, {name}: {status}")
         if status != "ok":
             return ReplayCheck(f"{name}: {status}", dropped_shifts=dropped)
         if hardware is not None:

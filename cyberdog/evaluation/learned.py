@@ -182,8 +182,8 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             except ExtractionError as err:
                 rejected.append({**candidate, "status": f"no path: {err}"})
                 continue
-            check = (replay_check(LearnedPath("", ex.path), speed, cfg) if args.replay_check
-                     else ReplayCheck("not checked"))
+            check = (replay_check(LearnedPath("", ex.path), speed, cfg, log=lambda m: log(f"    {m}"))
+                     if args.replay_check else ReplayCheck("not checked"))
             if check.status in ("ok", "not checked"):
                 if check.electrical_J_per_m is not None:
                     log(f"  candidate: the {cycle} path of env seed {args.rollout_seed + k} replays, "
