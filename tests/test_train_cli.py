@@ -201,3 +201,14 @@ def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earl
     after_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) > 300]
     # the resumed process's rate counts its own steps, not the 300 the earlier process made
     assert after_rates and max(after_rates) < 3 * max(before_rates), (before_rates, after_rates)
+
+
+def test_a_resume_says_from_which_step_and_the_progress_line_shows_length_and_falls(tmp_path, capsys):
+    cfg = tiny(STAGE1)
+    stop_after(Trainer(cfg, tmp_path, stages=(1,), progress=False), 200)
+    resumed = Trainer(cfg, tmp_path, resume=True, progress=False)
+    err = capsys.readouterr().err
+    assert "resuming" in err and "stage 1 at env step 200 of the stage (200 in all)" in err
+    fields = resumed._progress_fields({"updates_per_s": 10.0})
+    assert {"ep", "score", "len", "falls", "upd_s"} <= set(fields) and fields["falls"].endswith("%")
+    resumed.close()
