@@ -247,6 +247,12 @@ class ExperimentConfig:
     agent: AgentConfig = field(default_factory=AgentConfig)
     train: TrainConfig = field(default_factory=TrainConfig)
 
+    @property
+    def imitates_trot(self) -> bool:
+        """The actor is pulled toward the trot's torque in some stage (agent or stage `trot_imitation` > 0)."""
+        return self.agent.trot_imitation > 0 or any((getattr(self.train, f"stage{n}").trot_imitation or 0) > 0
+                                                    for n in (1, 2))
+
     def __post_init__(self) -> None:
         env, s1 = self.env, self.train.stage1
         if env.prior_weight > 0 and env.prior_decay_steps > 0:  # the prior must be gone before stage 1 ends
@@ -255,9 +261,7 @@ class ExperimentConfig:
                    f"such that prior_decay_start + prior_decay_steps <= train.stage1.max_env_steps "
                    f"({s1.max_env_steps}; a step budget is needed): the prior's weight reaches 0 within stage 1, "
                    f"and the policy alone is trained after it", env.prior_decay_steps)
-        imitates = self.agent.trot_imitation > 0 or any(
-            (getattr(self.train, f"stage{n}").trot_imitation or 0) > 0 for n in (1, 2))
-        _check(not imitates or env.trot_reference or env.prior_weight > 0, "EnvConfig.trot_reference",
+        _check(not self.imitates_trot or env.trot_reference or env.prior_weight > 0, "EnvConfig.trot_reference",
                "true (or a prior) when the actor imitates the trot (agent or stage trot_imitation > 0): the "
                "reference is recorded per transition", env.trot_reference)
         _check(env.prior_weight == 0 or env.prior_decay_steps > 0, "EnvConfig.prior_decay_steps",

@@ -365,10 +365,8 @@ class CyberDogEnv(gym.Env):
                 "forward_speed": v_true, "forward_speed_used": v_used, "target_speed": self.target_speed,
                 "velocity_estimate": self.walker.velocity_estimate_world, "fallen": bool(fallen),
                 "time": self.t, "prior_weight": prior_weight}
-        if fallen:
-            info["fall_reason"] = "fell (body height or tilt)"
-        elif not finite:
-            info["fall_reason"] = "non-finite state"
+        if terminated:
+            info["fall_reason"] = "fell (body height or tilt)" if fallen else "non-finite state"
         if self.render_mode == "human":
             self.render()
         return self._observation(), reward, terminated, False, info

@@ -278,14 +278,11 @@ class Trainer(RunState):
     def _progress_fields(self, rates: dict) -> dict:
         """The progress line: what tells learning from failing (episode length and falls over the latest 100
         episodes), not only the score; the trot prior's weight while there is one."""
-        recent = list(self.recent)
-        fields = {"ep": self.c["stage_episodes"], "score": f"{np.mean(self.scores) if self.scores else 0:.2f}",
-                  "len": f"{np.mean([n for n, _ in recent]) if recent else 0:.0f}",
-                  "falls": f"{np.mean([f for _, f in recent]) * 100 if recent else 0:.0f}%"}
-        if self.cfg.env.prior_weight > 0:
-            fields["prior"] = f"{self.prior_weight:.3f}"
-        fields["upd_s"] = f"{rates['updates_per_s']:.0f}"
-        return fields
+        length, fell = np.mean(self.recent, axis=0) if self.recent else (0.0, 0.0)
+        prior = {"prior": f"{self.prior_weight:.3f}"} if self.cfg.env.prior_weight > 0 else {}
+        return {"ep": self.c["stage_episodes"], "score": f"{np.mean(self.scores) if self.scores else 0:.2f}",
+                "len": f"{length:.0f}", "falls": f"{100 * fell:.0f}%", **prior,
+                "upd_s": f"{rates['updates_per_s']:.0f}"}
 
     def _collector(self, reward, seed: int, random_frames: int):
         """The stage's collector: the env(s) in a worker process one batch ahead of the updates ("async"), or
@@ -301,9 +298,7 @@ class Trainer(RunState):
     @property
     def extra_transition_keys(self) -> tuple:
         """What a transition keeps beyond TRANSITION_KEYS: the trot's torque when the actor is pulled toward it."""
-        tc, agent = self.cfg.train, self.cfg.agent
-        imitates = agent.trot_imitation > 0 or any((getattr(tc, f"stage{n}").trot_imitation or 0) > 0 for n in (1, 2))
-        return (TROT_ACTION_KEY,) if imitates else ()
+        return (TROT_ACTION_KEY,) if self.cfg.imitates_trot else ()
 
     def _collection_env(self) -> C.EnvConfig:
         """The env config the stage collects in: the trot prior (torque mode, `EnvConfig.prior_weight`) decays
@@ -320,8 +315,7 @@ class Trainer(RunState):
     @property
     def prior_weight(self) -> float:
         """The trot prior's weight now (0 without one, and in every stage after the first)."""
-        env = self._collection_env()
-        return env.prior_weight_at(env.prior_steps_done)
+        return (env := self._collection_env()).prior_weight_at(env.prior_steps_done)
 
     def _random_frames_left(self, stage: int) -> int:
         """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent)."""
