@@ -45,6 +45,17 @@ def test_offset_path_interpolates_its_table_and_its_rate_is_the_phase_derivative
     assert path.at([1.25, -0.75, 0.25, 0.25])[0][0] == pytest.approx(path.at([0.25] * 4)[0][0])  # wraps
 
 
+
+def test_offset_path_sample_is_the_array_interpolation():
+    """`sample` and `at` share one interpolation (floats); it equals the plain array law of tests/oracles.py."""
+    from oracles import foot_offsets
+    table = smooth_table()
+    path = FootOffsetPath(table, period=0.4)
+    phases = np.concatenate([np.random.default_rng(0).uniform(-2.0, 2.0, 500), [0.0, -1e-17, 1.0, 0.999999]])
+    for leg in range(4):
+        np.testing.assert_allclose(path.sample(leg, phases), foot_offsets(table, leg, phases), rtol=0, atol=1e-15)
+    assert path.sample(0, phases).shape == (len(phases), 3)
+
 def test_offset_path_from_samples_recovers_a_table_sampled_at_each_legs_phase():
     table = smooth_table(n=100)
     path = FootOffsetPath(table, 0.4)

@@ -85,7 +85,7 @@ def test_the_electrical_models_friction_is_what_the_simulated_joint_feels():
     tau = np.full(12, 3.0)
     simulated = C.ActuatorConfig(friction=True)
     felt = ActuatorModel(simulated).joint_torque(tau, omega)
-    felt_friction = felt[1] - felt[0]  # joint torque minus motor torque: the friction on the joint
+    felt_friction = np.subtract(felt[1], felt[0])  # joint torque minus motor torque: the friction on the joint
     added = en.drive_torque(tau, omega, C.ActuatorConfig(friction=False)) - tau
     np.testing.assert_allclose(added, -felt_friction, rtol=1e-12, atol=1e-15)
     assert en.drive_torque(tau, omega, simulated) is not None

@@ -74,7 +74,7 @@ def _calls(tree: ast.AST, attribute: str) -> list[str]:
 
 
 def test_one_place_steps_the_robot_under_the_controller():
-    """Only the walker calls `Robot.step` and the trot controller's `command` and `driver_torque(_list)` (its
+    """Only the walker calls `Robot.step` and the trot controller's `command` and `driver_torque` (its
     `torque` is the two in one, for callers outside the loop), and nothing replaces a method of the robot at
     run time."""
     steppers, torquers, patches = set(), set(), []
@@ -83,9 +83,8 @@ def test_one_place_steps_the_robot_under_the_controller():
         rel = str(path.relative_to(PACKAGE))
         if any("robot" in c.lower() for c in _calls(tree, "step")):
             steppers.add(rel)
-        if any(c.endswith(("controller.torque", "ctrl.torque", "controller.command", "controller.driver_torque",
-                           "controller.driver_torque_list"))
-               for name in ("torque", "command", "driver_torque", "driver_torque_list") for c in _calls(tree, name)):
+        if any(c.endswith(("controller.torque", "ctrl.torque", "controller.command", "controller.driver_torque"))
+               for name in ("torque", "command", "driver_torque") for c in _calls(tree, name)):
             torquers.add(rel)
         for node in ast.walk(tree):
             if isinstance(node, ast.Assign):
@@ -97,6 +96,22 @@ def test_one_place_steps_the_robot_under_the_controller():
     assert torquers == {"loop/walker.py"}
     assert patches == []
 
+
+
+def test_the_controller_period_is_written_once():
+    """One body of the period: in the walker only `_period` steps the robot and pushes the latency queue, and
+    only it and `trot_torque` (the torque-mode prior, which does not step) ask the controller for a command;
+    `run` and `step` both call it; no float/array twin of a per-period law (`*_list`) is left in the package."""
+    tree = ast.parse((PACKAGE / "loop" / "walker.py").read_text())
+    methods = {n.name: n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)}
+    for name, expected in (("step", {"_period"}), ("push", {"_period"}), ("command", {"_period", "trot_torque"})):
+        callers = {m for m, node in methods.items() if any(c.endswith(f".{name}") for c in _calls(node, name))}
+        assert callers == expected, (name, callers)
+    assert {m for m, node in methods.items() if _calls(node, "driver_torque")} == {"_driver_torque", "trot_torque"}
+    assert "self._period" in ast.unparse(methods["step"]) and "self._period" in ast.unparse(methods["run"])
+    twins = [f"{p.relative_to(PACKAGE)}: {n.name}" for p in PACKAGE.rglob("*.py")
+             for n in ast.walk(ast.parse(p.read_text())) if isinstance(n, ast.FunctionDef) and n.name.endswith("_list")]
+    assert twins == []
 
 def test_a_walker_without_its_body_trace_walks_the_same_and_refuses_a_walk_result():
     """The body trace is bookkeeping only (the env leaves it off): the same torques either way, and a result

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cyberdog.analysis import shape_optimization as so
+from cyberdog.core import path_shape as so
 from cyberdog.core.trajectories import CompositeCycloid
 from conftest import walk_config
 

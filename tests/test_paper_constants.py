@@ -13,7 +13,8 @@ from cyberdog.config import paper
 ROOT = Path(__file__).resolve().parents[1]
 CONSTANTS = ("PAPER_SPEEDS", "PAPER_LIFT_HEIGHT", "PAPER_WALK_DURATION", "PAPER_DISTANCE_M", "SPEED_BAND",
              "SPEED_TOLERANCE")
-USERS = ("baselines", "compare", "prototype", "shape_optimization", "shape_search", "extract", "table5")
+USERS = ("analysis/baselines", "analysis/compare", "analysis/prototype", "core/path_shape", "analysis/shape_search",
+         "analysis/extract", "analysis/table5")
 
 
 def assigned_names(path: Path) -> set[str]:
@@ -28,14 +29,14 @@ def assigned_names(path: Path) -> set[str]:
 
 @pytest.mark.parametrize("module", USERS)
 def test_experiment_modules_import_the_paper_constants(module):
-    path = ROOT / "cyberdog" / "analysis" / f"{module}.py"
+    path = ROOT / "cyberdog" / f"{module}.py"
     redefined = assigned_names(path) & set(CONSTANTS) - {"SPEED_TOLERANCE"}  # an alias name, checked below
     assert not redefined, f"{path.name} defines {sorted(redefined)}: import them from cyberdog.config.paper"
-    mod = importlib.import_module(f"cyberdog.analysis.{module}")
+    mod = importlib.import_module(f"cyberdog.{module.replace('/', '.')}")
     for name in CONSTANTS:
         if hasattr(mod, name):
             expected = paper.SPEED_BAND if name == "SPEED_TOLERANCE" else getattr(paper, name)
-            assert getattr(mod, name) is expected, f"cyberdog.analysis.{module}.{name} is a copy"
+            assert getattr(mod, name) is expected, f"cyberdog.{module}.{name} is a copy"
     assert assigned_names(ROOT / "cyberdog" / "config" / "paper.py") >= set(CONSTANTS) - {"SPEED_TOLERANCE"}
 
 

@@ -74,7 +74,7 @@ def test_latency_delays_the_command_and_the_drivers_pd_acts_on_the_state_on_arri
         pd = late.controller.driver_torque
 
         def motor(tau):  # the actuator's torque–speed envelope, as the robot applies it
-            return np.array(late.robot.actuator.joint_torque_list(tau.tolist(), s.dq.tolist())[0])
+            return np.array(late.robot.actuator.joint_torque(list(tau), s.dq.tolist())[0])
 
         np.testing.assert_allclose(applied, motor(pd(sent[37], s.q, s.dq)), rtol=1e-12, atol=1e-12)
         assert not np.allclose(applied, motor(pd(sent[40], s.q, s.dq)), atol=1e-3)  # not the newest command
@@ -137,7 +137,8 @@ def test_distance_walk_stops_at_the_goal_or_at_the_time_cap():
 
 @pytest.fixture(scope="module")
 def rows():
-    return proto.run_prototype({"cycloid": None}, speeds=(1.0,), distance_m=2.0, workers=2, log=lambda _: None)
+    return proto.run_prototype({"cycloid": None}, speeds=(1.0,), distance_m=2.0, workers=2, draws=1, run_up_s=0.0,
+                               log=lambda _: None)
 
 
 def test_2m_prototype_gives_ideal_and_hardware_rows(rows):
@@ -209,7 +210,7 @@ def test_a_run_up_is_walked_before_the_measured_distance():
     """With run_up_s the measured walk starts at speed: its distance, time and battery use are those after the
     run-up."""
     kw = dict(speeds=(1.2,), distance_m=2.0, modes=("ideal",), workers=1, log=lambda _: None)
-    (stand,), (run_up,) = proto.run_prototype({"cycloid": None}, **kw), proto.run_prototype(
+    (stand,), (run_up,) = proto.run_prototype({"cycloid": None}, run_up_s=0.0, **kw), proto.run_prototype(
         {"cycloid": None}, run_up_s=1.5, **kw)
     assert stand["run_up_s"] == 0.0 and run_up["run_up_s"] == 1.5 and run_up["reached"]
     assert 2.0 <= run_up["distance_m"] < 2.01
@@ -221,7 +222,7 @@ def test_a_run_up_is_walked_before_the_measured_distance():
 
 def test_every_seed_walks_with_the_common_trajectories_at_its_lift_on_each_draw():
     learned = learned_set(seed0=[commanded(1.0, -0.01, 0)], seed1=[commanded(1.0, -0.03, 1)])
-    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.5, modes=("ideal", "hardware"), workers=2, draws=2,
+    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.5, modes=("ideal", "hardware"), workers=2, draws=2, run_up_s=0.0,
                                learned=learned, log=lambda _: None)
     assert len(rows) == 2 * 3 * (1 + 2)  # seeds × trajectories × (ideal + 2 draws)
     for seed, lift in (("seed0", 0.09), ("seed1", 0.07)):
@@ -287,7 +288,7 @@ def test_a_learned_rows_lift_height_is_its_paths_own_like_its_baselines():
     """One meaning per column: a learned row's lift_height_m is the path's own lift, the same as the common
     trajectories matched to it; the trot under a commanded path has its H in trot_lift_height_m."""
     learned = learned_set(seed0=[commanded(1.0, -0.01, 0)])
-    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.3, modes=("ideal",), learned=learned,
+    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.3, modes=("ideal",), learned=learned, run_up_s=0.0,
                                trajectories={"cycloid": None}, workers=1, log=lambda *_: None)
     own = learned.path("seed0", 1.0).lift_height
     by = {r["trajectory"]: r for r in rows}

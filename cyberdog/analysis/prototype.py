@@ -1,5 +1,5 @@
-"""The paper's prototype experiment (Section 4.2) in simulation: walk 100 m with each trajectory at each speed,
-on the ideal robot and on a hardware-like one, and report the battery drain by Eq. (13).
+"""The paper's prototype experiment (Section 4.2) in simulation: walk a distance (the paper's 100 m) with each
+trajectory at each speed, on the ideal robot and on hardware-like ones, and report the battery drain by Eq. (13).
 
 The paper walked the real CyberDog 100 m at 1.0, 1.2 and 1.4 m/s with three foot trajectories and read the
 drop of the battery charge (Eq. 13, P_C = E_f − E_n, starting from E_f = 95 %). It reports ranges on a full
@@ -34,7 +34,7 @@ from cyberdog.analysis.prototype_summary import summary_markdown, summary_rows
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
-from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS
+from cyberdog.config.paper import PAPER_SPEEDS, PROTOTYPE_DISTANCE_M, PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S
 from cyberdog.core import energy as en
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.learned_set import LearnedSet
@@ -121,12 +121,13 @@ def _check_picklable(name: str, trajectory) -> None:
 
 
 def run_prototype(trajectories: dict | None = None,
-                  speeds=PAPER_SPEEDS, distance_m: float = PAPER_DISTANCE_M, modes=MODES,
+                  speeds=PAPER_SPEEDS, distance_m: float = PROTOTYPE_DISTANCE_M, modes=MODES,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
-                  every_walk: bool = True, learned: LearnedSet | None = None, draws: int = 1,
-                  run_up_s: float = 0.0) -> list[dict]:
-    """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk.
+                  every_walk: bool = True, learned: LearnedSet | None = None, draws: int = PROTOTYPE_DRAWS,
+                  run_up_s: float = PROTOTYPE_RUN_UP_S) -> list[dict]:
+    """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk. The
+    defaults (distance, draws, run-up) are the prototype run's, `cyberdog.config.paper`'s, as `evaluate.py`'s.
 
     trajectories: name → FootTrajectory, or None for the trajectory of that name in TRAJECTORY_NAMES
         ("cycloid", "straight") or, for any other name, `base_cfg.gait`'s own. Default: cycloid and straight.

@@ -1,4 +1,4 @@
-"""The direct search for the energy-optimal foot-path shape over `cyberdog.analysis.shape_optimization`'s
+"""The direct search for the energy-optimal foot-path shape over `cyberdog.core.path_shape`'s
 five parameters.
 
 Objective (`ShapeObjective`): the mean over the speeds of the energy (Eq. 7, or the electrical energy with
@@ -25,7 +25,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from cyberdog.analysis.parallel import ProcessMap
-from cyberdog.analysis.shape_optimization import CYCLOID_PARAMS, ShapeParams, from_unit, shape_trajectory, to_unit
+from cyberdog.core.path_shape import CYCLOID_PARAMS, ShapeParams, from_unit, shape_trajectory, to_unit
 from cyberdog.config import HardwareConfig, WalkConfig
 from cyberdog.config.paper import PAPER_SPEEDS, SPEED_BAND
 

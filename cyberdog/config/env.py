@@ -9,7 +9,8 @@ from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
 
-from cyberdog.config.robot import GaitConfig, HardwareConfig, RandomizationConfig, WalkConfig
+from cyberdog.config.hardware import HardwareConfig, RandomizationConfig
+from cyberdog.config.robot import GaitConfig, WalkConfig
 
 
 REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E

@@ -258,7 +258,7 @@ class TrotController:
         """Foot targets (4 × (x, y, z)), foot velocities (4 × (vx, vy, vz)), joint targets and joint speed
         targets (12 floats each) and the swing flags (4 bools) at time t, in plain Python values."""
         c = self.cfg.controller
-        phases = self.scheduler.leg_phase_list(t)
+        phases = self.scheduler.phases_at(t)
         S = self._side_step_lengths(t, body, periods)
         # sideways foot placement against the body's sideways speed
         dy = c.lateral_placement_gain * body.lateral_speed
@@ -313,9 +313,8 @@ class TrotController:
         q = np.asarray(q, dtype=float)
         dq = np.asarray(dq, dtype=float)
         if q.shape != (12,) or dq.shape != (12,):
-            _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK)
-            return self._checked_torque(q_t, q, dq_t, dq, in_swing)
-        return self.driver_torque(self.command(t, q, body), q, dq)
+            raise ValueError(f"q and dq must have shape (12,), got {q.shape} and {dq.shape}")
+        return np.array(self.driver_torque(self.command(t, q, body), q, dq))
 
     def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None,
                 periods: int = 1) -> JointCommand:
@@ -329,38 +328,20 @@ class TrotController:
             self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(), in_swing)
         return JointCommand(q_t, dq_t, feedforward)
 
-    def driver_torque(self, command: JointCommand, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
-        """The motor drivers' law, τ = PID(q_target − q, q̇_target − q̇) + τ_ff (12,), N·m, on the joint state
-        (q, q̇) they read now: as CyberDog's motor command (q_des, qd_des, kp, kd, tau_des; MiRoboticsLab
-        cyberdog_motor_sdk), with the trot's PID gains."""
-        return np.array(self.driver_torque_list(command, q, dq))
-
-    def driver_torque_list(self, command: JointCommand, q: np.ndarray | list, dq: np.ndarray | list) -> list:
-        """`driver_torque` as a list of 12 floats (the walker's per-period path hands it to `Robot.step` as is);
-        q, q̇ as arrays or lists of floats."""
+    def driver_torque(self, command: JointCommand, q: np.ndarray | list, dq: np.ndarray | list) -> list:
+        """The motor drivers' law, τ = PID(q_target − q, q̇_target − q̇) + τ_ff, N·m, as 12 floats (the walker's
+        period hands it to `Robot.step` as is), on the joint state (q, q̇: arrays or lists of floats) they read
+        now: as CyberDog's motor command (q_des, qd_des, kp, kd, tau_des; MiRoboticsLab cyberdog_motor_sdk),
+        with the trot's PID gains."""
         q = q if type(q) is list else q.tolist()
         dq = dq if type(dq) is list else dq.tolist()
         tau = self.pid.torque_from_lists(command.q_target, q, command.dq_target, dq)
         return [a + b for a, b in zip(tau, command.feedforward)]
 
-    def _checked_torque(self, q_t, q, dq_t, dq, in_swing) -> np.ndarray:
-        tau = self.pid.torque(np.array(q_t), q, np.array(dq_t), dq)  # raises on a bad shape
-        if self.cfg.controller.gravity_compensation:
-            tau = tau + self.stance_feedforward(q, ~np.array(in_swing))
-        return tau
-
-    def stance_feedforward(self, q: np.ndarray, stance: np.ndarray) -> np.ndarray:
-        """τ = Jᵀ f per stance leg, f = (0, 0, −m g / n_stance): the stance legs carry the body."""
-        n = int(np.count_nonzero(stance))
-        if n == 0:
-            return np.zeros(12)
-        J = kin.jacobian(np.reshape(q, (4, 3)), self.robot)
-        tau = J[:, 2, :] * (-self.body_weight / n * stance)[:, None]  # Jᵀ (0, 0, f_z)
-        return tau.ravel()
-
     def _add_stance_feedforward(self, tau: list[float], q: list[float], in_swing: list[bool]) -> None:
-        """`stance_feedforward` added to tau (12 floats) in place, q as 12 floats, the legs' swing flags (4
-        bools): only the stance legs' Jacobian rows are computed (the swing legs' terms are zeros)."""
+        """The stance legs carry the body: τ += Jᵀ f per stance leg, f = (0, 0, −m g / n_stance), added to tau (12
+        floats) in place, q as 12 floats, the legs' swing flags (4 bools): only the stance legs' Jacobian rows
+        are computed (the swing legs' terms are zeros; tests/oracles.py holds the array form)."""
         n = 4 - sum(in_swing)
         if n == 0:
             return

@@ -1,4 +1,4 @@
-"""Joint actuator model: torque clip, torque–speed envelope and joint friction. Pure numpy.
+"""Joint actuator model: torque clip, torque–speed envelope and joint friction. No simulator.
 
 PyBullet does not enforce the URDF effort or velocity limits under TORQUE_CONTROL (measured, see
 `shared/robot/NOTES.md`), so the limits of the CyberDog's actuators are applied here, in one place, before
@@ -26,7 +26,7 @@ DRY_FRICTION_SMOOTHING = 0.01  # rad/s: the Coulomb term is dry_friction · tanh
 def joint_friction(joint_velocity, viscous: float, dry: float) -> np.ndarray:
     """The one joint-friction law, N·m, of magnitude b·ω + f·tanh(ω / 0.01 rad/s) and the sign of ω: what a
     joint moving at ω loses to friction (viscous b, N·m·s/rad; dry f, N·m [X] cyberdog.hpp). The simulated
-    joint feels its negative (`ActuatorModel.friction_torque`); the electrical model adds it to what the motor
+    joint feels its negative (`ActuatorModel.joint_torque`); the electrical model adds it to what the motor
     must produce where the simulation leaves friction out (`cyberdog.core.energy.drive_torque`)."""
     omega = np.asarray(joint_velocity, dtype=float)
     return viscous * omega + dry * np.tanh(omega / DRY_FRICTION_SMOOTHING)
@@ -35,7 +35,7 @@ def joint_friction(joint_velocity, viscous: float, dry: float) -> np.ndarray:
 class ActuatorModel:
     """Turns joint torque commands into the torques the 12 actuators produce, and their friction.
 
-    Works on arrays of any shape (normally (12,)); inputs are not modified.
+    The law works on the 12 joints of one controller period, in floats; inputs are not modified.
     """
 
     def __init__(self, config: ActuatorConfig):
@@ -53,47 +53,20 @@ class ActuatorModel:
             raise ValueError(f"friction scale must be >= 0 and strength > 0, got {friction_scale!r}, {strength!r}")
         self.friction_scale, self.strength = float(friction_scale), float(strength)
 
-    def torque_envelope(self, joint_velocity: np.ndarray) -> np.ndarray:
-        """Largest |τ| (N·m) available while motoring at joint speed ω: torque_limit up to full_torque_speed,
-        linearly down to 0 at zero_torque_speed, 0 beyond ([X] n1, n2)."""
-        speed = np.abs(np.asarray(joint_velocity, dtype=float))
-        fraction = np.minimum(np.maximum((self._n2 - speed) / (self._n2 - self._n1), 0.0), 1.0)
-        return self.torque_limit * fraction
-
-    def motor_torque(self, torque_command: np.ndarray, joint_velocity: np.ndarray) -> np.ndarray:
-        """Torque (N·m) the motors produce for a command at joint velocities ω (rad/s).
+    def joint_torque(self, torque_command, joint_velocity) -> tuple[list, list]:
+        """(motor torque, motor torque + friction torque), N·m, 12 floats each: what the motors produce for a
+        command (12 numbers) at joint velocities ω (rad/s), and what acts on the joints.
 
         1. clip to ±torque_limit;
-        2. if `torque_speed_curve`: where the motor drives the joint (τ·ω > 0), limit |τ| to
-           `torque_envelope(ω)`; braking torques keep the clipped value;
-        3. × `strength` (1 unless a drawn actuator, `set_scales`).
-        """
-        limit = self.torque_limit
-        tau = np.minimum(np.maximum(np.asarray(torque_command, dtype=float), -limit), limit)  # np.clip is slower
-        if self.config.torque_speed_curve:
-            omega = np.asarray(joint_velocity, dtype=float)
-            envelope = self.torque_envelope(omega)
-            tau = np.where(tau * omega > 0.0, np.minimum(np.maximum(tau, -envelope), envelope), tau)
-        return tau if self.strength == 1.0 else tau * self.strength
+        2. if `torque_speed_curve`: where the motor drives the joint (τ·ω > 0), limit |τ| to the envelope:
+           torque_limit up to full_torque_speed, linearly down to 0 at zero_torque_speed ([X] n1, n2); braking
+           torques keep the clipped value;
+        3. × `strength` (1 unless a drawn actuator, `set_scales`);
+        4. the joint also feels −`joint_friction` (× the drawn `friction_scale`) when `friction` is on.
 
-    def friction_torque(self, joint_velocity: np.ndarray) -> np.ndarray:
-        """Joint friction torque (N·m) on the joint, opposing motion: −`joint_friction` (× the drawn
-        `friction_scale`); zeros when `friction` is off."""
-        omega = np.asarray(joint_velocity, dtype=float)
-        if not self.config.friction:
-            return np.zeros_like(omega)
-        c, k = self.config, self.friction_scale
-        return -joint_friction(omega, k * c.viscous_damping, k * c.dry_friction)
-
-    def joint_torque(self, torque_command: np.ndarray, joint_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(motor torque, motor torque + friction torque): what the motors produce and what acts on the joints."""
-        motor = self.motor_torque(torque_command, joint_velocity)
-        return motor, motor + self.friction_torque(joint_velocity)
-
-    def joint_torque_list(self, torque_command: list, joint_velocity: list) -> tuple[list, list]:
-        """`joint_torque` for lists of Python floats (the robot's per-period path): the same law joint by
-        joint. For 12 joints this takes under 2 µs against about 16 µs for the numpy calls, whose per-call
-        overhead exceeds the arithmetic at this size (tests/test_fast_paths.py checks that the two agree)."""
+        In Python floats, joint by joint: for 12 joints this takes under 2 µs against about 16 µs for numpy,
+        whose per-call overhead exceeds the arithmetic at this size (tests/oracles.py holds the array law that
+        tests/test_fast_paths.py checks it against)."""
         limit, n1, n2 = self.torque_limit, self._n1, self._n2
         curve, inv_span = self.config.torque_speed_curve, 1.0 / (n2 - n1)
         motor = []

@@ -13,8 +13,8 @@ and its rate of change dΔp_i/dt = dΔp_i/dφ / period (the trot's velocity feed
 interpolation. Each leg keeps its own path, because the four feet of a trot do not do the same work (a
 policy shifts the hind feet differently from the front ones); `reference_leg` picks one for plots.
 
-Pure numpy; the evaluation at one set of phases (`at`) works on Python floats, since the trot controller
-calls it at every controller period (400 Hz by default).
+Pure numpy; the interpolation itself is written once, in Python floats, since the trot controller calls
+`at` at every controller period (400 Hz by default).
 """
 from __future__ import annotations
 
@@ -50,26 +50,31 @@ class FootOffsetPath:
     def at(self, phases) -> tuple[list[tuple[float, float, float]], list[tuple[float, float, float]]]:
         """Offsets (m) and their rates (m/s) of the four legs at their phases (4 floats, any real value: the
         phase wraps), as lists of (x, y, z) tuples."""
-        n, inv_period = self.n, 1.0 / self.period
+        inv_period = 1.0 / self.period
         offsets, rates = [], []
-        for rows, phase in zip(self._rows, phases):
-            u = (phase % 1.0) * n
-            k = int(u)
-            if k >= n:  # phase % 1.0 rounds up to 1.0 for tiny negative phases
-                k, u = 0, 0.0
-            (ox, oy, oz), (sx, sy, sz) = rows[k]
-            f = u - k
-            offsets.append((ox + sx * f / n, oy + sy * f / n, oz + sz * f / n))
+        for leg, phase in enumerate(phases):
+            offset, (sx, sy, sz) = self._interpolate(leg, phase)
+            offsets.append(offset)
             rates.append((sx * inv_period, sy * inv_period, sz * inv_period))
         return offsets, rates
 
     def sample(self, leg: int, phase) -> np.ndarray:
-        """(m, 3) offsets of one leg at the phases `phase` (m,), by the same interpolation as `at`."""
-        phi = np.mod(np.asarray(phase, dtype=float), 1.0) * self.n
-        k = np.minimum(phi.astype(int), self.n - 1)
-        f = (phi - k)[:, None]
-        table = self.offsets[leg]
-        return table[k] + (table[(k + 1) % self.n] - table[k]) * f
+        """(m, 3) offsets of one leg at the phases `phase` (m,): `at`'s interpolation at each."""
+        phases = np.asarray(phase, dtype=float).reshape(-1).tolist()
+        return np.array([self._interpolate(leg, p)[0] for p in phases]).reshape(len(phases), 3)
+
+    def _interpolate(self, leg: int, phase: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """The one interpolation, in floats: one leg's offset (m) at `phase` (wrapping) and its slope (m per
+        unit phase) on that segment."""
+        n = self.n
+        u = (phase % 1.0) * n
+        k = int(u)
+        if k >= n:  # phase % 1.0 rounds up to 1.0 for tiny negative phases
+            k, u = 0, 0.0
+        (ox, oy, oz), slope = self._rows[leg][k]
+        f = u - k
+        sx, sy, sz = slope
+        return (ox + sx * f / n, oy + sy * f / n, oz + sz * f / n), slope
 
     def rms(self) -> np.ndarray:
         """(4, 3) m, the root-mean-square offset per leg and axis over the cycle."""

@@ -78,15 +78,15 @@ class GaitScheduler:
         return t[..., None]
 
     def leg_phases(self, t: Any) -> np.ndarray:
-        """(…, 4) phase of each leg in [0, 1): (t / period + offset) mod 1, 0 = lift-off."""
-        phase = np.round(np.mod(self._time(t) / self.period + self.gait.offsets, 1.0), _PHASE_DECIMALS)
-        return np.where(phase >= 1.0, 0.0, phase)
+        """(…, 4) phase of each leg in [0, 1): (t / period + offset) mod 1, 0 = lift-off; `phases_at` at
+        each time."""
+        t = self._time(t)[..., 0]
+        return np.array([self.phases_at(ti) for ti in t.ravel().tolist()]).reshape(t.shape + (4,))
 
-    def leg_phase_list(self, t: float) -> list[float]:
-        """`leg_phases` for one scalar time, as 4 Python floats (the controller's per-period path: no arrays).
-
-        Same arithmetic as the array method: Python's float % is numpy's mod, and round(x · 1e12) / 1e12 is
-        np.round(x, 12) (both round half to even)."""
+    def phases_at(self, t: float) -> list[float]:
+        """The 4 legs' phases at one time t (s), as Python floats: the one law (the controller calls it at
+        every period, so it builds no arrays). Each is (t / period + offset) mod 1, rounded to 1e-12 so that
+        legs half a cycle apart agree on a boundary: round(x · 1e12) / 1e12, half to even as np.round(x, 12)."""
         t = float(t)
         if not math.isfinite(t):
             raise ValueError("time t must be finite")

@@ -197,9 +197,9 @@ class StraightLine(FootTrajectory):
 
     def corners(self, step_length: float, lift_height: float) -> np.ndarray:
         """(k, 2) vertices (x, z), m, of the swing polyline from lift-off to touch-down."""
-        return np.asarray(self._corner_list(step_length, lift_height), dtype=float)
+        return np.asarray(self._corner_points(step_length, lift_height), dtype=float)
 
-    def _corner_list(self, step_length: float, lift_height: float) -> list[tuple[float, float]]:
+    def _corner_points(self, step_length: float, lift_height: float) -> list[tuple[float, float]]:
         S, H = step_length, lift_height
         if self.shape == "rectangle":
             pts = [(-S / 2, 0.0), (-S / 2, H), (S / 2, H), (S / 2, 0.0)]
@@ -230,7 +230,7 @@ class StraightLine(FootTrajectory):
     def _swing_point(self, tau: float, step_length: float, lift_height: float
                      ) -> tuple[float, float, float, float]:
         """`swing_path` at one τ in Python floats, the same polyline walk."""
-        vertices = self._corner_list(float(step_length), float(lift_height))
+        vertices = self._corner_points(float(step_length), float(lift_height))
         segments = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(vertices[:-1], vertices[1:])]
         lengths = [math.hypot(dx, dz) for dx, dz in segments]
         starts = [0.0]  # path length at each segment's start (np.cumsum order)
@@ -372,7 +372,7 @@ def point_evaluator(trajectory: FootTrajectory):
     neither `swing_path` nor `position_velocity`), else None: callers then use `position_velocity`."""
     cls = type(trajectory)
     for base in (CompositeCycloid, StraightLine):
-        same = ("_swing_point", "swing_path") + (("corners", "_corner_list") if base is StraightLine else ())
+        same = ("_swing_point", "swing_path") + (("corners", "_corner_points") if base is StraightLine else ())
         if (isinstance(trajectory, base) and all(getattr(cls, n) is getattr(base, n) for n in same) and all(
                 getattr(cls, n) is getattr(FootTrajectory, n) for n in ("point_at", "position_velocity"))):
             return trajectory.point_at

@@ -378,7 +378,7 @@ class CyberDogEnv(gym.Env):
         v_world = self.walker.velocity_estimate_world
         v_body = s.base_linear_velocity_body if v_world is None else s.rotation_matrix.T @ v_world
         t = self.t
-        phase = 2 * np.pi * self.controller.scheduler.leg_phase_list(t)[0]  # = leg_phases(t)[0]
+        phase = 2 * np.pi * self.controller.scheduler.phases_at(t)[0]
         obs = np.concatenate([
             [s.base_position[2], s.base_position[1] - self.walker.start[1]], s.base_rpy, v_body,
             s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(t)],

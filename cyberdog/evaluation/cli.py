@@ -13,16 +13,15 @@ import sys
 from pathlib import Path
 
 from cyberdog.config import LEG_NAMES, add_override_option
-from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_SPEEDS, PAPER_WALK_DURATION, SPEED_BAND
+from cyberdog.config.paper import (PAPER_DISTANCE_M, PAPER_SPEEDS, PAPER_WALK_DURATION, PROTOTYPE_DISTANCE_M,
+                                   PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S, SPEED_BAND)
 
 # Literal copies of library constants whose modules import the simulator or numpy (a test keeps them equal):
 BASELINE_CHOICES = ("cycloid", "straight")  # cyberdog.analysis.baselines.BASELINES
 CYCLE_CHOICES = ("mean", "cheapest")  # cyberdog.analysis.extract.CYCLE_CHOICES
-DEFAULT_PROTOTYPE_DISTANCE = 20.0  # m per prototype walk in the default run (the paper's 100 with --prototype-distance)
-DEFAULT_PROTOTYPE_DRAWS = 2  # hardware-like robots (mass draw, sensor noise) each path walks on
-# s walked from the stand before the measured distance: the 1 s speed ramp and the speed integral's overshoot
-# (the cycloid's speed per gait cycle is within 3 % of the command from 2.8 s on, at 1.0 and 1.4 m/s, hardware-like)
-DEFAULT_PROTOTYPE_RUN_UP = 3.0
+# the prototype run's defaults are the library's (cyberdog.config.paper): one set for the CLI and run_prototype
+DEFAULT_PROTOTYPE_DISTANCE, DEFAULT_PROTOTYPE_DRAWS, DEFAULT_PROTOTYPE_RUN_UP = (PROTOTYPE_DISTANCE_M, PROTOTYPE_DRAWS,
+                                                                            PROTOTYPE_RUN_UP_S)
 DEFAULT_COMMAND = "all"
 DEFAULT_CANDIDATES = 1  # paths that replay, per speed, of which extraction keeps the cheapest on the check robots
 

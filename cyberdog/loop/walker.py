@@ -1,10 +1,11 @@
 """`Walker`: robot + trot controller + hardware model, advanced one controller period at a time.
 
-Every loop of the project that steps the simulated CyberDog runs through `Walker.step`: the learning
-environment (`CyberDog-v0`, 10 steps per agent step at the default 400 Hz, in one `Walker.run` call), the
-scripted walks of the trajectory comparison and the prototype (`cyberdog.analysis.walk`), the videos and
-the policy rollouts. One step is one period of the joint controller (`SimConfig.controller_dt`, 2.5 ms by
-default):
+Every loop of the project that steps the simulated CyberDog runs through the walker's one controller period
+(`Walker._period`; `step` runs one, `run(n)` n of them): the learning environment (`CyberDog-v0`, 10 periods
+per agent step at the default 400 Hz, in one `run` call), the scripted walks of the trajectory comparison and
+the prototype (`cyberdog.analysis.walk`), the videos and the policy rollouts. One step is one period of the
+joint controller (`SimConfig.controller_dt`, 2.5 ms by default), the same stages on every robot, each present
+or absent for this one:
 
 1. the robot's software reads its sensors (the hardware model: encoder noise, Kalman speed; the truth on the
    ideal robot) and the trot controller computes its torque (trajectory + IK + PID), unless the controller is
@@ -208,63 +209,48 @@ class Walker:
         s = self.state
         q, dq = self.sensed_joints(s)
         command = self.controller.command(self.time, q, self.body_feedback(s, self.velocity_estimate_world), periods)
-        return self.controller.driver_torque(command, q, dq)
+        return np.array(self.controller.driver_torque(command, q, dq))
 
     def run(self, periods: int, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
-        """`periods` controller periods (≥ 1), each as `step(extra_torque)`; returns the motor torque applied in
-        the last (12,). The env's loop: the usual period (the ideal robot under its controller, no added torque,
-        no latency, nothing recorded) runs here with the walker's attributes looked up once, not per period."""
+        """`periods` controller periods (≥ 1), each the one period of `step` with the same `extra_torque`;
+        returns the motor torque applied in the last (12,). The env's loop: 10 periods per agent step."""
         if periods < 1:
             raise ValueError(f"periods must be >= 1, got {periods!r}")
-        if not (self.drive and self.sensing is None and extra_torque is None and self.delay.steps == 0
-                and not self.joint_damping and not (self.body_trace or self.record or self.gait_metrics)):
-            for _ in range(periods):
-                applied = self.step(extra_torque)
-            return applied
-        robot, joint_stop, dt, start_y = self.robot, self.joint_stop, self.dt, self._start_y
-        command, driver_torque = self.controller.command, self.controller.driver_torque_list
-        robot_step, read, lateral_speed = robot.step_list, robot.read, kin.lateral_velocity_body
-        tau_rows, q_rows = self.tau, self.q_rows
+        period = self._period
         for _ in range(periods):
-            r = self.reading
-            if joint_stop is not None and joint_stop.torque(r.q, r.dq) is not None:
-                applied = self.step()  # a joint beyond its range: the end stop's torque is added
-                continue
-            # what `step` does in the usual period, in the same order
-            k = self.steps
-            feedback = BodyFeedback(r.base_rpy[2], r.base_position[1] - start_y, r.base_linear_velocity_world[0],
-                                    lateral_speed(r.base_quaternion, r.base_linear_velocity_world))
-            applied = robot_step(driver_torque(command(k * dt, r.q, feedback), r.q, r.dq))
-            tau_rows.append(applied)  # a list: the array is made once, for the last period
-            self.steps = k + 1
-            self.reading = r = read()
-            self._state = None
-            q_rows.append(r.q)
-        return applied if type(applied) is np.ndarray else np.array(applied)
+            applied = period(extra_torque)
+        return np.array(applied)
 
     def step(self, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
         """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
         torque applied (12,)."""
-        r, k = self.reading, self.steps
+        return np.array(self._period(extra_torque))
+
+    def _period(self, extra_torque) -> list:
+        """The controller period, written once: sense → command → joint stop → delay → actuate → record (the
+        module docstring). What this robot lacks (sensors' noise and filter, controller, end stop, latency,
+        damping, traces) is skipped; the usual period (the truth, the controller alone) stays in floats.
+        Returns the motor torque applied as 12 floats."""
+        r, k, sensing = self.reading, self.steps, self.sensing
         q = dq = command = None
-        if self.drive:
-            if self.sensing is None:  # the truth, in floats: no arrays built at the controller rate
+        if self.drive:  # sense, then command (torque mode: no controller, so its sensors are not read)
+            if sensing is None:  # the truth, in floats
                 q, dq = r.q, r.dq
                 feedback = BodyFeedback(r.base_rpy[2], r.base_position[1] - self._start_y,
                                         r.base_linear_velocity_world[0],
                                         kin.lateral_velocity_body(r.base_quaternion, r.base_linear_velocity_world))
             else:
                 s = self.state
-                q, dq, v_world = self.sensing.read(k, s, self.robot.foot_contacts)
+                q, dq, v_world = sensing.read(k, s, self.robot.foot_contacts)
                 feedback = self.body_feedback(s, v_world)
             command = self.controller.command(k * self.dt, q, feedback)
         stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
         # the latency holds the whole command (targets, feedforward, the added torques); the drivers' PD then
         # acts on the joint state read now (q, dq of this period)
-        if command is not None and extra_torque is None and stop is None and self.delay.steps == 0:
-            tau = self.controller.driver_torque_list(command, q, dq)  # the usual period, without the queue
-        else:
-            tau = self._driver_torque(self.delay.push((command, extra_torque, stop)), q, dq)
+        arrived = (command, extra_torque, stop)
+        if self.delay.steps:
+            arrived = self.delay.push(arrived)
+        tau = self._driver_torque(arrived, q, dq)
         if self.joint_damping:  # the drivers' damping acts on the joint speed of this period, after the latency
             tau = np.asarray(tau, dtype=float) - self.joint_damping * np.asarray(r.dq if dq is None else dq)
         s = self.state if self.body_trace or self.record else None  # this period's start, before the step
@@ -294,14 +280,14 @@ class Walker:
         if arrived is None:
             return np.zeros(12)
         command, extra, stop = arrived
-        if command is not None and extra is None and stop is None:  # the usual period: a list for Robot.step
-            return self.controller.driver_torque_list(command, q, dq)
         tau = self.controller.driver_torque(command, q, dq) if command is not None else None
+        if extra is None and stop is None:
+            return [0.0] * 12 if tau is None else tau
         if extra is not None:
-            tau = extra if tau is None else extra + tau
+            tau = extra if tau is None else extra + np.asarray(tau)
         if stop is not None:
             tau = stop if tau is None else tau + stop
-        return np.zeros(12) if tau is None else tau
+        return tau
 
     def _record(self, s) -> None:
         traces = self._traces

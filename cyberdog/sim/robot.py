@@ -246,27 +246,24 @@ class Robot:
         self._joint_cache = None
         self.step_count = 0
 
-    def step(self, torque_command: np.ndarray | list) -> np.ndarray:
+    def step(self, torque_command: np.ndarray | list) -> list:
         """Apply joint torque commands (12,) N·m (an array, or a list of 12 numbers) for one controller period
-        (`dt`, held constant over its physics substeps); return the motor torque applied (12,).
+        (`dt`, held constant over its physics substeps); return the motor torque applied, as 12 floats.
 
         The actuator model clips the command and applies the torque–speed envelope at the current joint
         velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
+        The law runs in Python floats: 12 values are too few for numpy's call overhead.
         """
-        if type(torque_command) is list:  # no array round trip (step_list checks the length)
-            return np.array(self.step_list(torque_command))
-        tau = np.asarray(torque_command, dtype=float)
-        if tau.shape != (N_JOINTS,):
-            raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
-        return np.array(self.step_list(tau.tolist()))  # the actuator law in floats: 12 values are too few for numpy
-
-    def step_list(self, torque_command: list) -> list:
-        """`step` for a list of 12 floats, returning the motor torque applied as a list (the walker's loop)."""
-        if len(torque_command) != N_JOINTS:
+        if type(torque_command) is not list:
+            tau = np.asarray(torque_command, dtype=float)
+            if tau.shape != (N_JOINTS,):
+                raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
+            torque_command = tau.tolist()
+        elif len(torque_command) != N_JOINTS:
             raise ValueError(f"torque_command must hold {N_JOINTS} numbers, got {len(torque_command)}")
         if not math.isfinite(sum(torque_command)) and not all(map(math.isfinite, torque_command)):
             raise ValueError(f"torque_command must be finite, got {torque_command!r}")
-        motor, joint = self.actuator.joint_torque_list(torque_command, self._joint_lists()[1])
+        motor, joint = self.actuator.joint_torque(torque_command, self._joint_lists()[1])
         self._set_motors(self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, forces=joint)
         self._step_simulation()
         self._joint_cache = None

@@ -1,10 +1,11 @@
-"""Beyond the paper: the energy-optimal SHAPE of the foot path at a fixed lift height and gait timing.
+"""Beyond the paper: the SHAPE of a foot path at a fixed lift height and gait timing, as 5 numbers. Pure numpy.
 
 The paper learns a foot trajectory with DDPG and finds it 9–12 % cheaper than the cheaper of the composite
 cycloid and the straight line. In our simulation that saving comes from the learned path's lower lift
-height, not from its shape. This module asks the shape question directly: with the lift height H, the step
-length S = v·stance_time and the trot timing all fixed, how much Eq. (7) energy can the path's shape save
-against the composite cycloid when it is optimised derivative-free on the same simulator and IK + PID trot?
+height, not from its shape. The shape question is asked directly by a search over this parameterisation
+(`cyberdog.analysis.shape_search`, derivative-free on the simulator): with the lift height H, the step length
+S = v·stance_time and the trot timing all fixed, how much Eq. (7) energy can the path's shape save against the
+composite cycloid? This module holds only the shape: its parameters, bounds and the trajectory they make.
 
 Parameterisation (`ShapeParams`, 5 numbers with bounds, `PARAM_BOUNDS`). Phase φ ∈ [0, 1) over the gait
 cycle, φ = 0 at lift-off; swing for φ < β = swing_time / period with τ = φ / β, stance after with
@@ -183,12 +184,8 @@ def shape_trajectory(p: ShapeParams, gait: GaitConfig | None = None, n_points: i
     phase = np.arange(n_points) / n_points
     x_hat, z_hat = normalised_cycle(phase, p, beta)
     step_length = gait.step_length if gait.step_length > 0 else 0.2  # m; only normalises x
-    meta = {"source": "cyberdog.analysis.shape_optimization", "shape_params": p.as_dict(),
+    meta = {"source": "cyberdog.core.path_shape", "shape_params": p.as_dict(),
             "swing_fraction": beta, "period_s": gait.period, "swing_time_s": gait.swing_time,
             "n_points": int(n_points), **(provenance or {})}
     return SampledTrajectory(phase, step_length * x_hat, gait.lift_height * z_hat, step_length,
                              gait.lift_height, meta)
-
-
-# ---------------------------------------------------------------------------------------------------------
-# the objective: walks on the simulator

@@ -1,10 +1,10 @@
-"""The foot-path shape parameterisation (cyberdog.analysis.shape_optimization) and a tiny objective run."""
+"""The foot-path shape parameterisation (cyberdog.core.path_shape) and a tiny objective run."""
 import math
 
 import numpy as np
 import pytest
 
-from cyberdog.analysis import shape_optimization as so
+from cyberdog.core import path_shape as so
 from cyberdog.analysis import shape_search as search
 from cyberdog.config import HARDWARE_LIKE
 from cyberdog.config import GaitConfig
