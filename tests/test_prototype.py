@@ -222,8 +222,8 @@ def test_a_run_up_is_walked_before_the_measured_distance():
 
 def test_every_seed_walks_with_the_common_trajectories_at_its_lift_on_each_draw():
     learned = learned_set(seed0=[commanded(1.0, -0.01, 0)], seed1=[commanded(1.0, -0.03, 1)])
-    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.5, modes=("ideal", "hardware"), workers=2, draws=2, run_up_s=0.0,
-                               learned=learned, log=lambda _: None)
+    rows = proto.run_prototype(speeds=(1.0,), distance_m=0.5, modes=("ideal", "hardware"), workers=2, draws=2,
+                               run_up_s=0.0, learned=learned, log=lambda _: None)
     assert len(rows) == 2 * 3 * (1 + 2)  # seeds × trajectories × (ideal + 2 draws)
     for seed, lift in (("seed0", 0.09), ("seed1", 0.07)):
         mine = [r for r in rows if r["seed"] == seed]

@@ -4,7 +4,7 @@
     python tools/optimize_trajectory.py --lift-height 0.10 --max-evals 100 --workers 2
     python tools/optimize_trajectory.py --lift-height 0.085 --objective electrical --robot hardware   # battery
 
-Beyond the paper (`cyberdog.analysis.shape_optimization`, the search in `cyberdog.analysis.shape_search`): a
+Beyond the paper (`cyberdog.core.path_shape`, the search in `cyberdog.analysis.shape_search`): a
 5-parameter periodic foot path (swing x timing law and skew, apex timing and fullness with the apex exactly at
 H, stance timing law), started from the composite cycloid and improved with bounded Nelder–Mead on the mean
 energy (Eq. 7, or with `--objective electrical` what the battery pays) of `--duration`-s walks (measured from
@@ -36,7 +36,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
-from cyberdog.analysis import shape_optimization as so  # noqa: E402
+from cyberdog.core import path_shape as so  # noqa: E402
 from cyberdog.analysis import shape_search  # noqa: E402
 from cyberdog.analysis.compare import WalkJob, reduction, run_jobs, walk_config  # noqa: E402
 from cyberdog.analysis.report import json_safe  # noqa: E402
