@@ -1,0 +1,150 @@
+"""The README's two result tables, made from the shipped results (so the README and `results/` cannot disagree).
+
+`python tools/readme_tables.py` prints them from `results/figures_input/` (what `python evaluate.py` wrote
+and `tools/ship_result.py` shipped); `--write` puts them into README.md between its `<!-- table:NAME -->` and
+`<!-- /table:NAME -->` markers; `tests/test_readme.py` checks that the README holds them as made.
+
+- `table5`: Table 5 over the seeds (`comparison.json`, the walks of `evaluate.py compare`): the learned paths'
+  Eq. 7 energy, the common trajectories at each path's own lift, D_t (Eq. 12) on E and on the electrical
+  energy, the learned paths against the searched shape, the paper's protocol (baselines at 0.15 m) and the
+  paper's own numbers; mean ± 95 % CI over the seeds whose walk is valid (`cyberdog.analysis.table5`).
+- `prototype`: the prototype run on the hardware-like robots (`prototype.json`): battery per 100 m, the
+  saving against the cheaper common trajectory, range, electrical energy, the searched shape's battery and the
+  learned paths against it, the paper's range; mean ± 95 % CI across seeds (`cyberdog.analysis.prototype_summary`).
+"""
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+
+from cyberdog.analysis import prototype_summary as ps
+from cyberdog.analysis import table5
+from cyberdog.analysis.compare import REFERENCE
+from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
+from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
+
+NAMES = ("table5", "prototype")
+SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
+MINUS = "\u2212"  # the README's minus sign
+
+
+def number(x: float, fmt: str, sign: bool = False) -> str:
+    """`x` formatted, with a typographic minus (and a plus if `sign`)."""
+    text = format(x, ("+" if sign else "") + fmt)
+    return text.replace("-", MINUS)
+
+
+def mean_ci(row: dict, key: str, fmt: str, unit: str = "", sign: bool = False) -> str:
+    """"m unit ± h" for a row's `key`_mean and `key`_ci95 (no "± h" where the CI is undefined: one value)."""
+    m, h = row.get(f"{key}_mean", math.nan), row.get(f"{key}_ci95", math.nan)
+    if not math.isfinite(m):
+        return "–"
+    return number(m, fmt, sign) + unit + (f" ± {number(h, fmt)}" if math.isfinite(h) else "")
+
+
+def _line(label: str, cells: list[str]) -> str:
+    return "|" + "".join(f" {c} |" if c else " |" for c in [label, *cells])
+
+
+def _header(first: str, speeds: list[float]) -> list[str]:
+    return [_line(first, [f"{v:.1f} m/s" for v in speeds]), "|---|" + "---|" * len(speeds)]
+
+
+def table5_markdown(walks: list[dict], straight_shape: str = "rectangle") -> str:
+    """The README's Table 5 from the walks of `evaluate.py compare` (its comparison.json)."""
+    summary = table5.summary_rows(walks)
+    same = [r for r in summary if r["set"] == "same_lift"]
+    paper = {r["speed_command_mps"]: r for r in summary if r["set"] == "paper"}
+    if not same:
+        raise ValueError("the walks hold no learned path compared at its own lift height (set 'same_lift')")
+    speeds = [r["speed_command_mps"] for r in same]
+    lines = _header("", speeds)
+    lines.append(_line("E, learned (kJ)", [mean_ci(r, "learned_energy_kJ", ".3f") for r in same]))
+    lines.append(_line("E, composite cycloid (kJ)", [mean_ci(r, "cycloid_energy_kJ", ".3f") for r in same]))
+    lines.append(_line(f"E, straight line, {straight_shape} (kJ)",
+                       [mean_ci(r, "straight_energy_kJ", ".3f") for r in same]))
+    lines.append(_line("**D_t on E, Eq. 12**", [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}**" for r in same]))
+    lines.append(_line("D_t on the electrical energy", [mean_ci(r, "D_t_electrical_pct", ".1f", " %") for r in same]))
+    searched = [r.get(f"{REFERENCE}_lift_height_m") for r in same]
+    if all(h is not None for h in searched):
+        lines.append(_line(f"learned against the direct search's shape at {searched[0]:.3f} m, on E",
+                           [mean_ci(r, "D_ref_pct", ".1f", " %") for r in same]))
+    if all(v in paper for v in speeds):
+        p = [paper[v] for v in speeds]
+        lines.append(_line(f"*paper's protocol:* E, cycloid / straight at {PAPER_LIFT_HEIGHT:.2f} m (kJ)",
+                           [f"{r['cycloid_energy_kJ_mean']:.3f} / {r['straight_energy_kJ_mean']:.3f}" for r in p]))
+        lines.append(_line("***paper's protocol:* D_t on E**",
+                           [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}**" for r in p]))
+    t = table5.PAPER_TABLE5_KJ
+    idx = [PAPER_SPEEDS.index(v) if v in PAPER_SPEEDS else None for v in speeds]
+    lines.append(_line("*paper, Table 5: learned / cycloid / straight (kJ)*",
+                       [f"{t['learned'][i]:.2f} / {t['cycloid'][i]:.2f} / {t['straight'][i]:.2f}" if i is not None
+                        else "" for i in idx]))
+    lines.append(_line("*paper: D_t*", [f"{t['decrement_pct'][i]:.0f} %" if i is not None else "" for i in idx]))
+    return "\n".join(lines)
+
+
+def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
+    """The README's prototype table from the walks of `evaluate.py prototype` (its prototype.json)."""
+    summary = [r for r in ps.summary_rows(walks) if r["robot"] == robot]
+    by = {(r["trajectory"], r["speed_mps"]): r for r in summary}
+    speeds = sorted({r["speed_mps"] for r in summary if r["trajectory"] == "learned"})
+    if not speeds:
+        raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
+    learned, cycloid, straight = ([by[(name, v)] for v in speeds] for name in ("learned", "cycloid", "straight"))
+    lines = _header("hardware-like robot" if robot == "hardware" else f"{robot} robot", speeds)
+    lines.append(_line("battery % per 100 m: learned", [mean_ci(r, "battery_pct_per_100m", ".2f") for r in learned]))
+    lines.append(_line("battery % per 100 m: composite cycloid / straight line",
+                       [f"{mean_ci(c, 'battery_pct_per_100m', '.2f')} / {mean_ci(s, 'battery_pct_per_100m', '.2f')}"
+                        for c, s in zip(cycloid, straight)]))
+    lines.append(_line("**battery saving against the cheaper common trajectory**",
+                       [f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**" for r in learned]))
+    lines.append(_line("range on a full charge (m): learned / cycloid",
+                       [f"{mean_ci(r, 'range_full_charge_m', '.0f')} / {mean_ci(c, 'range_full_charge_m', '.0f')}"
+                        for r, c in zip(learned, cycloid)]))
+    lines.append(_line("electrical energy per 100 m (kJ): learned / cycloid",
+                       [f"{mean_ci(r, 'electrical_kJ_per_100m', '.1f')} / {mean_ci(c, 'electrical_kJ_per_100m', '.1f')}"
+                        for r, c in zip(learned, cycloid)]))
+    if all((ps.REFERENCE, v) in by for v in speeds):
+        lines.append(_line("*reference: a shape searched for the battery on this robot, battery % per 100 m*",
+                           [f"*{by[(ps.REFERENCE, v)]['battery_pct_per_100m_mean']:.2f}*" for v in speeds]))
+        lines.append(_line("learned against that searched shape",
+                           [mean_ci(r, "battery_vs_searched_pct", ".1f", " %", sign=True) for r in learned]))
+    gain = PAPER_RANGE_1MPS_M["learned"] / PAPER_RANGE_1MPS_M["cycloid"] - 1.0
+    lines.append(_line("*paper, 1 m/s: range learned / cycloid*",
+                       [f"*{PAPER_RANGE_1MPS_M['learned']:,.0f} / {PAPER_RANGE_1MPS_M['cycloid']:,.0f} m "
+                        f"({gain * 100:+.0f} %)*"] + [""] * (len(speeds) - 1)))
+    return "\n".join(lines)
+
+
+def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
+    """Both tables from a folder holding comparison.json and prototype.json."""
+    results = Path(results)
+    for name, file in SOURCES.items():
+        if not (results / file).is_file():
+            raise FileNotFoundError(f"{results / file} not found: the {name} table is made from it "
+                                    "(`python evaluate.py` writes it; results/figures_input/ holds the shipped one)")
+    walks = {name: json.loads((results / file).read_text()) for name, file in SOURCES.items()}
+    return {"table5": table5_markdown(walks["table5"], straight_shape),
+            "prototype": prototype_markdown(walks["prototype"])}
+
+
+def _block(name: str) -> re.Pattern:
+    return re.compile(rf"(<!-- table:{name} -->\n)(.*?)(\n<!-- /table:{name} -->)", re.S)
+
+
+def readme_blocks(text: str) -> dict[str, str]:
+    """The tables between the README's markers, by name (a name without markers is absent)."""
+    return {name: m.group(2) for name in NAMES if (m := _block(name).search(text))}
+
+
+def replace_blocks(text: str, tables: dict[str, str]) -> str:
+    """`text` with each marked block replaced by its table; a missing marker is an error naming it."""
+    for name, table in tables.items():
+        pattern = _block(name)
+        if not pattern.search(text):
+            raise ValueError(f"no '<!-- table:{name} -->' ... '<!-- /table:{name} -->' block in the README")
+        text = pattern.sub(lambda m: m.group(1) + table + m.group(3), text)
+    return text
