@@ -6,9 +6,9 @@ import pytest
 from cyberdog.analysis.policy_check import check_jobs, stage_reductions
 
 
-def row(label, stage, speed, energy, walks=True, duration=10.0):
+def row(label, stage, speed, energy, walks=True, duration=10.0, distance=10.0):
     return {"label": label, "stage": stage, "speed_command_mps": speed, "energy_J": energy, "walks": walks,
-            "duration_s": duration}
+            "duration_s": duration, "energy_per_metre_J": energy / distance}
 
 
 def test_the_reduction_is_stage2_against_stage1_at_the_same_speed():
@@ -18,6 +18,22 @@ def test_the_reduction_is_stage2_against_stage1_at_the_same_speed():
     assert set(got) == {("s0", 1.0), ("s0", 1.4)}
     assert got["s0", 1.0]["reduction_pct"] == pytest.approx(10.0) and got["s0", 1.0]["both_walk"]
     assert got["s0", 1.4]["reduction_pct"] == pytest.approx(-25.0) and not got["s0", 1.4]["both_walk"]
+
+
+def test_the_reduction_per_metre_does_not_credit_walking_slower():
+    """Stage 2 spends 10 % less over the same 10 s but walks 20 % less far: per metre it spends more."""
+    (got,) = stage_reductions([row("s0", 1, 1.0, 1000.0, distance=10.0), row("s0", 2, 1.0, 900.0, distance=8.0)])
+    assert got["reduction_pct"] == pytest.approx(10.0)
+    assert got["reduction_per_metre_pct"] == pytest.approx(100.0 * (1.0 - (900.0 / 8.0) / (1000.0 / 10.0)))
+    assert got["reduction_per_metre_pct"] < 0
+
+
+def test_the_trot_reference_row_walks_the_controller_at_the_speed():
+    """The reference row is the trot controller's own walk: it keeps the speed and does not fall."""
+    from cyberdog.analysis.policy_check import COLUMNS, check_trot
+    r = check_trot((1.2, 3.0))
+    assert set(COLUMNS) <= set(r) and r["label"] == "trot" and r["stage"] == 0
+    assert not r["fell"] and abs(r["mean_speed_mps"] - 1.2) < 0.1 and r["energy_J"] > 0
 
 
 def test_walks_of_different_durations_give_no_reduction():

@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from cyberdog.analysis.parallel import map_in_processes, progress_log
-from cyberdog.analysis.policy_check import COLUMNS, check_actor, check_jobs, stage_reductions
+from cyberdog.analysis.policy_check import COLUMNS, check_actor, check_jobs, check_trot, stage_reductions
 from cyberdog.analysis.report import json_safe, markdown_table
 
 
@@ -28,6 +28,8 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, default=10.0, help="s per walk (default 10, the paper's)")
     p.add_argument("--actor", choices=["final", "best"], default="final",
                    help="stage<N>_final_actor.pt (default) or stage<N>_best_actor.pt")
+    p.add_argument("--trot", action="store_true",
+                   help="also walk the trot controller itself at each speed (label trot, stage 0): the reference")
     p.add_argument("--workers", type=int, default=None, help="processes (default: the CPUs)")
     p.add_argument("--out", type=Path, required=True, help="folder for policy_check.md and policy_check.json")
     args = p.parse_args(argv)
@@ -49,6 +51,9 @@ def main(argv=None) -> int:
                 f"{'fell' if r['fell'] else 'walks' if r['walks'] else 'off the band'}, {r['energy_J']:.0f} J")
 
     rows = map_in_processes(check_actor, jobs, args.workers, on_result=progress_log(len(jobs), line))
+    if args.trot:  # the reference: the trot controller's own walks
+        rows += map_in_processes(check_trot, [(float(v), args.duration) for v in args.speeds], args.workers,
+                                 on_result=progress_log(len(args.speeds), line))
     reductions = stage_reductions(rows)
     md = ("## Every walk\n\n" + markdown_table([{k: r[k] for k in COLUMNS} for r in rows])
           + "\n\n## Stage 2 against stage 1 (Eq. 7, same speed and duration)\n\n" + markdown_table(reductions) + "\n")

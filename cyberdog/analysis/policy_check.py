@@ -5,7 +5,10 @@ actor and commanded speed, one deterministic walk of `duration` s from the stand
 without exploration noise and without the trot prior a torque policy may have trained with
 (`cyberdog.rl.rollout`). A walk *walks* when it does not fall and its mean speed over the last half is within
 ±5 % of the command (`speed_within_band`, the band of Table 5). For a seed's stage-1 and stage-2 actors at the
-same speed, the Eq. 7 reduction is 1 − E₂/E₁ over the same duration (both must walk for it to mean anything).
+same speed, the Eq. 7 reduction is 1 − E₂/E₁ over the same duration, and per metre walked, 1 − (E₂/d₂)/(E₁/d₁)
+(both must walk for it to mean anything; per metre, a policy that walks slower is not credited for it). The trot
+controller's own walk at each speed (trajectory + IK + PD at the controller rate, what a torque policy's prior
+came from) is the reference row, label "trot" and stage 0 (`check_trot`).
 """
 from __future__ import annotations
 
@@ -32,6 +35,25 @@ def check_actor(job: tuple) -> dict:
             "mean_speed_mps": r.mean_speed, "in_band": in_band, "energy_J": r.energy,
             "electrical_energy_J": r.electrical_energy, "energy_per_metre_J": r.energy_per_metre,
             "cost_of_transport": r.cost_of_transport, "score": r.score, "wall_s": time.perf_counter() - t0}
+
+
+def check_trot(job: tuple) -> dict:
+    """The trot controller's own walk → one row like `check_actor`'s. job: (speed m/s, duration s)."""
+    import dataclasses
+
+    from cyberdog.analysis.walk import walk
+    from cyberdog.config import WalkConfig
+
+    speed, duration = job
+    t0 = time.perf_counter()
+    cfg = WalkConfig()
+    r = walk(dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, speed=float(speed))), duration=duration)
+    in_band = speed_within_band(r.mean_speed, speed) if math.isfinite(r.mean_speed) else False
+    return {"label": "trot", "stage": 0, "actor": "", "speed_command_mps": speed,
+            "walks": bool(not r.fell and in_band), "fell": bool(r.fell), "duration_s": r.duration,
+            "mean_speed_mps": r.mean_speed, "in_band": in_band, "energy_J": r.energy,
+            "electrical_energy_J": r.electrical_energy, "energy_per_metre_J": r.energy_per_metre,
+            "cost_of_transport": r.cost_of_transport, "score": math.nan, "wall_s": time.perf_counter() - t0}
 
 
 def check_jobs(actors: dict[str, dict[int, str | Path]], speeds, duration: float, seed: int = 0) -> list[tuple]:
@@ -63,8 +85,9 @@ def stage_reductions(rows: list[dict]) -> list[dict]:
         same = one["duration_s"] == two["duration_s"]
         out.append({"label": label, "speed_command_mps": speed, "both_walk": one["walks"] and two["walks"],
                     "energy_stage1_J": one["energy_J"], "energy_stage2_J": two["energy_J"],
-                    "reduction_pct": 100.0 * (1.0 - two["energy_J"] / one["energy_J"]) if same else math.nan})
+                    "reduction_pct": 100.0 * (1.0 - two["energy_J"] / one["energy_J"]) if same else math.nan,
+                    "reduction_per_metre_pct": 100.0 * (1.0 - two["energy_per_metre_J"] / one["energy_per_metre_J"])})
     return out
 
 
-__all__ = ["COLUMNS", "check_actor", "check_jobs", "stage_reductions"]
+__all__ = ["COLUMNS", "check_actor", "check_jobs", "check_trot", "stage_reductions"]

@@ -27,6 +27,7 @@ from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
 NAMES = ("table5", "prototype")
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
+TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 MINUS = "\u2212"  # the README's minus sign
 
 
@@ -52,8 +53,11 @@ def _header(first: str, speeds: list[float]) -> list[str]:
     return [_line(first, [f"{v:.1f} m/s" for v in speeds]), "|---|" + "---|" * len(speeds)]
 
 
-def table5_markdown(walks: list[dict], straight_shape: str = "rectangle") -> str:
-    """The README's Table 5 from the walks of `evaluate.py compare` (its comparison.json)."""
+def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
+                    torque_walks: list[dict] | None = None) -> str:
+    """The README's Table 5 from the walks of `evaluate.py compare` (its comparison.json); with `torque_walks`
+    (the same for the paper's torque agent's paths) its D_t at matched lift as rows of its own, with the
+    number of seeds whose path replays (no fall, ±5 % speed) at each speed."""
     summary = table5.summary_rows(walks)
     same = [r for r in summary if r["set"] == "same_lift"]
     paper = {r["speed_command_mps"]: r for r in summary if r["set"] == "paper"}
@@ -67,6 +71,13 @@ def table5_markdown(walks: list[dict], straight_shape: str = "rectangle") -> str
                        [mean_ci(r, "straight_energy_kJ", ".3f") for r in same]))
     lines.append(_line("**D_t on E, Eq. 12**", [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}**" for r in same]))
     lines.append(_line("D_t on the electrical energy", [mean_ci(r, "D_t_electrical_pct", ".1f", " %") for r in same]))
+    if torque_walks:
+        torque = {r["speed_command_mps"]: r for r in table5.summary_rows(torque_walks) if r["set"] == "same_lift"}
+        t = [torque.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
+        lines.append(_line("**D_t on E, the paper's agent (joint torques)**",
+                           [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}** ({r['n_valid']} of {r['n_seeds']})" for r in t]))
+        lines.append(_line("D_t on the electrical energy, the paper's agent",
+                           [mean_ci(r, "D_t_electrical_pct", ".1f", " %") for r in t]))
     searched = [r.get(f"{REFERENCE}_lift_height_m") for r in same]
     if all(h is not None for h in searched):
         lines.append(_line(f"learned against the direct search's shape at {searched[0]:.3f} m, on E",
@@ -120,14 +131,16 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
 
 
 def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
-    """Both tables from a folder holding comparison.json and prototype.json."""
+    """Both tables from a folder holding comparison.json and prototype.json (and comparison_torque.json, if
+    the paper's torque agent's paths were compared)."""
     results = Path(results)
     for name, file in SOURCES.items():
         if not (results / file).is_file():
             raise FileNotFoundError(f"{results / file} not found: the {name} table is made from it "
                                     "(`python evaluate.py` writes it; results/figures_input/ holds the shipped one)")
     walks = {name: json.loads((results / file).read_text()) for name, file in SOURCES.items()}
-    return {"table5": table5_markdown(walks["table5"], straight_shape),
+    torque = json.loads((results / TORQUE_SOURCE).read_text()) if (results / TORQUE_SOURCE).is_file() else None
+    return {"table5": table5_markdown(walks["table5"], straight_shape, torque),
             "prototype": prototype_markdown(walks["prototype"])}
 
 
