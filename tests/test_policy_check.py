@@ -31,7 +31,8 @@ def test_the_reduction_per_metre_does_not_credit_walking_slower():
 def test_the_trot_reference_row_walks_the_controller_at_the_speed():
     """The reference row is the trot controller's own walk: it keeps the speed and does not fall."""
     from cyberdog.analysis.policy_check import COLUMNS, check_trot
-    r = check_trot((1.2, 3.0))
+    from cyberdog.config import EnvConfig
+    r = check_trot((1.2, 3.0, EnvConfig().walk))
     assert set(COLUMNS) <= set(r) and r["label"] == "trot" and r["stage"] == 0
     assert not r["fell"] and abs(r["mean_speed_mps"] - 1.2) < 0.1 and r["energy_J"] > 0
 

@@ -19,6 +19,7 @@ from pathlib import Path
 from cyberdog.analysis.parallel import map_in_processes, progress_log
 from cyberdog.analysis.policy_check import COLUMNS, check_actor, check_jobs, check_trot, stage_reductions
 from cyberdog.analysis.report import json_safe, markdown_table
+from cyberdog.config import ExperimentConfig, load
 
 
 def main(argv=None) -> int:
@@ -29,7 +30,8 @@ def main(argv=None) -> int:
     p.add_argument("--actor", choices=["final", "best"], default="final",
                    help="stage<N>_final_actor.pt (default) or stage<N>_best_actor.pt")
     p.add_argument("--trot", action="store_true",
-                   help="also walk the trot controller itself at each speed (label trot, stage 0): the reference")
+                   help="also walk the trot controller itself at each speed (label trot, stage 0): the reference, "
+                        "with the first run's env.walk (its trajectory and lift height)")
     p.add_argument("--workers", type=int, default=None, help="processes (default: the CPUs)")
     p.add_argument("--out", type=Path, required=True, help="folder for policy_check.md and policy_check.json")
     args = p.parse_args(argv)
@@ -51,8 +53,10 @@ def main(argv=None) -> int:
                 f"{'fell' if r['fell'] else 'walks' if r['walks'] else 'off the band'}, {r['energy_J']:.0f} J")
 
     rows = map_in_processes(check_actor, jobs, args.workers, on_result=progress_log(len(jobs), line))
-    if args.trot:  # the reference: the trot controller's own walks
-        rows += map_in_processes(check_trot, [(float(v), args.duration) for v in args.speeds], args.workers,
+    if args.trot:  # the reference: the trot controller's own walks, as the first run's env has it
+        config = args.runs[0] / "config.yaml"
+        walk_cfg = (load(ExperimentConfig, config) if config.is_file() else ExperimentConfig()).env.walk
+        rows += map_in_processes(check_trot, [(float(v), args.duration, walk_cfg) for v in args.speeds], args.workers,
                                  on_result=progress_log(len(args.speeds), line))
     reductions = stage_reductions(rows)
     md = ("## Every walk\n\n" + markdown_table([{k: r[k] for k in COLUMNS} for r in rows])

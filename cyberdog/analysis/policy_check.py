@@ -38,15 +38,14 @@ def check_actor(job: tuple) -> dict:
 
 
 def check_trot(job: tuple) -> dict:
-    """The trot controller's own walk → one row like `check_actor`'s. job: (speed m/s, duration s)."""
+    """The trot controller's own walk → one row like `check_actor`'s. job: (speed m/s, duration s, the env's
+    `WalkConfig`: the trot the env's controller, and a torque policy's prior, runs)."""
     import dataclasses
 
     from cyberdog.analysis.walk import walk
-    from cyberdog.config import WalkConfig
 
-    speed, duration = job
+    speed, duration, cfg = job
     t0 = time.perf_counter()
-    cfg = WalkConfig()
     r = walk(dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, speed=float(speed))), duration=duration)
     in_band = speed_within_band(r.mean_speed, speed) if math.isfinite(r.mean_speed) else False
     return {"label": "trot", "stage": 0, "actor": "", "speed_command_mps": speed,
