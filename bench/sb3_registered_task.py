@@ -39,6 +39,24 @@ def evaluate(model, env, episodes: int, seed: int) -> list[dict]:
     return rows
 
 
+def progress_callback(total: int, every_s: float = 15.0):
+    """An SB3 callback that prints the env steps done every `every_s` seconds (training is otherwise silent)."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Progress(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.t0 = self.last = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            now = time.perf_counter()
+            if now - self.last >= every_s:
+                self.last = now
+                print(f"  training: {self.num_timesteps} of {total} env steps ({now - self.t0:.0f} s)", flush=True)
+            return True
+
+    return Progress()
+
+
 def report(title: str, rows: list[dict]) -> None:
     print(f"{title}: mean length {np.mean([r['length'] for r in rows]):.0f} steps, falls {sum(r['fell'] for r in rows)}"
           f"/{len(rows)}, mean score {np.mean([r['score'] for r in rows]):.1f}", flush=True)
@@ -69,7 +87,8 @@ def main(argv=None) -> int:
     report(f"{args.task}, the zero action (the trot)", evaluate(None, eval_env, args.episodes, 10_000))
     report(f"{args.task}, SB3 TD3 untrained", evaluate(model, eval_env, args.episodes, 10_000))
     t0 = time.perf_counter()
-    model.learn(total_timesteps=args.steps, progress_bar=False, log_interval=None)
+    model.learn(total_timesteps=args.steps, progress_bar=False, log_interval=None,
+                callback=progress_callback(args.steps))
     print(f"trained {args.steps} env steps in {time.perf_counter() - t0:.0f} s", flush=True)
     report(f"{args.task}, SB3 TD3 after {args.steps} steps", evaluate(model, eval_env, args.episodes, 10_000))
     return 0
