@@ -156,3 +156,38 @@ def test_servers_are_installed(command):
 def test_the_environment_page_example_runs():
     code = re.search(r"```python\n(.*?)```", (ROOT / "docs" / "environment.md").read_text(), flags=re.S)[1]
     exec(compile(code, "docs/environment.md", "exec"), {})
+
+
+def test_the_readme_tables_are_the_shipped_results_as_made():
+    """Table 5 and the prototype table in the README are `tools/readme_tables.py`'s output from results/figures_input/,
+    to the printed digit; a changed result, or a hand edit, shows here."""
+    from cyberdog.analysis.readme_tables import NAMES, make_tables, readme_blocks
+    blocks = readme_blocks(README)
+    assert set(blocks) == set(NAMES)
+    tables = make_tables(ROOT / "results" / "figures_input")
+    for name in NAMES:
+        assert blocks[name] == tables[name], f"README's {name} table differs: python tools/readme_tables.py --write"
+
+
+def test_the_readme_tables_follow_the_rows_they_are_made_from(tmp_path):
+    """Each cell is its rows' mean ± CI: moving one seed's learned walk moves the table's cells for that speed
+    only, and a README without a table's markers is refused by name."""
+    import json
+    from cyberdog.analysis.readme_tables import make_tables, replace_blocks
+    source = ROOT / "results" / "figures_input"
+    for name in ("comparison.json", "prototype.json"):
+        (tmp_path / name).write_text((source / name).read_text())
+    before = make_tables(tmp_path)
+    walks = json.loads((tmp_path / "comparison.json").read_text())
+    moved = next(w for w in walks if w["trajectory"] == "learned" and w["set"] == "same_lift"
+                 and w["speed_command_mps"] == 1.2 and w["valid"])
+    moved["energy_kJ"] += 0.5
+    (tmp_path / "comparison.json").write_text(json.dumps(walks))
+    after = make_tables(tmp_path)
+    row = next(line for line in after["table5"].splitlines() if line.startswith("| E, learned (kJ)"))
+    old = next(line for line in before["table5"].splitlines() if line.startswith("| E, learned (kJ)"))
+    cells, old_cells = row.split(" | ")[1:], old.split(" | ")[1:]
+    assert cells[0] == old_cells[0] and cells[1] != old_cells[1] and cells[2] == old_cells[2]
+    assert after["prototype"] == before["prototype"]
+    with pytest.raises(ValueError, match="table:prototype"):
+        replace_blocks("no markers here", {"prototype": after["prototype"]})
