@@ -154,9 +154,8 @@ def test_the_walkers_per_period_feedback_equals_the_state_snapshot():
 
 @pytest.mark.parametrize("case", ["ideal", "end stop", "added torque", "hardware"])
 def test_walker_run_equals_its_periods_one_by_one(case):
-    """`Walker.run(n)` (the env's loop) is n calls of `step`, to the bit: on the ideal robot (its own loop),
-    with an end stop narrow enough to act in some periods (those go through `step`), and where it hands every
-    period to `step` (an added torque, the hardware-like robot)."""
+    """`Walker.run(n)` (the env's loop) is n calls of `step`, to the bit: on the ideal robot, with an end stop
+    narrow enough to act in some periods, with an added torque, and on the hardware-like robot."""
     from cyberdog.control.joint_stop import JointStop
     cfg = walk_config(speed=1.2)
     stop = JointStop(cfg.robot, 0.12, 200.0, 1.0) if case == "end stop" else None
