@@ -135,3 +135,27 @@ def test_a_mistyped_sub_command_is_one_line_naming_the_closest(capsys):
     err = capsys.readouterr().err.strip()
     assert exit_.value.code == 2 and len(err.splitlines()) == 1
     assert "unknown sub-command 'comapre'" in err and "did you mean 'compare'" in err
+
+
+@pytest.mark.parametrize("command", ["prototype", "stiffness"])
+def test_a_closed_loop_actor_that_is_no_actor_or_has_no_path_is_one_line_before_any_walk(command, tmp_path, capsys):
+    assert evaluate.main([command, "--closed-loop", "results/policy_speeds/metrics.csv",
+                          "--out", str(tmp_path / "p")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--closed-loop" in err[0] and not (tmp_path / "p").exists()
+    # seed 0's actor with a learned set that holds seed 1's path only: refused
+    assert evaluate.main([command, "--learned", "results/learned_battery/seed1_1mps.json", "--speeds", "1.0",
+                          "--closed-loop", "results/policy_battery/stage2_actor.pt",
+                          "--out", str(tmp_path / "q")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no learned path of the same seed" in err[0] and "seed0" in err[0]
+    assert not (tmp_path / "q").exists()
+
+
+def test_a_bad_pd_scale_is_one_line(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        evaluate.main(["stiffness", "--pd-scales", "0", "--out", str(tmp_path / "s")])
+    assert stop.value.code == 2 and "--pd-scales" in capsys.readouterr().err
+    assert evaluate.main(["stiffness", "--pd-scales", "1", "1", "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--pd-scales" in err[0] and "distinct" in err[0]

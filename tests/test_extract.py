@@ -281,8 +281,8 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
     assert replay_check.replay_status(path, 1.2, None, 30.0, hardware, 20.0) == "ok"
     calls = []
 
-    def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None):
-        calls.append((None if hardware is None else hardware.seed, distance))
+    def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None, progress=None):
+        calls.append((None if hardware is None else hardware.seed, distance, (cfg or C.WalkConfig()).pid.kp[0]))
         fell = hardware is not None and hardware.seed == seeds[-1]
         return SimpleNamespace(fell=fell, duration=14.0, speed_ok=True, mean_speed=1.2, distance=100.0,
                                electrical_energy=2000.0 + (0.0 if hardware is None else hardware.seed),
@@ -290,8 +290,12 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
 
     monkeypatch.setattr(replay_check, "replay_walk", stand_in)
     verdict = replay_check.replay_verdict(path, 1.2)
-    assert verdict == f"hardware-like robot (seed {seeds[-1]}), 100 m: fell at 14.00 s"
-    assert calls == [(None, None), (None, 100.0)] + [(seed, 100.0) for seed in seeds]
+    pd = replay_check.HARDWARE_CHECK_PD_SCALES
+    assert verdict == f"hardware-like robot (seed {seeds[-1]}, PD {pd[-1]:g}x), 100 m: fell at 14.00 s"
+    # each hardware-like robot with its own PD stiffness (kp 60 N·m/rad × the scale): 1.0, 0.7 and 1.4 among them
+    assert calls == [(None, None, 60.0), (None, 100.0, 60.0)] + [(seed, 100.0, pytest.approx(60.0 * s))
+                                                                  for seed, s in zip(seeds, pd)]
+    assert {1.0, 0.7, 1.4} <= set(pd)
     # all walk: the energy per metre is the mean over the hardware-like walks only
     monkeypatch.setattr(replay_check, "HARDWARE_CHECK_SEEDS", seeds[:-1])
     lines = []

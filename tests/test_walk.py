@@ -130,3 +130,23 @@ def test_a_run_up_is_walked_but_left_out_of_the_result():
     for bad in (-0.1, 3.0, float("nan")):
         with pytest.raises(ValueError, match="run_up"):
             walk(cfg, 3.0, run_up=bad)
+
+
+def test_a_long_walk_reports_each_simulated_second_and_a_replay_check_logs_a_heartbeat(monkeypatch):
+    """A 100 m check walk is 20 s or more of wall time: `walk` calls `progress` once per simulated second (with
+    the distance so far), and the replay check's heartbeat turns that into a line once its wall interval passed."""
+    from cyberdog.analysis import replay_check as rc
+    calls = []
+    r = walk(walk_cfg("cycloid", 1.0), duration=3.0, progress=lambda t, x: calls.append((t, x)))
+    assert [round(t, 6) for t, _ in calls] == [1.0, 2.0, 3.0]
+    xs = [x for _, x in calls]
+    assert xs == sorted(xs) and 0.5 < xs[-1] - xs[0] < 3.0  # forward, about 1 m/s after the ramp
+    assert xs[-1] == pytest.approx(r.distance, abs=0.3)
+    clock = iter([0.0, 4.0, 11.0, 12.0, 25.0])  # wall seconds: begin, then one reading per progress call
+    monkeypatch.setattr(rc.time, "monotonic", lambda: next(clock))
+    lines = []
+    beat = rc.heartbeat(lines.append, "ideal robot, 100 m", 100.0, every_s=10.0)
+    for t, x in [(1.0, 0.4), (2.0, 1.3), (3.0, 2.2), (4.0, 3.2)]:
+        beat(t, x)
+    assert lines == ["replay check, ideal robot, 100 m: 1 m of 100 (2 s walked)",
+                     "replay check, ideal robot, 100 m: 3 m of 100 (4 s walked)"]

@@ -10,7 +10,8 @@ prototype's draws; the actor's domain randomisation off), three timed walks of `
   replay        the learned path of that seed and speed (`--learned`), as the prototype walks it;
   cycloid       the composite cycloid at that path's lift height.
 
-Printed and written to --out (markdown and JSON): electrical energy per 100 m (what the battery pays; battery
+`evaluate.py prototype --closed-loop ACTOR...` walks the policies the prototype's own way (run-up, distance)
+as a row of its tables; this script keeps the timed walks from a stand. Printed and written to --out (markdown and JSON): electrical energy per 100 m (what the battery pays; battery
 % per 100 m is proportional to it, Eq. 13) and the saving against the cycloid, per actor, speed and draw, and
 whether the walk fell or left the ±5 % speed band.
 
@@ -43,7 +44,7 @@ def walk_row(job: tuple) -> dict:
     if kind == "closed loop":
         actor = load_actor(actor_file)
         env = dataclasses.replace(actor.config.env, hardware=hw, randomization=C.RandomizationConfig())
-        r = rollout(actor, speed, duration, seed=draw, env_config=env)
+        r = rollout(actor, speed, duration, seed=draw, env_config=env, hardware_robot=True)  # the draw's robot
     elif kind == "replay":
         r = walk(cfg, duration, trajectory, hardware=hw, foot_offsets=offsets)
     else:  # the cycloid at the path's own lift height, as the prototype run matches it

@@ -33,7 +33,7 @@ from cyberdog.analysis.parallel import map_in_processes, progress_log
 from cyberdog.analysis.prototype_summary import summary_markdown, summary_rows
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
-from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, WalkConfig
+from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, RandomizationConfig, WalkConfig
 from cyberdog.config.paper import PAPER_SPEEDS, PROTOTYPE_DISTANCE_M, PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S
 from cyberdog.core import energy as en
 from cyberdog.core.foot_offsets import FootOffsetPath
@@ -43,6 +43,7 @@ from cyberdog.core.trajectories import FootTrajectory
 PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
 PAPER_SIM_TO_REAL_GAP_PP = 3.0  # percentage points: 12 % (simulation) vs 9 % (prototype) energy reduction
 MODES = ("ideal", "hardware")
+POLICY = "policy"  # the row of a policy walking closed loop (`run_prototype(policies=...)`)
 TIME_CAP_MARGIN_S = 10.0  # s added to 1.5 × distance / speed (+ the start-up ramp) before a walk is abandoned
 
 # the Markdown table's columns (rows carry more: J, wall time, peak torque, lateral drift, battery E_f, E_n)
@@ -66,6 +67,8 @@ class _Job:
     draw: int = 0  # which hardware-like robot: HardwareConfig.seed + draw (0 on the ideal robot)
     run_up_s: float = 0.0  # s walked before the measured distance (see `run_prototype`)
     lift_height: float | None = None  # m, the path's own lift (a learned path); None: the config's trajectory's
+    policy: str | None = None  # an actor file: the policy itself walks (closed loop, `cyberdog.rl.rollout`)
+    pd_scale: float = 1.0  # the joint PD's stiffness in `cfg.pid`, × the base config's (PIDConfig.stiffness_scaled)
 
 
 def time_cap(distance_m: float, speed: float, cfg: WalkConfig, run_up_s: float = 0.0) -> float:
@@ -80,22 +83,41 @@ def _job_config(base: WalkConfig, name: str, trajectory: FootTrajectory | None, 
     return dataclasses.replace(base, gait=gait)
 
 
+def _policy_walk(job: _Job, hardware: HardwareConfig | None, cap: float):
+    """The actor of `job.policy` walks the protocol in its own env (its observation, its trot under the action),
+    on the same robot and with the same joint PD as the paths: `job.cfg.pid`, the hardware draw's mass and
+    sensor streams (`hardware_robot`), the domain randomisation off."""
+    from cyberdog.rl.rollout import load_actor, rollout  # torch: only in the processes that walk a policy
+
+    actor = load_actor(job.policy)
+    env = actor.config.env
+    env = dataclasses.replace(env, walk=dataclasses.replace(env.walk, pid=job.cfg.pid),
+                              hardware=hardware or HardwareConfig(), randomization=RandomizationConfig())
+    return rollout(actor, job.speed, cap, seed=job.draw, env_config=env, distance=job.distance_m,
+                   run_up=job.run_up_s, hardware_robot=True)
+
+
 def _run_job(job: _Job) -> dict:
     """One walk → one row (runs in a worker process)."""
     t0 = time.perf_counter()
     hw = job.hardware if job.mode == "hardware" else None
-    r = walk(job.cfg, time_cap(job.distance_m, job.speed, job.cfg, job.run_up_s), job.trajectory, hardware=hw,
-             distance=job.distance_m, foot_offsets=job.foot_offsets, run_up=job.run_up_s)
+    cap = time_cap(job.distance_m, job.speed, job.cfg, job.run_up_s)
+    if job.policy is not None:
+        r = _policy_walk(job, hw, cap)
+    else:
+        r = walk(job.cfg, cap, job.trajectory, hardware=hw, distance=job.distance_m, foot_offsets=job.foot_offsets,
+                 run_up=job.run_up_s)
     e_cfg = job.cfg.energy
     ok = r.distance > 0 and r.electrical_energy > 0
     pct = en.battery_percent_used(r.electrical_energy, e_cfg)
     start_pct = 100.0 * e_cfg.usable_fraction
     return {
         "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
-        "robot": job.mode, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        "robot": job.mode, "pd_scale": job.pd_scale, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
         # one meaning in every row: the lift height of the foot path walked (a learned path's own); the trot a
         # commanded path shifts has its own, under its own name
-        "lift_height_m": job.cfg.gait.lift_height if job.lift_height is None else job.lift_height,
+        "lift_height_m": (math.nan if job.policy is not None  # a policy's own foot lift is not an input
+                          else job.cfg.gait.lift_height if job.lift_height is None else job.lift_height),
         "trot_lift_height_m": job.cfg.gait.lift_height if job.foot_offsets is not None else None,
         "mean_speed_mps": r.mean_speed,  # last half of the walk
         "average_speed_mps": r.distance / r.duration if r.duration > 0 else float("nan"),
@@ -125,7 +147,8 @@ def run_prototype(trajectories: dict | None = None,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
                   every_walk: bool = True, learned: LearnedSet | None = None, draws: int = PROTOTYPE_DRAWS,
-                  run_up_s: float = PROTOTYPE_RUN_UP_S) -> list[dict]:
+                  run_up_s: float = PROTOTYPE_RUN_UP_S, policies: dict | None = None, pd_scale: float = 1.0
+                  ) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk. The
     defaults (distance, draws, run-up) are the prototype run's, `cyberdog.config.paper`'s, as `evaluate.py`'s.
 
@@ -142,6 +165,10 @@ def run_prototype(trajectories: dict | None = None,
     run_up_s: s each walk walks from its stand before `distance_m` is measured (`walk(run_up=...)`): the start-up
         (speed ramp, blend into a learned path) is then left out of the battery use, energies and time, as it is
         of a range on a full charge, where it happens once in kilometres; 0 = the paper's walk from a stand.
+    policies: {label of `learned`: actor file}: that seed's policy walks too, closed loop, as the row "policy"
+        (same robots, PD, run-up and distance as its replayed path; its saving is against the same baselines).
+    pd_scale: every walk with the joint PD this many times as stiff as `base_cfg.pid` (kp × s, kd × √s:
+        `PIDConfig.stiffness_scaled`); rows carry it as `pd_scale`.
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them).
     Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
@@ -152,6 +179,12 @@ def run_prototype(trajectories: dict | None = None,
     speeds, modes = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws)
     if not (math.isfinite(run_up_s) and run_up_s >= 0):
         raise ValueError(f"run_up_s must be >= 0 s and finite, got {run_up_s!r}")
+    policies = dict(policies or {})
+    unknown = [label for label in policies if learned is None or label not in learned.labels]
+    if unknown:
+        raise ValueError(f"policies {unknown} have no learned path of the same label (labels: "
+                         f"{list(learned.labels) if learned is not None else []})")
+    base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = []
     for label in learned.labels if learned is not None else [""]:
@@ -160,14 +193,18 @@ def run_prototype(trajectories: dict | None = None,
         for v, path in paths.items():
             cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
             jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), float(distance_m), offsets,
-                          label, d, float(run_up_s), float(path.lift_height)) for mode, d in robots]
+                          label, d, float(run_up_s), float(path.lift_height), pd_scale=pd_scale)
+                     for mode, d in robots]
+            if label in policies:
+                jobs += [_Job(POLICY, None, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
+                              float(run_up_s), policy=str(policies[label]), pd_scale=pd_scale) for mode, d in robots]
         for name, traj in trajectories.items():
             for v in speeds:
                 cfg = _job_config(base_cfg, name, traj, v)
                 if v in lifts:
                     cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
                 jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
-                              float(run_up_s)) for mode, d in robots]
+                              float(run_up_s), pd_scale=pd_scale) for mode, d in robots]
     def line(row: dict) -> str:
         return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
                 f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "

@@ -51,15 +51,16 @@ def _seed_means(walks: list[dict], value) -> list[float]:
     return out
 
 
-def battery_savings(rows: list[dict], robot: str, speed: float, against: tuple[str, ...] = COMMON) -> list[float]:
-    """Per seed, the learned path's battery saving (%) against the cheaper counting trajectory of `against`
-    (default: the common ones) on the same robot draw at the same lift, averaged over the draws where both
-    counted."""
+def battery_savings(rows: list[dict], robot: str, speed: float, against: tuple[str, ...] = COMMON,
+                    of: str = "learned") -> list[float]:
+    """Per seed, the battery saving (%) of the walks named `of` (the learned path; also the policy or the
+    searched shape) against the cheaper counting trajectory of `against` (default: the common ones) on the same
+    robot draw at the same lift, averaged over the draws where both counted."""
     here = [r for r in rows if r["robot"] == robot and r["speed_mps"] == speed]
     out = []
-    for seed in dict.fromkeys(r.get("seed", "") for r in here if r["trajectory"] == "learned"):
+    for seed in dict.fromkeys(r.get("seed", "") for r in here if r["trajectory"] == of):
         per_draw = []
-        for learned in (r for r in here if r["trajectory"] == "learned" and r.get("seed", "") == seed):
+        for learned in (r for r in here if r["trajectory"] == of and r.get("seed", "") == seed):
             others = [METRICS["battery_pct_per_100m"](r) for r in here
                       if r["trajectory"] in against and r.get("seed", "") == seed
                       and r.get("draw", 0) == learned.get("draw", 0) and walk_counts(r)]
@@ -71,8 +72,18 @@ def battery_savings(rows: list[dict], robot: str, speed: float, against: tuple[s
 
 
 def summary_rows(rows: list[dict]) -> list[dict]:
-    """Per robot, speed and trajectory: walks, counting walks, falls, seeds, and every metric's mean and 95 %
-    CI across seeds; the learned rows add the battery saving against the cheaper common trajectory."""
+    """Per joint-PD stiffness (`pd_scale`, 1 where a row has none), robot, speed and trajectory: walks, counting
+    walks, falls, seeds, and every metric's mean and 95 % CI across seeds; every row but the common trajectories'
+    adds the battery saving against the cheaper common trajectory, and the learned path's and the policy's the
+    saving against the searched shape where it was walked."""
+    out = []
+    for scale in dict.fromkeys(r.get("pd_scale", 1.0) for r in rows):
+        out += [{"pd_scale": scale, **r} for r in _summary_at([r for r in rows if r.get("pd_scale", 1.0) == scale])]
+    return out
+
+
+def _summary_at(rows: list[dict]) -> list[dict]:
+    """`summary_rows` of walks at one PD stiffness."""
     out = []
     for robot in dict.fromkeys(r["robot"] for r in rows):
         for v in sorted(dict.fromkeys(r["speed_mps"] for r in rows if r["robot"] == robot)):
@@ -86,13 +97,13 @@ def summary_rows(rows: list[dict]) -> list[dict]:
                        "draws": len(dict.fromkeys(w.get("draw", 0) for w in walks))}
                 for key, value in METRICS.items():
                     row[f"{key}_mean"], row[f"{key}_ci95"] = mean_ci(_seed_means(walks, value))
-                if name == "learned":
-                    savings = battery_savings(rows, robot, v)
+                if name not in COMMON:
+                    savings = battery_savings(rows, robot, v, of=name)
                     row["battery_saving_pct_mean"], row["battery_saving_pct_ci95"] = mean_ci(savings)
                     row["battery_saving_seeds"] = len(savings)
-                    if any(r["trajectory"] == REFERENCE for r in rows):
+                    if name != REFERENCE and any(r["trajectory"] == REFERENCE for r in rows):
                         row["battery_vs_searched_pct_mean"], row["battery_vs_searched_pct_ci95"] = mean_ci(
-                            battery_savings(rows, robot, v, against=(REFERENCE,)))
+                            battery_savings(rows, robot, v, against=(REFERENCE,), of=name))
                 out.append(row)
     return out
 
@@ -109,7 +120,7 @@ def summary_markdown(summary: list[dict], robot: str) -> str:
     shown = []
     for r in (r for r in summary if r["robot"] == robot):
         saving = (_cell(r, "battery_saving_pct", ".1f") + f" % ({r['battery_saving_seeds']} seeds)"
-                  if r["trajectory"] == "learned" else "")
+                  if "battery_saving_seeds" in r else "")
         shown.append({"speed (m/s)": f"{r['speed_mps']:g}", "trajectory": r["trajectory"],
                       "walks counted / fell": f"{r['counted']} of {r['walks']} / {r['fell']}",
                       "battery % per 100 m": _cell(r, "battery_pct_per_100m", ".2f"),
@@ -118,8 +129,9 @@ def summary_markdown(summary: list[dict], robot: str) -> str:
                       "electrical (kJ per 100 m)": _cell(r, "electrical_kJ_per_100m", ".2f"),
                       "electrical CoT": _cell(r, "electrical_cost_of_transport", ".3f"),
                       "battery saving vs the cheaper common": saving,
-                      **({"vs the searched shape": _cell(r, "battery_vs_searched_pct", ".1f") + " %"}
-                         if "battery_vs_searched_pct_mean" in r else {})})
+                      **({"vs the searched shape": (_cell(r, "battery_vs_searched_pct", ".1f") + " %"
+                                                    if "battery_vs_searched_pct_mean" in r else "")}
+                         if any("battery_vs_searched_pct_mean" in x for x in summary) else {})})
     return markdown_table(shown)
 
 

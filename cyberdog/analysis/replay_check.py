@@ -8,7 +8,8 @@ command). `replay_verdict` replays a path as the two tables walk it, and as far 
 1. the ideal robot, as the comparison walks it (Table 5: `REPLAY_CHECK_S`, the ±5 % speed band), then over the
    paper's prototype distance (`CHECK_DISTANCE_M`, 100 m, with the prototype's time cap and speed band);
 2. hardware-like robots over the same 100 m: `HARDWARE_LIKE` with the seeds `HARDWARE_CHECK_SEEDS`, so mass
-   draws and sensor noise that the prototype's robots (seeds 0 .. draws − 1) never have.
+   draws and sensor noise that the prototype's robots (seeds 0 .. draws − 1) never have, and with the joint PD
+   at 1.0, 0.7 and 1.4 times its stiffness (`HARDWARE_CHECK_PD_SCALES`): the gains are the user's to set.
 
 Each part was needed (measured on the battery preset's 15 paths): checked for 10 s on the ideal robot alone, a
 1.4 m/s path that fell on both prototype robots was kept; with 20 m walks on one, then three hardware-like
@@ -25,6 +26,7 @@ run, which reports the saving, walks other draws (seeds 0 .. draws − 1).
 from __future__ import annotations
 
 import dataclasses
+import time
 from dataclasses import dataclass
 
 from cyberdog.analysis.prototype import time_cap
@@ -35,7 +37,11 @@ from cyberdog.core.learned_set import LearnedPath
 
 REPLAY_CHECK_S = PAPER_WALK_DURATION  # s: the comparison's walk (Table 5)
 HARDWARE_CHECK_SEEDS = tuple(range(1000, 1006))  # HardwareConfig.seed of the check's robots: far from the prototype's
+# × the joint PD's stiffness of each check robot (PIDConfig.stiffness_scaled): a user sets the gains, so a path
+# must walk 30 % softer and 40 % stiffer too, and is chosen by its cost over all six
+HARDWARE_CHECK_PD_SCALES = (1.0, 0.7, 1.4, 1.0, 0.7, 1.4)
 CHECK_DISTANCE_M = PAPER_DISTANCE_M  # m: the paper's prototype walk (evaluate.py --prototype-distance 100)
+HEARTBEAT_S = 10.0  # s of wall time between a long check walk's progress lines (QUIET_LIMIT_S: never 15 s quiet)
 
 
 @dataclass(frozen=True)
@@ -48,11 +54,26 @@ class ReplayCheck:
 
 
 def replay_walk(path: LearnedPath, speed: float, cfg: WalkConfig | None = None, duration: float = REPLAY_CHECK_S,
-                hardware: HardwareConfig | None = None, distance: float | None = None):
+                hardware: HardwareConfig | None = None, distance: float | None = None, progress=None):
     """`path` replayed at `speed` (m/s) for `duration` s (or over `distance` m, `duration` then the time cap) on
-    the ideal robot (or `hardware`): the walk's `WalkResult`."""
+    the ideal robot (or `hardware`): the walk's `WalkResult`. `progress`: `walk`'s per-second callback."""
     walk_cfg, trajectory, offsets = path.walk_args(cfg or WalkConfig(), speed)
-    return walk(walk_cfg, duration, trajectory, foot_offsets=offsets, hardware=hardware, distance=distance)
+    return walk(walk_cfg, duration, trajectory, foot_offsets=offsets, hardware=hardware, distance=distance,
+                progress=progress)
+
+
+def heartbeat(log, name: str, distance: float | None, every_s: float = HEARTBEAT_S):
+    """A `walk` progress callback that logs "<name>: 41 m of 100 (42 s walked)" when `every_s` s of wall time
+    have passed since the walk began or since its last line (a 100 m check is 20 s or more under load)."""
+    last = [time.monotonic()]
+
+    def progress(t: float, x: float) -> None:
+        now = time.monotonic()
+        if now - last[0] >= every_s:
+            last[0] = now
+            so_far = f"{x:.0f} m of {distance:g}" if distance is not None else f"{x:.0f} m"
+            log(f"replay check, {name}: {so_far} ({t:.0f} s walked)")
+    return progress
 
 
 def walk_status(r) -> str:
@@ -78,11 +99,15 @@ def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None,
     cap = time_cap(CHECK_DISTANCE_M, speed, cfg)
     walks = [("ideal robot, 10 s", REPLAY_CHECK_S, None, None),
              (f"ideal robot, {CHECK_DISTANCE_M:g} m", cap, None, CHECK_DISTANCE_M)]
-    walks += [(f"hardware-like robot (seed {seed}), {CHECK_DISTANCE_M:g} m", cap,
-               dataclasses.replace(HARDWARE_LIKE, seed=seed), CHECK_DISTANCE_M) for seed in HARDWARE_CHECK_SEEDS]
+    walks = [(*w, 1.0) for w in walks]
+    walks += [(f"hardware-like robot (seed {seed}{f', PD {pd:g}x' if pd != 1 else ''}), {CHECK_DISTANCE_M:g} m",
+               cap, dataclasses.replace(HARDWARE_LIKE, seed=seed), CHECK_DISTANCE_M, pd)
+              for seed, pd in zip(HARDWARE_CHECK_SEEDS, HARDWARE_CHECK_PD_SCALES)]
     per_metre, dropped = [], 0
-    for name, duration, hardware, distance in walks:
-        r = replay_walk(path, speed, cfg, duration, hardware, distance)
+    for name, duration, hardware, distance, pd in walks:
+        walk_cfg = cfg if pd == 1 else dataclasses.replace(cfg, pid=cfg.pid.stiffness_scaled(pd))
+        r = replay_walk(path, speed, walk_cfg, duration, hardware, distance,
+                        progress=None if log is None else heartbeat(log, name, distance))
         dropped += r.dropped_shifts
         status = walk_status(r)
         if log is not None:
@@ -99,5 +124,5 @@ def replay_verdict(path: LearnedPath, speed: float, cfg: WalkConfig | None = Non
     return replay_check(path, speed, cfg).status
 
 
-__all__ = ["CHECK_DISTANCE_M", "HARDWARE_CHECK_SEEDS", "REPLAY_CHECK_S", "ReplayCheck", "replay_check", "replay_status",
-           "replay_verdict", "replay_walk", "walk_status"]
+__all__ = ["CHECK_DISTANCE_M", "HARDWARE_CHECK_PD_SCALES", "HARDWARE_CHECK_SEEDS", "HEARTBEAT_S", "REPLAY_CHECK_S",
+           "ReplayCheck", "heartbeat", "replay_check", "replay_status", "replay_verdict", "replay_walk", "walk_status"]

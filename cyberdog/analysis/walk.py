@@ -12,6 +12,8 @@ is exactly the ideal one. The stepping itself is `cyberdog.loop.walker.Walker`'s
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from cyberdog.config import HardwareConfig, WalkConfig
@@ -26,8 +28,8 @@ from cyberdog.sim.robot import Robot
 
 def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | None = None,
          robot: Robot | None = None, record: bool = False, hardware: HardwareConfig | None = None,
-         distance: float | None = None, foot_offsets: FootOffsetPath | None = None, run_up: float = 0.0
-         ) -> WalkResult:
+         distance: float | None = None, foot_offsets: FootOffsetPath | None = None, run_up: float = 0.0,
+         progress: Callable[[float, float], None] | None = None) -> WalkResult:
     """Walk at `cfg.gait.speed` with the trot controller; reuse `robot` if given.
 
     duration: s; the walk's length, or with `distance` its time cap.
@@ -41,6 +43,8 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
     run_up: s walked first and left out of the result's time, distance, energies and speed (the start from a
         stand: the speed ramp and the blend into a learned path); `distance` counts from its end, `duration`
         (the time cap) includes it. A fall in the run-up is the walk's fall.
+    progress: called with (s walked, m travelled from the start) after every simulated second, so that a long
+        walk (100 m is minutes of wall time on a loaded machine) can report that it is alive.
 
     The walk ends as a fall when the body falls (`Walker.fallen`) or when the trot asks for a foot target beyond
     the leg's reach (`UnreachableFootTarget`: a robot going down can make it step too far).
@@ -58,6 +62,8 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
         n_steps = int(round(duration / walker.dt))
         run_up_steps = int(round(run_up / walker.dt))
         since, since_x, goal_x = 0, None, None
+        steps_per_second = max(1, int(round(1.0 / walker.dt)))
+        start_x = float(walker.state.base_position[0]) if progress is not None else 0.0
         fell = False
         for k in range(n_steps):
             if k == run_up_steps:  # the measured walk starts here
@@ -74,6 +80,8 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
             if walker.fallen():
                 fell = True
                 break
+            if progress is not None and (k + 1) % steps_per_second == 0:
+                progress((k + 1) * walker.dt, float(walker.state.base_position[0]) - start_x)
         result = walk_result(walker, walker.controller.speed, fell, target_distance=distance, since=since,
                              since_x=since_x)
     if not record:

@@ -1,6 +1,7 @@
 """Settings of one scripted walk: robot, actuator, simulator, gait, PID, trot controller, energy and battery."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Tuple
 
@@ -154,6 +155,16 @@ class PIDConfig:
             v = getattr(self, n)
             _check(len(v) == 3 and all(g >= 0 for g in v), f"PIDConfig.{n}", "3 non-negative gains", v)
         _non_negative(self, "integral_limit")
+
+    def stiffness_scaled(self, factor: float) -> "PIDConfig":
+        """The PD `factor` times as stiff: kp × factor and kd × √factor, so that each joint's damping ratio
+        ζ = kd / (2·√(kp·J)) stays what it was (J the joint's reflected inertia); ki × factor keeps the integral's
+        share of the proportional action. The stiffness a user may set, as one number (0.7 = 30 % softer)."""
+        _check(isinstance(factor, (int, float)) and math.isfinite(factor) and factor > 0, "PD stiffness factor",
+               "a finite number > 0", factor)
+        root = math.sqrt(factor)
+        return PIDConfig(kp=tuple(g * factor for g in self.kp), ki=tuple(g * factor for g in self.ki),
+                         kd=tuple(g * root for g in self.kd), integral_limit=self.integral_limit)
 
 
 @dataclass(frozen=True)

@@ -176,7 +176,9 @@ class CyberDogEnv(gym.Env):
     latency, encoder noise, Kalman speed feedback (simulated IMU + leg odometry) and a mass draw, the same model
     the prototype walks use. The robot's software sees what its sensors read: with `estimated_velocity` the
     trot controller, the observation and the reward's v_x use the Kalman estimate; encoder noise reaches the
-    controller and the observation. The mass is drawn per episode.
+    controller and the observation. The mass is drawn per episode; `reset(options={"hardware_robot": True})`
+    walks the robot of `hardware.seed` instead (mass and sensor noise from its seeded streams, no randomisation
+    draw): the robot a scripted walk with the same `HardwareConfig` walks.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 40}
@@ -238,11 +240,14 @@ class CyberDogEnv(gym.Env):
         else:
             self.target_speed = cfg.target_speed
         hw = cfg.hardware  # per episode: a mass draw and sensor noise seeded from the env's generator
-        mass_scale = draw_mass_scale(hw, self.np_random) if hw.mass_uncertainty > 0 else None
-        sensor_rng = np.random.default_rng(self.np_random.integers(2 ** 63))
-        # domain randomisation: this episode's robot, drawn after the other draws (so that an env without
-        # it repeats its episodes exactly as before)
-        draw = draw_robot(cfg.randomization, self.np_random) if cfg.randomization.enabled else None
+        if options.get("hardware_robot"):  # the robot of hw.seed, as a scripted walk with this `hw` draws it
+            mass_scale = sensor_rng = draw = None
+        else:
+            mass_scale = draw_mass_scale(hw, self.np_random) if hw.mass_uncertainty > 0 else None
+            sensor_rng = np.random.default_rng(self.np_random.integers(2 ** 63))
+            # domain randomisation: this episode's robot, drawn after the other draws (so that an env without
+            # it repeats its episodes exactly as before)
+            draw = draw_robot(cfg.randomization, self.np_random) if cfg.randomization.enabled else None
         if draw is not None:  # one robot: the ranges left nominal keep the hardware's latency and mass draw
             draw = resolve_draw(draw, cfg.randomization, self.walker.latency_steps, mass_scale)
         self.controller.set_speed(self.target_speed)

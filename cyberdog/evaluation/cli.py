@@ -71,6 +71,12 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                   "20; the paper's 100) on the ideal robot and on --prototype-draws hardware-like robots: battery "
                   "use (Eq. 13), range, energy per 100 m, cost of transport, mean ± 95 % CI across seeds, the "
                   "learned path's battery saving. Writes prototype.*, prototype_summary.* and prototype_gaps.*."),
+    "stiffness": ("the prototype run at several joint-PD stiffnesses: does the saving survive the gains?",
+                  "the prototype run's walks (hardware-like robots by default) with every walk's joint PD scaled "
+                  "by each of --pd-scales (kp x s, kd x sqrt(s), the damping ratio kept): the learned paths, the "
+                  "common trajectories at their lift, the searched shape and, with --closed-loop, the policies "
+                  "themselves; the battery saving against the cheaper common trajectory at each stiffness, mean "
+                  "± 95 % CI across seeds, falls counted. Writes stiffness.{csv,json,md} and stiffness_walks.json."),
     "figures": ("redraw Figures 4, 6, 7, 10, 13 from saved results",
                 "Figures 4, 6, 7, 10 and 13 from saved results (--from DIR: a folder written by `all` or "
                 "`compare`); by default they are written beside those results."),
@@ -225,6 +231,9 @@ def _prototype_options() -> argparse.ArgumentParser:
                         "results/optimized_trajectory_H0.085_electrical_hardware.json: searched for the battery on the "
                         "hardware-like robot)")
     g.add_argument("--no-prototype-reference", action="store_true", help="no reference row in the prototype run")
+    g.add_argument("--closed-loop", type=Path, nargs="+", default=None, metavar="ACTOR",
+                   help="stage-2 actor files whose policies walk the same protocol themselves, closed loop, as the "
+                        "row \"policy\" (each beside the learned path of its seed: seed<N>, from its config)")
     return p
 
 
@@ -275,6 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
         "extract": [output, speeds, extraction],
         "compare": [output, speeds, duration, workers, learned, extraction],
         "prototype": [output, speeds, workers, learned, extraction, prototype],
+        "stiffness": [output, speeds, workers, learned, extraction, prototype],
         "figures": [output, metrics, learned],
         "video": [output, learned, extraction, video],
     }
@@ -296,6 +306,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="a shape saved by tools/optimize_trajectory.py, walked at each speed at its own lift "
                             "height (default results/optimized_trajectory_H0.095.json)")
         g.add_argument("--no-reference", action="store_true", help="no reference row")
+    sub["stiffness"].add_argument("--pd-scales", type=positive, nargs="+", default=[0.7, 1.0, 1.4], metavar="S",
+                                  help="joint-PD stiffness factors (default 0.7 1.0 1.4; training draws 0.8-1.2 in "
+                                       "the battery preset, 0.6-1.6 in its stiffness variant)")
+    sub["stiffness"].set_defaults(prototype_modes=["hardware"])
     sub["baselines"].add_argument("--trajectories", nargs="+", default=list(BASELINE_CHOICES),
                                   choices=BASELINE_CHOICES, help="which common trajectories to walk")
     sub["figures"].add_argument("--from", dest="from_dir", type=Path, default=None, metavar="DIR",

@@ -132,7 +132,28 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
-                       run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up)
+                       run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
+                       policies=L.closed_loop_policies(args, learned))
+    return run.finish()
+
+
+def cmd_stiffness(args, cfg: C.WalkConfig) -> int:
+    from cyberdog.analysis.stiffness import check_scales, run_stiffness, write_stiffness
+
+    L.check_learned_inputs(args)
+    try:
+        scales = check_scales(args.pd_scales)
+    except ValueError as err:
+        raise UsageError(f"--pd-scales: {err}") from None
+    reference = L.reference_shape(args, prototype=True)
+    run = open_run(args, cfg)
+    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
+    trajectories = {"cycloid": None, "straight": None, **({"searched": reference} if reference is not None else {})}
+    rows = run_stiffness(scales, trajectories=trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
+                         modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, learned=learned,
+                         draws=args.prototype_draws, run_up_s=args.prototype_run_up,
+                         policies=L.closed_loop_policies(args, learned))
+    print("\n" + write_stiffness(rows, run.out))
     return run.finish()
 
 
@@ -155,7 +176,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
                                                                      for_prototype=True)
         run_prototype_part(cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
                            args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference,
-                           run_up_s=args.prototype_run_up)
+                           run_up_s=args.prototype_run_up, policies=L.closed_loop_policies(args, proto_learned))
     run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(cfg, learned, args, run.out)
@@ -201,7 +222,7 @@ def cmd_video(args, cfg: C.WalkConfig) -> int:
 
 
 COMMAND_FUNCTIONS = {"all": cmd_all, "baselines": cmd_baselines, "extract": cmd_extract, "compare": cmd_compare,
-                     "prototype": cmd_prototype, "figures": cmd_figures, "video": cmd_video}
+                     "prototype": cmd_prototype, "stiffness": cmd_stiffness, "figures": cmd_figures, "video": cmd_video}
 
 
 def run(args, argv: list[str], draw_figures=None) -> int:

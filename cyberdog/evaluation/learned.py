@@ -10,8 +10,8 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
                                       extract_from_rollout)
-from cyberdog.analysis.replay_check import (CHECK_DISTANCE_M, HARDWARE_CHECK_SEEDS, REPLAY_CHECK_S, ReplayCheck,
-                                           replay_check)
+from cyberdog.analysis.replay_check import (CHECK_DISTANCE_M, HARDWARE_CHECK_PD_SCALES, HARDWARE_CHECK_SEEDS,
+                                           REPLAY_CHECK_S, ReplayCheck, replay_check)
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
@@ -205,7 +205,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         "selected_by": "least electrical energy per metre on the hardware-like check robots",
         "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
         "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
-        "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS)}
+        "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS), "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES)}
     in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
     if check.dropped_shifts or in_rollout:
         log(f"  foot shifts out of reach, dropped (the unshifted target sent): {in_rollout} leg-periods in the "
@@ -220,10 +220,14 @@ def check_learned_inputs(args) -> None:
     """Fail now, before any walk, on a missing or unreadable trajectory file or policy, or on a requested
     speed that no learned path can walk."""
     paths = policy_paths(args.policies, args.sweep)
+    closed_loop = closed_loop_labels(args)
     if not paths:
-        for_prototype = {"all": (False, True), "prototype": (True,)}.get(args.command, (False,))
+        for_prototype = {"all": (False, True), "prototype": (True,), "stiffness": (True,)}.get(args.command, (False,))
         for files in dict.fromkeys(tuple(default_learned(args, p)) for p in for_prototype):
-            check_speeds_covered(load_learned(list(files)), getattr(args, "speeds", []))
+            learned = load_learned(list(files))
+            check_speeds_covered(learned, getattr(args, "speeds", []))
+        if closed_loop:  # the prototype's paths (the last loaded): each policy walks beside its own seed's
+            closed_loop_policies(args, learned)
     from cyberdog.rl.checkpoint import CheckpointError
     from cyberdog.rl.rollout import load_actor
 
@@ -232,6 +236,38 @@ def check_learned_inputs(args) -> None:
             load_actor(path)
         except (CheckpointError, ValueError) as err:
             raise UsageError(f"--policies {path}: {err}") from None
+
+
+def closed_loop_labels(args) -> dict[str, Path]:
+    """{seed<N>: actor file} of --closed-loop (N: the actor's training seed); UsageError for a file that is
+    not an actor or two actors of one seed."""
+    files = getattr(args, "closed_loop", None) or []
+    if not files:
+        return {}
+    from cyberdog.rl.checkpoint import CheckpointError
+    from cyberdog.rl.rollout import load_actor
+
+    out = {}
+    for path in files:
+        try:
+            label = f"seed{load_actor(path).config.train.seed}"
+        except (CheckpointError, ValueError, OSError) as err:
+            raise UsageError(f"--closed-loop {path}: {err}") from None
+        if label in out:
+            raise UsageError(f"--closed-loop: {out[label]} and {path} were both trained with {label}")
+        out[label] = Path(path)
+    return out
+
+
+def closed_loop_policies(args, learned: LearnedSet) -> dict[str, str]:
+    """--closed-loop's actors by the label of the learned path they walk beside; UsageError for an actor whose
+    seed has no learned path."""
+    policies = closed_loop_labels(args)
+    missing = [f"{path} ({label})" for label, path in policies.items() if label not in learned.labels]
+    if missing:
+        raise UsageError(f"--closed-loop: no learned path of the same seed for {', '.join(missing)} (learned: "
+                         f"{', '.join(learned.labels)})")
+    return {label: str(path) for label, path in policies.items()}
 
 
 def check_speeds_covered(learned: LearnedSet, speeds: list[float]) -> None:

@@ -87,25 +87,30 @@ def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
 
 def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], distance_m: float,
                        modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False,
-                       draws: int = 1, reference=None, run_up_s: float = 0.0) -> list[dict]:
+                       draws: int = 1, reference=None, run_up_s: float = 0.0, policies: dict | None = None
+                       ) -> list[dict]:
     """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
     lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
     `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched".
     `run_up_s`: s walked from the stand before the measured `distance_m` (`run_prototype`).
+    `policies`: {label: actor file}, the policies that walk beside their paths, closed loop (row "policy").
     `brief`: a progress line per quarter of the walks and the summary's main numbers only."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
     from cyberdog.analysis.prototype_summary import REFERENCE, summary_rows
 
     trajectories = {"cycloid": None, "straight": None, **({REFERENCE: reference} if reference is not None else {})}
     robots = sum(draws if m == "hardware" else 1 for m in modes)
-    log(f"prototype: {len(learned) * len(speeds) * (len(trajectories) + 1) * robots} walks of {distance_m:g} m "
+    policies = dict(policies or {})
+    log(f"prototype: {(len(learned) * (len(trajectories) + 1) + len(policies)) * len(speeds) * robots} walks of "
+        f"{distance_m:g} m "
         f"{f'after a {run_up_s:g} s run-up ' if run_up_s > 0 else 'from a stand '}"
         f"({len(learned)} learned seeds, each with the common trajectories"
-        f"{' and the searched shape' if reference is not None else ''} at its lift height; "
+        f"{' and the searched shape' if reference is not None else ''} at its lift height"
+        f"{f', {len(policies)} policies closed loop' if policies else ''}; "
         f"{draws} hardware-like robot{'s' * (draws > 1)})")
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
                          base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws,
-                         run_up_s=run_up_s)
+                         run_up_s=run_up_s, policies=policies)
     write_prototype(rows, out)
     if not brief:
         print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks after a {run_up_s:g} s "
@@ -119,7 +124,7 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     for mode in modes:
         cells = [f"{name} " + " / ".join(f"{r['battery_pct_per_100m_mean']:.2f}" for r in summary
                                          if r["trajectory"] == name and r["robot"] == mode)
-                 for name in ("learned", *trajectories)]
+                 for name in ("learned", *(["policy"] if policies else []), *trajectories)]
         print(f"  {mode:8s} " + "   ".join(cells) + f"  at {' / '.join(f'{v:g}' for v in speeds)} m/s")
         saving = [r for r in summary if r["trajectory"] == "learned" and r["robot"] == mode]
         print(f"  {'':8s} learned saves " + " / ".join(

@@ -60,14 +60,25 @@ def load_actor(path: str | Path) -> LoadedActor:
 
 
 def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed: int = 0,
-            env_config: C.EnvConfig | None = None, reward: str | C.RewardConfig = "stage2") -> WalkResult:
+            env_config: C.EnvConfig | None = None, reward: str | C.RewardConfig = "stage2",
+            distance: float | None = None, run_up: float = 0.0, hardware_robot: bool = False) -> WalkResult:
     """Run the actor deterministically for `duration` s at `speed` m/s in the env it was trained in
     (or `env_config`), recording every controller period. Stops early if the robot falls. The result is the
-    same record as a scripted walk's, with the episode's score."""
+    same record as a scripted walk's, with the episode's score.
+
+    distance, run_up: as `cyberdog.analysis.walk.walk`'s, so that a policy walks the prototype run's protocol:
+    `run_up` s first, left out of the result, then `distance` m (`duration` is then the time cap). The goal is
+    checked once per agent step (25 ms), the scripted walk's every period: per-metre values are unaffected.
+    hardware_robot: walk the robot of `env_config.hardware.seed` (the env's reset option of that name), the one
+    a scripted walk with that `HardwareConfig` walks, instead of one drawn from the env's generator."""
     if not (np.isfinite(speed) and speed >= 0):
         raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
     if not duration > 0:
         raise ValueError(f"duration must be > 0 s, got {duration!r}")
+    if distance is not None and not (np.isfinite(distance) and distance > 0):
+        raise ValueError(f"distance must be None or > 0 m and finite, got {distance!r}")
+    if not (0.0 <= run_up < duration):
+        raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
     cfg = env_config or actor.config.env
     # the policy alone: a torque policy trained with the trot prior (EnvConfig.prior_weight) is judged without it
     cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=(),
@@ -77,15 +88,24 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
         # the env's simulation loop keeps every controller period: state, body, applied torque, contacts, and the
         # trot controller's commanded foot targets and the policy's shift of them; and samples foot slip
         env.walker.record = env.walker.gait_metrics = env.walker.body_trace = True
-        obs, _ = env.reset(seed=seed, options={"target_speed": float(speed)})
+        obs, _ = env.reset(seed=seed, options={"target_speed": float(speed), "hardware_robot": hardware_robot})
         n_steps = int(round(duration / cfg.control_dt))
-        score, fell = 0.0, False
-        for _ in range(n_steps):
+        run_up_steps = int(round(run_up / cfg.control_dt))
+        walker = env.walker
+        score, fell, since, since_x, goal_x = 0.0, False, 0, None, None
+        for k in range(n_steps):
+            if k == run_up_steps:  # the measured walk starts here
+                x = float(walker.state.base_position[0])
+                since, since_x = (walker.steps, x) if k > 0 else (0, None)
+                goal_x = None if distance is None else x + distance
+            if goal_x is not None and walker.state.base_position[0] >= goal_x:
+                break
             obs, reward_t, terminated, _, info = env.step(actor(obs))
             score += float(reward_t)
             if terminated:
                 fell = True
                 break
-        return walk_result(env.walker, float(speed), fell, score=score)
+        return walk_result(walker, float(speed), fell, target_distance=distance, score=score, since=since,
+                           since_x=since_x)
     finally:
         env.close()

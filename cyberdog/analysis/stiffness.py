@@ -1,0 +1,110 @@
+"""Does a battery saving survive the joint PD a user sets? The prototype run at several PD stiffnesses.
+
+A learned commanded path is a shift of the trot's foot targets; what the robot walks is what its joint PD makes
+of that target. A path learned under one PD can save energy *because* that PD does not quite follow it (a
+soft PD lets a foot sag or lag; a stiffer one executes the command and stubs the toe), and a robot's gains are
+set by whoever runs it. This study walks the prototype run's protocol (`run_prototype`: the same hardware-like
+robots, run-up and distance) with every walk's PD scaled by each factor of `scales` (kp × s, kd × √s, the
+damping ratio kept: `PIDConfig.stiffness_scaled`): the learned paths, the common trajectories at their lift,
+the searched shape and, given actors, the policies themselves in closed loop. Each row of `stiffness_table`
+is one trajectory at one stiffness and speed: battery % per 100 m and the saving against the cheaper common
+trajectory on the same robot at that same stiffness, mean ± 95 % CI across seeds, with the walks that fell
+counted. `evaluate.py stiffness` runs it and writes `stiffness.{csv,json,md}` and `stiffness_walks.json`.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from cyberdog.analysis.prototype import run_prototype
+from cyberdog.analysis.prototype_summary import COMMON, summary_rows
+from cyberdog.analysis.report import json_safe, markdown_table, write_rows
+
+DEFAULT_SCALES = (0.7, 1.0, 1.4)  # × the joint PD's stiffness: 30 % softer, as configured, 40 % stiffer
+
+
+def check_scales(scales) -> tuple[float, ...]:
+    """The stiffness factors as floats, each finite and > 0, at least one, none twice."""
+    out = tuple(float(s) for s in scales)
+    if not out or not all(math.isfinite(s) and s > 0 for s in out) or len(set(out)) != len(out):
+        raise ValueError(f"PD stiffness scales must be distinct finite numbers > 0, got {list(scales)!r}")
+    return out
+
+
+def run_stiffness(scales=DEFAULT_SCALES, log=print, **prototype) -> list[dict]:
+    """Every walk of `run_prototype(**prototype)` at each stiffness of `scales` (rows carry `pd_scale`)."""
+    rows = []
+    for s in check_scales(scales):
+        log(f"joint PD at {s:g}x its stiffness (kp x {s:g}, kd x {math.sqrt(s):.3f}):")
+        rows += run_prototype(log=log, pd_scale=s, **prototype)
+    return rows
+
+
+def stiffness_table(rows: list[dict], robot: str = "hardware") -> list[dict]:
+    """Per stiffness, speed and trajectory on `robot`: walks, how many counted and fell, battery % per 100 m and
+    the battery saving against the cheaper common trajectory (and against the searched shape), mean and 95 % CI
+    across seeds (`cyberdog.analysis.prototype_summary.summary_rows` at each stiffness)."""
+    keys = ("battery_pct_per_100m", "battery_saving_pct", "battery_vs_searched_pct")
+    out = []
+    for r in summary_rows(rows):
+        if r["robot"] != robot:
+            continue
+        row = {k: r[k] for k in ("pd_scale", "speed_mps", "trajectory", "walks", "counted", "fell", "seeds")}
+        for k in keys:
+            row[f"{k}_mean"] = r.get(f"{k}_mean", math.nan)
+            row[f"{k}_ci95"] = r.get(f"{k}_ci95", math.nan)
+        out.append(row)
+    return out
+
+
+def _cell(row: dict, key: str) -> str:
+    m, h = row[f"{key}_mean"], row[f"{key}_ci95"]
+    if not math.isfinite(m):
+        return "–"
+    return f"{m:.1f} %" + (f" ± {h:.1f}" if math.isfinite(h) else "")
+
+
+def stiffness_markdown(table: list[dict]) -> str:
+    """One line per trajectory and stiffness, one column per speed: the battery saving against the cheaper common
+    trajectory (mean ± 95 % CI across seeds) and, where any walk did not count, how many of how many fell."""
+    speeds = sorted(dict.fromkeys(r["speed_mps"] for r in table))
+    index = {(r["trajectory"], r["pd_scale"], r["speed_mps"]): r for r in table}
+    lines = []
+    for name in dict.fromkeys(r["trajectory"] for r in table):
+        for scale in dict.fromkeys(r["pd_scale"] for r in table):
+            cells = {}
+            for v in speeds:
+                r = index.get((name, scale, v))
+                if r is None:
+                    cells[f"{v:g} m/s"] = ""
+                    continue
+                if math.isfinite(r["battery_saving_pct_mean"]):
+                    saving = _cell(r, "battery_saving_pct")
+                elif math.isfinite(r["battery_pct_per_100m_mean"]) and r["trajectory"] in COMMON:
+                    saving = f"{r['battery_pct_per_100m_mean']:.2f} % per 100 m"
+                else:
+                    saving = "–"
+                missed = r["walks"] - r["counted"]
+                cells[f"{v:g} m/s"] = saving + (f" ({missed} of {r['walks']} did not count, {r['fell']} fell)"
+                                                if missed else "")
+            lines.append({"trajectory": name, "PD stiffness": f"{scale:g}x", **cells})
+    return markdown_table(lines)
+
+
+def write_stiffness(rows: list[dict], folder: str | Path) -> str:
+    """`stiffness.{csv,json,md}` (the table) and `stiffness_walks.json` (every walk) in `folder`; returns the
+    Markdown."""
+    folder = Path(folder)
+    table = stiffness_table(rows)
+    write_rows(table, folder, "stiffness")
+    md = ("Battery saving against the cheaper common trajectory on the hardware-like robots, at each joint-PD "
+          "stiffness (kp × s, kd × √s); the common trajectories' rows give their battery % per 100 m\n\n"
+          + stiffness_markdown(table) + "\n")
+    (folder / "stiffness.md").write_text(md)
+    (folder / "stiffness_walks.json").write_text(json.dumps(json_safe(rows), indent=1))
+    return md
+
+
+__all__ = ["DEFAULT_SCALES", "check_scales", "run_stiffness", "stiffness_markdown", "stiffness_table",
+           "write_stiffness"]

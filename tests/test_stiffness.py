@@ -1,0 +1,115 @@
+"""The prototype run at several joint-PD stiffnesses (`evaluate.py stiffness`): the scaling reaches the PD of
+every walk kind, a walk that falls is reported in its row, and the policy walks the same robots as its path."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cyberdog import config as C
+from conftest import commanded, learned_set
+from cyberdog.analysis import prototype as proto
+from cyberdog.analysis import stiffness as st
+from cyberdog.core import pid as pid_module
+from cyberdog.core.trajectories import SampledTrajectory
+
+ROOT = Path(__file__).resolve().parents[1]
+BATTERY_ACTOR = ROOT / "results/policy_battery/stage2_actor.pt"  # a foot-mode policy trained with seed 0
+
+
+def test_a_stiffer_pd_scales_kp_and_keeps_the_damping_ratio():
+    pid = C.PIDConfig(kp=(60.0, 50.0, 40.0), ki=(1.0, 0.0, 0.0), kd=(2.0, 1.0, 4.0))
+    stiff = pid.stiffness_scaled(1.44)
+    assert stiff.kp == pytest.approx((86.4, 72.0, 57.6)) and stiff.ki == pytest.approx((1.44, 0.0, 0.0))
+    assert stiff.kd == pytest.approx((2.4, 1.2, 4.8))  # × √1.44
+    for kp0, kd0, kp1, kd1 in zip(pid.kp, pid.kd, stiff.kp, stiff.kd):  # ζ ∝ kd / √kp unchanged
+        assert kd1 / math.sqrt(kp1) == pytest.approx(kd0 / math.sqrt(kp0))
+    assert pid.stiffness_scaled(1.0) == pid
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="PD stiffness"):
+            pid.stiffness_scaled(bad)
+
+
+def test_the_stiffness_reaches_the_drivers_pd_in_every_walk_kind(monkeypatch):
+    """Learned path, common trajectory, searched shape and the policy closed loop: every joint PD built for the
+    walks of a 1.4x run has kp = 1.4 × 60 and kd = √1.4 × 2 (the hardware-like robot's drawn PD factors are 1)."""
+    built = []
+    original = pid_module.JointPID.__init__
+
+    def recording(self, kp, ki, kd, *args, **kwargs):
+        original(self, kp, ki, kd, *args, **kwargs)
+        built.append((np.array(self.kp), np.array(self.kd)))
+    monkeypatch.setattr(pid_module.JointPID, "__init__", recording)
+    learned = learned_set(seed0=[commanded(1.0, -0.01, 0)])
+    searched = SampledTrajectory.load(ROOT / "results/optimized_trajectory_H0.095.json")
+    rows = proto.run_prototype({"cycloid": None, "searched": searched}, speeds=(1.0,), distance_m=0.3,
+                               modes=("hardware",), learned=learned, draws=1, run_up_s=0.0, workers=1,
+                               log=lambda *_: None, policies={"seed0": str(BATTERY_ACTOR)}, pd_scale=1.4)
+    assert sorted(r["trajectory"] for r in rows) == ["cycloid", "learned", "policy", "searched"]
+    assert all(r["pd_scale"] == 1.4 for r in rows)
+    assert len(built) >= 4  # one walker (at least) per walk
+    for kp, kd in built:
+        assert kp == pytest.approx(np.full(12, 84.0)) and kd == pytest.approx(np.full(12, 2.0 * math.sqrt(1.4)))
+
+
+def test_the_policy_walks_the_same_robots_as_its_replayed_path():
+    """Draw by draw, the closed-loop row and the path's row are the same hardware-like robot (mass draw) over the
+    same protocol (run-up left out, the distance reached)."""
+    from cyberdog.core.learned_set import LearnedSet, learned_files
+
+    learned = LearnedSet.load(learned_files([ROOT / "results/learned_battery/seed0_1mps.json"]))
+    rows = proto.run_prototype({}, speeds=(1.0,), distance_m=1.0, modes=("hardware",), learned=learned, draws=2,
+                               run_up_s=1.0, workers=1, log=lambda *_: None, policies={"seed0": str(BATTERY_ACTOR)})
+    by = {(r["trajectory"], r["draw"]): r for r in rows}
+    assert set(by) == {("learned", 0), ("learned", 1), ("policy", 0), ("policy", 1)}
+    for d in (0, 1):
+        assert by["policy", d]["mass_scale"] == by["learned", d]["mass_scale"]
+        assert by["policy", d]["run_up_s"] == by["learned", d]["run_up_s"] == 1.0
+        for kind in ("policy", "learned"):
+            assert by[kind, d]["reached"] and 1.0 <= by[kind, d]["distance_m"] < 1.1  # measured after the run-up
+    assert by["policy", 0]["mass_scale"] != by["policy", 1]["mass_scale"]
+    assert math.isnan(by["policy", 0]["lift_height_m"])  # a policy's lift is not an input
+
+
+def test_a_policy_without_a_learned_path_of_its_seed_is_refused_before_walking():
+    learned = learned_set(seed3=[commanded(1.0, -0.01, 3)])
+    with pytest.raises(ValueError, match="no learned path of the same label"):
+        proto.run_prototype(speeds=(1.0,), distance_m=0.3, learned=learned, policies={"seed0": "x.pt"},
+                            log=lambda *_: None)
+
+
+def row(trajectory: str, seed: str, scale: float, battery_pct: float, **kw) -> dict:
+    """A synthetic 20 m hardware walk at PD stiffness `scale` using `battery_pct` of the pack."""
+    return {"trajectory": trajectory, "seed": seed, "draw": 0, "speed_mps": 1.0, "robot": "hardware",
+            "pd_scale": scale, "reached": True, "fell": False, "mean_speed_mps": 1.0, "distance_m": 20.0,
+            "battery_used_pct": battery_pct, "energy_J": 2000.0, "electrical_energy_J": 7000.0,
+            "electrical_cost_of_transport": 2.5, "range_full_charge_m": 20.0 * 95 / battery_pct, **kw}
+
+
+def test_each_stiffness_is_its_own_comparison_and_a_fall_is_reported_in_its_row(tmp_path):
+    rows = []
+    for scale, learned_s1 in ((1.0, 0.8), (1.4, 0.5)):
+        rows += [row("learned", "s0", scale, 0.9), row("cycloid", "s0", scale, 1.0 * scale),
+                 row("straight", "s0", scale, 1.2), row("cycloid", "s1", scale, 1.0), row("straight", "s1", scale, 1.1)]
+        rows.append(row("learned", "s1", scale, learned_s1, **({"fell": True, "reached": False, "distance_m": 4.0}
+                                                               if scale == 1.4 else {})))
+    table = {(r["trajectory"], r["pd_scale"]): r for r in st.stiffness_table(rows)}
+    # at 1.0x: 10 % and 20 %; at 1.4x: s0 against the straight line (1.2 < 1.4), s1's walk fell: not counted
+    assert table["learned", 1.0]["battery_saving_pct_mean"] == pytest.approx(15.0)
+    assert table["learned", 1.4]["battery_saving_pct_mean"] == pytest.approx(25.0)
+    stiff = table["learned", 1.4]
+    assert (stiff["walks"], stiff["counted"], stiff["fell"]) == (2, 1, 1)
+    assert (table["learned", 1.0]["counted"], table["learned", 1.0]["fell"]) == (2, 0)
+    md = st.write_stiffness(rows, tmp_path)
+    line = next(x for x in md.splitlines() if x.startswith("| learned | 1.4x"))
+    assert "1 of 2 did not count, 1 fell" in line and "25.0 %" in line
+    assert "did not count" not in next(x for x in md.splitlines() if x.startswith("| learned | 1x"))
+    assert (tmp_path / "stiffness.json").is_file() and (tmp_path / "stiffness_walks.json").is_file()
+
+
+def test_bad_scales_are_refused():
+    for bad in ([], [0.0], [1.0, 1.0], [float("nan")]):
+        with pytest.raises(ValueError, match="PD stiffness scales"):
+            st.check_scales(bad)
