@@ -113,3 +113,19 @@ def test_bad_scales_are_refused():
     for bad in ([], [0.0], [1.0, 1.0], [float("nan")]):
         with pytest.raises(ValueError, match="PD stiffness scales"):
             st.check_scales(bad)
+
+
+def test_the_readme_robustness_table_gives_each_stiffness_its_saving_and_its_falls():
+    from cyberdog.analysis.readme_tables import stiffness_markdown
+    rows = []
+    for scale, learned_s1 in ((0.7, 0.8), (1.4, 0.5)):
+        rows += [row("learned", "s0", scale, 0.9), row("cycloid", "s0", scale, 1.0), row("straight", "s0", scale, 1.2),
+                 row("policy", "s0", scale, 0.7), row("cycloid", "s1", scale, 1.0), row("straight", "s1", scale, 1.1),
+                 row("learned", "s1", scale, learned_s1, **({"fell": True, "reached": False, "distance_m": 4.0}
+                                                           if scale == 1.4 else {}))]
+    lines = stiffness_markdown(rows).splitlines()
+    soft = next(x for x in lines if x.startswith("| **replayed learned path, PD 0.7×**"))
+    stiff = next(x for x in lines if x.startswith("| **replayed learned path, PD 1.4×**"))
+    assert "**15.0 % ± " in soft and "fell" not in soft  # 10 % and 20 %
+    assert "**10.0 % (1 of 2 fell)**" in stiff  # s0 alone counts; s1's fall is reported
+    assert any(x.startswith("| the policy, closed loop, PD 1.4× | 30.0 %") for x in lines)

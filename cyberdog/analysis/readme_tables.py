@@ -1,4 +1,4 @@
-"""The README's two result tables, made from the shipped results (so the README and `results/` cannot disagree).
+"""The README's result tables, made from the shipped results (so the README and `results/` cannot disagree).
 
 `python tools/readme_tables.py` prints them from `results/figures_input/` (what `python evaluate.py` wrote
 and `tools/ship_result.py` shipped); `--write` puts them into README.md between its `<!-- table:NAME -->` and
@@ -11,6 +11,9 @@ and `tools/ship_result.py` shipped); `--write` puts them into README.md between 
 - `prototype`: the prototype run on the hardware-like robots (`prototype.json`): battery per 100 m, the
   saving against the cheaper common trajectory, range, electrical energy, the searched shape's battery and the
   learned paths against it, the paper's range; mean ± 95 % CI across seeds (`cyberdog.analysis.prototype_summary`).
+- `stiffness` (where `stiffness_walks.json` is shipped): the same run with the joint PD at several stiffnesses
+  (`evaluate.py stiffness`): the battery saving of the replayed paths, the policies and the searched shape at
+  each, falls counted.
 """
 from __future__ import annotations
 
@@ -25,9 +28,10 @@ from cyberdog.analysis.compare import REFERENCE
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
 from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
-NAMES = ("table5", "prototype")
+NAMES = ("table5", "prototype", "stiffness")
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
+STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 MINUS = "\u2212"  # the README's minus sign
 
 
@@ -130,6 +134,29 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
     return "\n".join(lines)
 
 
+def stiffness_markdown(walks: list[dict], robot: str = "hardware") -> str:
+    """The README's robustness table from the walks of `evaluate.py stiffness`: per walk kind (the replayed
+    learned path, the policy closed loop, the searched shape) and PD stiffness, the battery saving against the
+    cheaper common trajectory at that stiffness (mean ± 95 % CI across seeds), and the walks that fell."""
+    summary = [r for r in ps.summary_rows(walks) if r["robot"] == robot]
+    speeds = sorted({r["speed_mps"] for r in summary})
+    scales = sorted({r["pd_scale"] for r in summary})
+    by = {(r["trajectory"], r["pd_scale"], r["speed_mps"]): r for r in summary}
+    names = {"learned": "replayed learned path", "policy": "the policy, closed loop", ps.REFERENCE: "searched shape"}
+    lines = _header("battery saving against the cheaper common trajectory", speeds)
+    for name, title in names.items():
+        for scale in scales:
+            rows = [by.get((name, scale, v)) for v in speeds]
+            if not any(rows):
+                continue
+            cells = [("" if r is None else mean_ci(r, "battery_saving_pct", ".1f", " %")
+                      + (f" ({r['fell']} of {r['walks']} fell)" if r["fell"] else "")) for r in rows]
+            bold = name == "learned"
+            label = f"{title}, PD {scale:g}×"
+            lines.append(_line(f"**{label}**" if bold else label, [f"**{c}**" if bold and c else c for c in cells]))
+    return "\n".join(lines)
+
+
 def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
     """Both tables from a folder holding comparison.json and prototype.json (and comparison_torque.json, if
     the paper's torque agent's paths were compared)."""
@@ -140,8 +167,11 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
                                     "(`python evaluate.py` writes it; results/figures_input/ holds the shipped one)")
     walks = {name: json.loads((results / file).read_text()) for name, file in SOURCES.items()}
     torque = json.loads((results / TORQUE_SOURCE).read_text()) if (results / TORQUE_SOURCE).is_file() else None
-    return {"table5": table5_markdown(walks["table5"], straight_shape, torque),
-            "prototype": prototype_markdown(walks["prototype"])}
+    tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque),
+              "prototype": prototype_markdown(walks["prototype"])}
+    if (results / STIFFNESS_SOURCE).is_file():
+        tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()))
+    return tables
 
 
 def _block(name: str) -> re.Pattern:
