@@ -97,9 +97,8 @@ def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None,
     up to 100 m are minutes on a loaded machine."""
     cfg = cfg or WalkConfig()
     cap = time_cap(CHECK_DISTANCE_M, speed, cfg)
-    walks = [("ideal robot, 10 s", REPLAY_CHECK_S, None, None),
-             (f"ideal robot, {CHECK_DISTANCE_M:g} m", cap, None, CHECK_DISTANCE_M)]
-    walks = [(*w, 1.0) for w in walks]
+    walks = [("ideal robot, 10 s", REPLAY_CHECK_S, None, None, 1.0),
+             (f"ideal robot, {CHECK_DISTANCE_M:g} m", cap, None, CHECK_DISTANCE_M, 1.0)]
     walks += [(f"hardware-like robot (seed {seed}{f', PD {pd:g}x' if pd != 1 else ''}), {CHECK_DISTANCE_M:g} m",
                cap, dataclasses.replace(HARDWARE_LIKE, seed=seed), CHECK_DISTANCE_M, pd)
               for seed, pd in zip(HARDWARE_CHECK_SEEDS, HARDWARE_CHECK_PD_SCALES)]

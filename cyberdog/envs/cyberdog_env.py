@@ -79,7 +79,6 @@ def actor_observation_scale(cfg: C.EnvConfig | None = None, groups=()) -> np.nda
     return scale
 
 
-
 class CyberDogEnv(gym.Env):
     """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
     body height, survival and energy.
@@ -163,9 +162,8 @@ class CyberDogEnv(gym.Env):
 
     **Options** (keyword arguments of `gymnasium.make("CyberDog-v0", ...)`): `config` (an `EnvConfig`),
     `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array", or "human": a PyBullet window;
-    on a machine without a display it runs without one, with a warning), and any
-    top-level `EnvConfig` field, e.g. `action_mode="torque"`, `target_speed=1.2`,
-    `hardware=C.HARDWARE_LIKE`.
+    on a machine without a display it runs without one, with a warning), and any top-level `EnvConfig` field,
+    e.g. `action_mode="torque"`, `target_speed=1.2`, `hardware=C.HARDWARE_LIKE`.
 
     **Domain randomisation** (`randomization`, a `RandomizationConfig`, off by default): each episode's robot
     is drawn from ranges of joint friction, actuation latency, link masses, motor strength, PID gains and
@@ -177,8 +175,7 @@ class CyberDogEnv(gym.Env):
     the prototype walks use. The robot's software sees what its sensors read: with `estimated_velocity` the
     trot controller, the observation and the reward's v_x use the Kalman estimate; encoder noise reaches the
     controller and the observation. The mass is drawn per episode; `reset(options={"hardware_robot": True})`
-    walks the robot of `hardware.seed` instead (mass and sensor noise from its seeded streams, no randomisation
-    draw): the robot a scripted walk with the same `HardwareConfig` walks.
+    walks a scripted walk's robot instead (`hardware.seed`'s mass and sensor streams, no randomisation draw).
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 40}
@@ -245,8 +242,7 @@ class CyberDogEnv(gym.Env):
         else:
             mass_scale = draw_mass_scale(hw, self.np_random) if hw.mass_uncertainty > 0 else None
             sensor_rng = np.random.default_rng(self.np_random.integers(2 ** 63))
-            # domain randomisation: this episode's robot, drawn after the other draws (so that an env without
-            # it repeats its episodes exactly as before)
+            # domain randomisation drawn last: an env without it repeats its episodes exactly as before
             draw = draw_robot(cfg.randomization, self.np_random) if cfg.randomization.enabled else None
         if draw is not None:  # one robot: the ranges left nominal keep the hardware's latency and mass draw
             draw = resolve_draw(draw, cfg.randomization, self.walker.latency_steps, mass_scale)
