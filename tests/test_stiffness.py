@@ -115,7 +115,7 @@ def test_bad_scales_are_refused():
             st.check_scales(bad)
 
 
-def test_the_readme_robustness_table_gives_each_stiffness_its_saving_and_its_falls():
+def test_the_readme_robustness_table_gives_each_stiffness_its_saving_its_falls_and_its_slow_walks():
     from cyberdog.analysis.readme_tables import stiffness_markdown
     rows = []
     for scale, learned_s1 in ((0.7, 0.8), (1.4, 0.5)):
@@ -123,9 +123,12 @@ def test_the_readme_robustness_table_gives_each_stiffness_its_saving_and_its_fal
                  row("policy", "s0", scale, 0.7), row("cycloid", "s1", scale, 1.0), row("straight", "s1", scale, 1.1),
                  row("learned", "s1", scale, learned_s1, **({"fell": True, "reached": False, "distance_m": 4.0}
                                                            if scale == 1.4 else {}))]
+    rows.append(row("learned", "s2", 1.4, 0.1, mean_speed_mps=0.9))  # 10 % slow: off the band, not a fall
+    rows += [row("cycloid", "s2", 1.4, 1.0), row("straight", "s2", 1.4, 1.1)]
     lines = stiffness_markdown(rows).splitlines()
     soft = next(x for x in lines if x.startswith("| **replayed learned path, PD 0.7×**"))
     stiff = next(x for x in lines if x.startswith("| **replayed learned path, PD 1.4×**"))
-    assert "**15.0 % ± " in soft and "fell" not in soft  # 10 % and 20 %
-    assert "**10.0 % (1 of 2 fell)**" in stiff  # s0 alone counts; s1's fall is reported
+    assert "**15.0 % ± " in soft and "fell" not in soft and "band" not in soft  # 10 % and 20 %
+    # s0 alone counts (its 90 % saving left out for s2, which walked slow); s1's fall and s2's slow walk reported
+    assert "**10.0 % (1 fell, 1 off the ±5 % band, of 3)**" in stiff
     assert any(x.startswith("| the policy, closed loop, PD 1.4× | 30.0 %") for x in lines)

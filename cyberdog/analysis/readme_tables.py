@@ -134,10 +134,18 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
     return "\n".join(lines)
 
 
+def _missed(row: dict) -> str:
+    """" (k of n fell, m off the band)" for a summary row whose walks did not all count; "" if they did."""
+    off = row["walks"] - row["counted"] - row["fell"]
+    parts = [f"{row['fell']} fell"] * bool(row["fell"]) + [f"{off} off the ±5 % band"] * bool(off)
+    return f" ({', '.join(parts)}, of {row['walks']})" if parts else ""
+
+
 def stiffness_markdown(walks: list[dict], robot: str = "hardware") -> str:
     """The README's robustness table from the walks of `evaluate.py stiffness`: per walk kind (the replayed
     learned path, the policy closed loop, the searched shape) and PD stiffness, the battery saving against the
-    cheaper common trajectory at that stiffness (mean ± 95 % CI across seeds), and the walks that fell."""
+    cheaper common trajectory at that stiffness (mean ± 95 % CI across seeds of the walks that count), and the
+    walks that fell or left the ±5 % speed band."""
     summary = [r for r in ps.summary_rows(walks) if r["robot"] == robot]
     speeds = sorted({r["speed_mps"] for r in summary})
     scales = sorted({r["pd_scale"] for r in summary})
@@ -149,8 +157,7 @@ def stiffness_markdown(walks: list[dict], robot: str = "hardware") -> str:
             rows = [by.get((name, scale, v)) for v in speeds]
             if not any(rows):
                 continue
-            cells = [("" if r is None else mean_ci(r, "battery_saving_pct", ".1f", " %")
-                      + (f" ({r['fell']} of {r['walks']} fell)" if r["fell"] else "")) for r in rows]
+            cells = [("" if r is None else mean_ci(r, "battery_saving_pct", ".1f", " %") + _missed(r)) for r in rows]
             bold = name == "learned"
             label = f"{title}, PD {scale:g}×"
             lines.append(_line(f"**{label}**" if bold else label, [f"**{c}**" if bold and c else c for c in cells]))

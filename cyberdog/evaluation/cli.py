@@ -220,7 +220,8 @@ def _prototype_options() -> argparse.ArgumentParser:
                         f"the paper's walk from a stand, whose start-up weighs 5x more in a 20 m walk than in 100 m")
     g.add_argument("--prototype-modes", nargs="+", default=["ideal", "hardware"], choices=["ideal", "hardware"],
                    help="the robots the prototype walks: ideal (the paper's simulation) and hardware (friction, "
-                        "latency, sensor noise, Kalman speed, mass draw: HARDWARE_LIKE) (default both)")
+                        "latency, sensor noise, Kalman speed, mass draw: HARDWARE_LIKE) (default both; for stiffness, "
+                        "hardware)")
     g.add_argument("--prototype-draws", type=positive_int, default=DEFAULT_PROTOTYPE_DRAWS, metavar="N",
                    help=f"hardware-like robots (each its own mass draw and sensor noise) every learned seed's path "
                         f"and the common trajectories at its lift walk on (default {DEFAULT_PROTOTYPE_DRAWS}); every "
