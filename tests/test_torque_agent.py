@@ -3,6 +3,7 @@ and the trot prior whose weight decays to exactly zero (DecAP). The contract of 
 limits, Table 4's ±45° stops), the prior's schedule in the env, the trainer, its checkpoints and the resume,
 and the evaluation of the policy alone."""
 import csv
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from tensordict import TensorDict
 
 from conftest import metrics_rows, stop_after, tiny
 from cyberdog import config as C
+from cyberdog.config.paper import speed_within_band
 from cyberdog.control.trot import TrotController
 from cyberdog.core import kinematics as kin
 from cyberdog.envs.cyberdog_env import CyberDogEnv
@@ -250,3 +252,23 @@ def test_imitation_needs_the_reference_and_keeps_it_per_transition(tmp_path):
     stored = trainer.rb[:]["next", "trot_action"]
     assert stored.shape == (100, 12) and torch.isfinite(stored).all() and stored.abs().max() <= 1.0
     assert load_checkpoint(tmp_path / "checkpoint.pt")["replay"]["data"]["next"]["trot_action"].shape == (100, 12)
+
+
+# ---- the shipped torque policies --------------------------------------------------------------------------
+BAND = Path(__file__).resolve().parents[1] / "results" / "policy_torque_band"
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_shipped_torque_policies_walk_alone_in_the_speed_band_and_stage2_spends_less(seed, monkeypatch):
+    """Each shipped seed's two actors walk 10 s at 1.4 m/s with no trot controller under them, within ±5 % of
+    the command and without falling, and stage 2's walk costs less Eq. 7 energy than stage 1's."""
+    folder = BAND / f"seed{seed}"
+    monkeypatch.setattr(TrotController, "command", lambda *a, **k: pytest.fail("a trot controller ran"))
+    energies = []
+    for stage in (1, 2):
+        actor = load_actor(folder / f"stage{stage}_final_actor.pt")
+        assert actor.config.env.action_mode == "torque"
+        r = rollout(actor, speed=1.4, duration=10.0)
+        assert not r.fell and speed_within_band(r.mean_speed, 1.4), (stage, r.mean_speed)
+        energies.append(r.energy)
+    assert energies[1] < energies[0]

@@ -80,9 +80,11 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     if not (0.0 <= run_up < duration):
         raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
     cfg = env_config or actor.config.env
-    # the policy alone: a torque policy trained with the trot prior (EnvConfig.prior_weight) is judged without it
+    # the policy alone: a torque policy trained with the trot prior (EnvConfig.prior_weight) is judged without it,
+    # and without the trot's torque computed as an imitation reference (EnvConfig.trot_reference): no trot
+    # controller runs at all (the reference never drove the robot: the walk is the same to the last bit)
     cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=(),
-                              prior_weight=0.0, prior_decay_steps=0, prior_steps_done=0)
+                              prior_weight=0.0, prior_decay_steps=0, prior_steps_done=0, trot_reference=False)
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
         # the env's simulation loop keeps every controller period: state, body, applied torque, contacts, and the
