@@ -135,7 +135,7 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
 
 
 def _missed(row: dict) -> str:
-    """" (k of n fell, m off the band)" for a summary row whose walks did not all count; "" if they did."""
+    """" (k fell, m off the ±5 % band, of n)" for a summary row whose walks did not all count; "" if they did."""
     off = row["walks"] - row["counted"] - row["fell"]
     parts = [f"{row['fell']} fell"] * bool(row["fell"]) + [f"{off} off the ±5 % band"] * bool(off)
     return f" ({', '.join(parts)}, of {row['walks']})" if parts else ""
