@@ -57,7 +57,7 @@ def bin_edges(last_step: float, edges: list[float] | None, every: float) -> list
 
 def steps_label(lo: float, hi: float) -> str:
     def k(x: float) -> str:
-        return f"{x:.0f}" if x < 1000 else f"{x / 1000:.0f} k" if x < 1e6 else f"{x / 1e6:g} M"
+        return f"{x:.0f}" if x < 1000 else f"{x / 1000:.0f} k" if round(x / 1000) < 1000 else f"{x / 1e6:.3g} M"
     return f"{k(lo)}–{k(hi)}"
 
 
