@@ -42,8 +42,10 @@ def test_episodes_fall_in_the_bin_of_the_stage_step_they_ended_at(tmp_path):
     assert s1[1]["mean length (steps)"] == pytest.approx(13.0)
     assert s1[1]["longest"] == 14
     assert s1[1]["mean score"] == pytest.approx(-0.5)
-    assert s1[1]["falls"] == pytest.approx(0.5)
-    assert s1[0]["falls"] != s1[0]["falls"]  # NaN: not logged, not "no fall"
+    assert s1[1]["falls"] == "1 (50.0%)"
+    assert s1[0]["falls"] == "not logged"  # not "no fall"
+    # a bin holding episodes from before and after the `fell` column: the share of those logged
+    assert tool.curve_rows(stages[1], edges=[1000])[0]["falls"] == "2 (66.7%) of 3 logged"
     # stage 2 counts its own steps: 50 and 170, so one episode in each of its two bins
     s2 = tool.curve_rows(stages[2], every=100)
     assert [r["episodes"] for r in s2] == [1, 1]
@@ -63,7 +65,7 @@ def test_the_table_and_the_command_line(tmp_path, capsys):
     assert tool.main([str(tmp_path), "--every", "100", "--out", str(out)]) == 0
     text = out.read_text()
     assert "stage 1: 4 episodes, 250 env steps" in text and "stage 2: 2 episodes, 170 env steps" in text
-    assert "| not logged |" in text and "| 50% |" in text
+    assert "| not logged |" in text and "| 1 (50.0%) |" in text
     with pytest.raises(SystemExit):  # the output may not overwrite the log it reads
         tool.main([str(tmp_path), "--out", str(tmp_path / "metrics.csv")])
     with pytest.raises(SystemExit):

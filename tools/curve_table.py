@@ -2,10 +2,11 @@
 """A run's learning curve as a table: its episodes binned by env steps of the stage.
 
 Reads train.py's `metrics.csv` (one row per finished episode) and prints, per stage and per bin of env steps,
-the number of episodes, their mean and longest length (agent steps), the share that ended in a fall ("not
-logged" for episodes logged before metrics.csv had a `fell` column), the mean episode score and the wall time the
-bin took (a gap of over 10 min between two episodes, a stop and a --resume, not counted). Bins end at `--edges` (env steps of the stage; default: every
-100,000) and at the stage's last step. An episode falls in the bin holding the env step it ended at.
+the number of episodes, their mean and longest length (agent steps), how many ended in a fall ("not logged" for
+episodes logged before metrics.csv had a `fell` column), the mean episode score and the wall time the bin took
+(a gap of over 10 min between two episodes, a stop and a --resume, not counted). Bins end at `--edges` (env
+steps of the stage; default: every 100,000) and at the stage's last step; an episode falls in the bin holding
+the env step it ended at.
 
     python tools/curve_table.py runs/paper_s0 --edges 20000 40000 60000 80000 100000
     python tools/curve_table.py runs/paper_s0/metrics.csv --out runs/paper_s0_curve.md
@@ -68,10 +69,13 @@ def training_seconds(wall_time_s: np.ndarray, pause_s: float = PAUSE_S) -> np.nd
     return np.where(dt > pause_s, 0.0, dt)
 
 
-def _share(flags: np.ndarray) -> float:
-    """The share of episodes that fell among those whose log says (NaN where none does)."""
+def _falls(flags: np.ndarray) -> str:
+    """How many episodes fell, and their share, among those whose log says ("not logged" where none does)."""
     known = flags[~np.isnan(flags)]
-    return float(known.mean()) if known.size else float("nan")
+    if not known.size:
+        return "not logged"
+    n = int(known.sum())
+    return f"{n:,} ({n / known.size:.1%})" + ("" if known.size == flags.size else f" of {known.size:,} logged")
 
 
 def curve_rows(stage: dict[str, np.ndarray], edges: list[float] | None = None, every: float = 100_000
@@ -86,7 +90,7 @@ def curve_rows(stage: dict[str, np.ndarray], edges: list[float] | None = None, e
             rows.append({"env steps": steps_label(lo, hi), "episodes": int(sel.sum()),
                          "mean length (steps)": float(stage["length"][sel].mean()),
                          "longest": int(stage["length"][sel].max()),
-                         "falls": _share(stage["fell"][sel]),
+                         "falls": _falls(stage["fell"][sel]),
                          "mean score": float(stage["score"][sel].mean()),
                          "wall (min)": float(busy[sel].sum()) / 60.0})
         lo = hi
@@ -94,11 +98,10 @@ def curve_rows(stage: dict[str, np.ndarray], edges: list[float] | None = None, e
 
 
 def markdown(rows: list[dict]) -> str:
-    fmt = {"mean length (steps)": "{:.1f}", "falls": "{:.0%}", "mean score": "{:+.2f}", "wall (min)": "{:.1f}"}
+    fmt = {"mean length (steps)": "{:.1f}", "mean score": "{:+.2f}", "wall (min)": "{:.1f}"}
     lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
     for r in rows:
-        cells = ["not logged" if isinstance(r[c], float) and np.isnan(r[c]) else
-                 fmt[c].format(r[c]) if c in fmt else (f"{r[c]:,}" if isinstance(r[c], int) else r[c])
+        cells = [fmt[c].format(r[c]) if c in fmt else (f"{r[c]:,}" if isinstance(r[c], int) else r[c])
                  for c in COLUMNS]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
