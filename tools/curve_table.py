@@ -14,11 +14,12 @@ the env step it ended at.
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from pathlib import Path
 
 import numpy as np
+
+from cyberdog.metrics_csv import read_rows, read_stages
 
 COLUMNS = ("env steps", "episodes", "mean length (steps)", "longest", "falls", "mean score", "wall (min)")
 PAUSE_S = 600.0  # s; no episode takes this long (400 agent steps), so a longer gap is a stop between runs
@@ -26,28 +27,23 @@ NEEDED = ("stage", "env_steps", "length", "score", "fell", "wall_time_s")
 
 
 def read_metrics(path: Path) -> dict[int, dict[str, np.ndarray]]:
-    """Per stage, the columns this table needs as arrays. The env steps are counted within each stage:
-    `env_steps` is the run's total, so a stage's count starts at the previous stage's last."""
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        missing = [c for c in NEEDED if c not in (reader.fieldnames or [])]
-        if missing:
-            raise ValueError(f"{path}: not a train.py metrics.csv (no column {', '.join(missing)})")
-        rows = list(reader)
-    if not rows:
+    """Per stage, the log's columns (the package's reader, `cyberdog.metrics_csv`; an empty cell, as in `fell`
+    of an older log, reads as NaN) plus `stage_steps`: the env steps counted within the stage (`env_steps` is
+    the run's total, so a stage's count starts at the previous stage's last)."""
+    stages = read_stages(path)
+    if not stages:
+        rows = read_rows(path)  # why nothing: a file of other columns, or a log with no episode yet
+        if rows and "stage" not in rows[0]:
+            raise ValueError(f"{path}: not a train.py metrics.csv (no column stage)")
         raise ValueError(f"{path}: no episode logged yet")
-    stages: dict[int, dict[str, list[float]]] = {}
-    for r in rows:
-        d = stages.setdefault(int(r["stage"]), {c: [] for c in NEEDED[1:]})
-        for c in NEEDED[1:]:
-            d[c].append(float(r[c]) if r[c] != "" else np.nan)  # an older log: no `fell` column yet
-    out, before = {}, 0.0
-    for s in sorted(stages):
-        d = {c: np.asarray(v) for c, v in stages[s].items()}
+    missing = [c for c in NEEDED if c != "stage" and any(c not in d for d in stages.values())]
+    if missing:
+        raise ValueError(f"{path}: not a train.py metrics.csv (no column {', '.join(missing)})")
+    before = 0.0
+    for d in stages.values():
         d["stage_steps"] = d["env_steps"] - before
         before = float(d["env_steps"][-1])
-        out[s] = d
-    return out
+    return stages
 
 
 def bin_edges(last_step: float, edges: list[float] | None, every: float) -> list[float]:
