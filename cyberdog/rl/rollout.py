@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from cyberdog import config as C
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.envs.cyberdog_env import CyberDogEnv, actor_observation_scale
 from cyberdog.loop.result import WalkResult, walk_result
 from cyberdog.rl.checkpoint import CheckpointError, check_shapes, load_torch_file
@@ -61,7 +62,8 @@ def load_actor(path: str | Path) -> LoadedActor:
 
 def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed: int = 0,
             env_config: C.EnvConfig | None = None, reward: str | C.RewardConfig = "stage2",
-            distance: float | None = None, run_up: float = 0.0, hardware_robot: bool = False) -> WalkResult:
+            distance: float | None = None, run_up: float = 0.0, hardware_robot: bool = False,
+            then_path: tuple[float, FootOffsetPath] | None = None) -> WalkResult:
     """Run the actor deterministically for `duration` s at `speed` m/s in the env it was trained in
     (or `env_config`), recording every controller period. Stops early if the robot falls. The result is the
     same record as a scripted walk's, with the episode's score.
@@ -70,7 +72,11 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     `run_up` s first, left out of the result, then `distance` m (`duration` is then the time cap). The goal is
     checked once per agent step (25 ms), the scripted walk's every period: per-metre values are unaffected.
     hardware_robot: walk the robot of `env_config.hardware.seed` (the env's reset option of that name), the one
-    a scripted walk with that `HardwareConfig` walks, instead of one drawn from the env's generator."""
+    a scripted walk with that `HardwareConfig` walks, instead of one drawn from the env's generator.
+    then_path: (t_s, offsets) hands the walk over at t_s (s, a multiple of the agent step) from the policy to a
+    fixed commanded path: from then on the actions are zero (the policy's shift ramps out over one agent step)
+    and the trot controller shifts its targets by `offsets` (a `FootOffsetPath`, as a replayed path does).
+    Whether a fixed path holds the gait the policy walked, started on it: `tools/replay_orbit.py`."""
     if not (np.isfinite(speed) and speed >= 0):
         raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
     if not duration > 0:
@@ -80,6 +86,20 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     if not (0.0 <= run_up < duration):
         raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
     cfg = env_config or actor.config.env
+    handover_step, path_offsets = None, None
+    if then_path is not None:
+        t_hand, path_offsets = then_path
+        if cfg.action_mode != "foot":
+            raise ValueError(f"then_path hands the walk to a foot path: the policy must act on foot targets, "
+                             f"not {cfg.action_mode!r}")
+        if not isinstance(path_offsets, FootOffsetPath):
+            raise TypeError(f"then_path's offsets must be a FootOffsetPath, got {type(path_offsets).__name__}")
+        if not (np.isfinite(t_hand) and 0.0 < t_hand < duration):
+            raise ValueError(f"then_path's time must be > 0 s and before the end ({duration!r} s), got {t_hand!r}")
+        handover_step = int(round(t_hand / cfg.control_dt))
+        if abs(handover_step * cfg.control_dt - t_hand) > 1e-9:
+            raise ValueError(f"then_path's time {t_hand!r} s is not a multiple of the agent step "
+                             f"({cfg.control_dt:g} s)")
     # the policy alone: a torque policy trained with the trot prior (EnvConfig.prior_weight) is judged without it,
     # and without the trot's torque computed as an imitation reference (EnvConfig.trot_reference): no trot
     # controller runs at all (the reference never drove the robot: the walk is the same to the last bit)
@@ -102,7 +122,10 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
                 goal_x = None if distance is None else x + distance
             if goal_x is not None and walker.state.base_position[0] >= goal_x:
                 break
-            obs, reward_t, terminated, _, info = env.step(actor(obs))
+            if k == handover_step:
+                env.controller.foot_offset_path = path_offsets  # the path's shift, at the controller's clock
+            action = actor(obs) if handover_step is None or k < handover_step else np.zeros(12, np.float32)
+            obs, reward_t, terminated, _, info = env.step(action)
             score += float(reward_t)
             if terminated:
                 fell = True
