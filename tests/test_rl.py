@@ -389,3 +389,30 @@ def test_action_smoothness_pulls_consecutive_actions_together():
     assert gap() < 0.2 * before
     with pytest.raises(ValueError, match="action_smoothness"):
         C.AgentConfig(action_smoothness=-1.0)
+
+
+def test_spatial_smoothness_makes_the_policy_react_less_to_the_state():
+    """CAPS's spatial term: with only it in the actor loss (critic gradient removed), μ moves less when the
+    observation moves by spatial_smoothness_sigma of its scale."""
+    def sensitivity(agent, b):
+        obs = b["observation"]
+        torch.manual_seed(1)
+        near = obs + 0.05 * torch.randn_like(obs)
+        with torch.no_grad():
+            act = lambda o: agent.actor(b.select("observation").clone().set("observation", o))["action"]  # noqa: E731
+            return (act(near) - act(obs)).pow(2).mean().item()
+
+    b = batch(64)
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_spatial_smoothness=10.0,
+                                spatial_smoothness_sigma=0.05, actor_lr=1e-2), OBS, ACT)
+    agent._actor_loss = lambda _: (torch.zeros(()), {})  # the penalty alone drives the actor
+    agent._fast = None
+    before = sensitivity(agent, b)
+    for _ in range(50):
+        agent.update(b)
+    assert sensitivity(agent, b) < 0.2 * before
+    with pytest.raises(ValueError, match="action_spatial_smoothness"):
+        C.AgentConfig(action_spatial_smoothness=-1.0)
+    with pytest.raises(ValueError, match="spatial_smoothness_sigma"):
+        C.AgentConfig(spatial_smoothness_sigma=-0.1)

@@ -49,6 +49,10 @@ class AgentConfig:
     action_smoothness: float = 0.0  # actor loss += action_smoothness · mean((μ(s') − μ(s))²), the temporal
     #                                 smoothness term of CAPS (Mysore et al. 2021): a foot-mode policy that
     #                                 changes its offsets from step to step makes the PID jerk, which costs energy
+    action_spatial_smoothness: float = 0.0  # actor loss += this · mean((μ(s̃) − μ(s))²), s̃ = s moved by
+    #                                         spatial_smoothness_sigma of each entry's typical magnitude: CAPS's
+    #                                         spatial term, a brake on the policy's feedback (0 = off)
+    spatial_smoothness_sigma: float = 0.05  # s̃'s spread, in typical magnitudes of each observation entry
     trot_imitation: float = 0.0  # actor loss += trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²): a torque
     #                             policy pulled toward the share of the trot controller's torque (in action
     #                             units, EnvConfig.trot_reference) that the prior of weight w no longer gives
@@ -71,7 +75,8 @@ class AgentConfig:
                "AgentConfig.hidden_sizes", "one or more positive integers", self.hidden_sizes)
         _positive(self, "actor_lr", "critic_lr", "tau", "ou_dt")
         _non_negative(self, "policy_noise", "noise_clip", "exploration_sigma", "exploration_sigma_end",
-                      "ou_theta", "max_grad_norm", "action_l2", "action_smoothness", "trot_imitation")
+                      "ou_theta", "max_grad_norm", "action_l2", "action_smoothness", "action_spatial_smoothness",
+                      "spatial_smoothness_sigma", "trot_imitation")
         _check(0 <= self.gamma < 1, "AgentConfig.gamma", "in [0, 1)", self.gamma)
         _check(self.tau <= 1, "AgentConfig.tau", "in (0, 1]", self.tau)
         _check(int(self.policy_delay) == self.policy_delay and self.policy_delay >= 1, "AgentConfig.policy_delay",

@@ -224,29 +224,47 @@ class Agent:
         """The actor loss (−Q₁(s, μ(s)), by `FastTD3Losses` or the TorchRL loss's own) plus `_penalties`, with
         μ(s) (and μ(s') for the smoothness term) from one forward pass through the loss's actor parameters."""
         obs = batch["observation"]
-        smooth = self.cfg.action_smoothness > 0
-        both = torch.cat([obs, batch["next", "observation"]]) if smooth else obs
+        parts = [obs]
+        if self.cfg.action_smoothness > 0:
+            parts.append(batch["next", "observation"])
+        if self.cfg.action_spatial_smoothness > 0:
+            parts.append(self._perturbed(obs))
+        both = torch.cat(parts) if len(parts) > 1 else obs
         if self._fast is not None:
             actions = self._fast.actor_actions(both)
         else:
             with self.loss.actor_network_params.to_module(self.loss.actor_network):
                 actions = self.loss.actor_network(TensorDict({"observation": both},
                                                              batch_size=both.shape[:1]))["action"]
-        now, nxt = actions.chunk(2) if smooth else (actions, None)
+        chunks = list(actions.chunk(len(parts)))
+        now = chunks.pop(0)
+        nxt = chunks.pop(0) if self.cfg.action_smoothness > 0 else None
+        near = chunks.pop(0) if self.cfg.action_spatial_smoothness > 0 else None
         if self._fast is not None:
             loss = self._fast.actor_loss(obs, now)
         else:
             loss, _ = self._actor_loss(batch)
-        return self._with_penalties(loss, now, nxt, batch)
+        return self._with_penalties(loss, now, nxt, batch, near)
+
+    def _perturbed(self, obs: torch.Tensor) -> torch.Tensor:
+        """s̃ = s + σ·scale·ε, ε ~ N(0, I): each observation entry moved by `spatial_smoothness_sigma` of its
+        typical magnitude (the actor's input scale; an entry hidden from the actor, scale +inf, is left as is)."""
+        scale = self.actor.module.observation_scale
+        scale = torch.where(torch.isfinite(scale), scale, torch.zeros_like(scale))
+        return obs + self.cfg.spatial_smoothness_sigma * scale * torch.randn_like(obs)
 
     def _with_penalties(self, loss: torch.Tensor, now: torch.Tensor, nxt: torch.Tensor | None,
-                        batch: TensorDictBase) -> torch.Tensor:
+                        batch: TensorDictBase, near: torch.Tensor | None = None) -> torch.Tensor:
         """`loss` (−Q) plus, in this order, over the batch's actions μ(s) (`now`) and μ(s') (`nxt`):
         - `action_l2 · mean(μ(s)²)`: keeps a residual policy near the trot controller unless the critic's
           gradient says otherwise (without it the actor ran to the ±1 bounds within a few thousand updates,
           where the critic, trained on actions near 0, only extrapolates: configs/quick_residual.yaml);
         - `action_smoothness · mean((μ(s') − μ(s))²)`: CAPS's temporal term (Mysore et al. 2021): a jump of
           the foot targets makes the PID jerk;
+        - `action_spatial_smoothness · mean((μ(s̃) − μ(s))²)` over s̃ near s (`_perturbed`, `near` = μ(s̃)):
+          CAPS's spatial term, here a brake on the policy's feedback: a policy that hardly reacts to the state
+          commands what a fixed path commands, so its gait must hold without feedback (a fixed path replayed
+          open loop loses the orbits that policies hold with sub-millimetre corrections: tools/replay_orbit.py);
         - `trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²)` over the transitions with a reference: pulls a
           torque policy toward the share of the trot controller's torque a_trot (stored per transition,
           `EnvConfig.trot_reference`) that the prior of weight w (`imitation_scale` = 1 − w) no longer gives;
@@ -255,6 +273,8 @@ class Agent:
             loss = loss + self.action_l2 * now.pow(2).mean()
         if nxt is not None:
             loss = loss + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
+        if near is not None:
+            loss = loss + self.cfg.action_spatial_smoothness * (near - now).pow(2).mean()
         if self.trot_imitation > 0:
             reference = batch[TROT_ACTION_KEY]
             known = torch.isfinite(reference).all(-1)
