@@ -3,6 +3,7 @@ refusals of tools/replay_orbit.py."""
 from __future__ import annotations
 
 import importlib.util
+import json
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -115,3 +116,23 @@ def test_the_tool_never_overwrites_and_refuses_a_torque_actor(tmp_path, capsys):
     with pytest.raises(SystemExit):
         tool.main(["--actor", str(ROOT / "results/policy_torque/stage2_actor.pt"), "--speed", "1.2"])
     assert "not on foot targets" in capsys.readouterr().err
+
+
+def test_the_tool_walks_the_policy_its_path_the_hand_over_and_the_sagittal_path(tmp_path, capsys):
+    out = tmp_path / "orbit.json"
+    assert tool.main(["--actor", str(BATTERY_ACTOR), "--speed", "1.0", "--duration", "7", "--handover", "2",
+                      "--sagittal", "--out", str(out)]) == 0
+    report = json.loads(out.read_text())
+    walks = report["walks"]
+    assert list(walks) == ["policy", "path", "policy, then path from 2 s", "path without its sideways shift"]
+    for name, w in walks.items():
+        assert not w["fell"], name
+        assert w["orbit"]["cycles"] == 12 and len(w["cycles"]) >= 12
+        assert w["orbit"]["energy_J"] == pytest.approx(np.mean([c["energy_J"] for c in w["cycles"][-12:]]))
+    assert walks["policy, then path from 2 s"]["electrical_J_per_m"] is None  # half policy, half path
+    assert walks["path"]["electrical_J_per_m"] > 0
+    # the same robot and path but no sideways shift: another walk
+    assert walks["path without its sideways shift"]["cycles"] != walks["path"]["cycles"]
+    # until the hand-over the hand-over walk is the policy's walk, cycle for cycle
+    assert walks["policy, then path from 2 s"]["cycles"][:5] == walks["policy"]["cycles"][:5]
+    assert "period" in capsys.readouterr().out

@@ -10,7 +10,8 @@ seeds 0 .., nor the extraction check's, 1000–1005), at one speed, three walks 
 1. the policy, closed loop (deterministic, its env with the domain randomisation off);
 2. the mean commanded path of walk 1's settled cycles in the ±5 % band, replayed from a stand;
 3. the policy until `--handover` s, then that path on its own (zero actions, the path's shift at the same
-   clock): the path started *on the policy's gait*.
+   clock): the path started *on the policy's gait*;
+4. with `--sagittal`, the path without its sideways (y) shift, from a stand: the x-z part alone.
 
 For each: the steady orbit of its last cycles (`cyberdog.analysis.orbit`: the period with which the cycles'
 Eq. (7) energy and speed repeat, their means, the speed's spread) and the electrical energy per metre of the
@@ -35,6 +36,7 @@ from cyberdog.analysis.extract import ExtractionError, clock_cycles, commanded_f
 from cyberdog.analysis.orbit import MAX_PERIOD, STEADY_WINDOW, TOLERANCE, steady_orbit
 from cyberdog.analysis.report import json_safe
 from cyberdog.analysis.walk import walk
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.learned_set import LearnedPath
 
 DEFAULT_HARDWARE_SEED = 2000  # a robot no table walks: the prototype's are seeds 0 .., the check's 1000-1005
@@ -54,6 +56,8 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, default=24.0, help="s of each walk (default 24)")
     p.add_argument("--handover", type=float, default=8.0, help="s of the policy before the path takes over "
                    "(default 8; a multiple of the agent step)")
+    p.add_argument("--sagittal", action="store_true", help="also walk the path without its sideways shift (its "
+                   "x-z part, the paper's kind of foot trajectory) from a stand")
     p.add_argument("--cycles", action="store_true", help="print every cycle's energy and speed")
     p.add_argument("--out", type=Path, help="a JSON file for the three walks' cycles and orbits (not overwritten)")
     args = p.parse_args(argv)
@@ -95,6 +99,13 @@ def main(argv=None) -> int:
     handed = rollout(actor, speed=v, duration=args.duration, env_config=env, hardware_robot=True,
                      then_path=(args.handover, ex.path.offsets))
 
+    if args.sagittal:
+        table = ex.path.offsets.offsets.copy()
+        table[:, :, 1] = 0.0  # no sideways shift
+        xz = dataclasses.replace(ex.path, offsets=FootOffsetPath(table, ex.path.offsets.period))
+        cfg, trajectory, offsets = LearnedPath("policy", xz).walk_args(walk_cfg, v)
+        sagittal = walk(cfg, args.duration, trajectory, foot_offsets=offsets, hardware=hw, record=True)
+
     shifts = np.stack([np.asarray(policy.traces["foot_offsets"])[ex.cycles[i].start:ex.cycles[i].end]
                        for i in ex.used])  # (cycles, samples, 4, 3) m
     variation = 1e3 * shifts.std(axis=0).mean(axis=(0, 1))
@@ -105,7 +116,9 @@ def main(argv=None) -> int:
               "pd_scale": args.pd_scale, "duration_s": args.duration, "handover_s": args.handover,
               "shift_cycle_std_mm": variation.tolist(), "walks": {}}
     walks = (("policy", policy, True), ("path", replay, True),
-             (f"policy, then path from {args.handover:g} s", handed, False))  # (name, walk, one walker from a stand)
+             (f"policy, then path from {args.handover:g} s", handed, False))  # (name, walk, J/m of one gait)
+    if args.sagittal:
+        walks += (("path without its sideways shift", sagittal, True),)
     for name, r, from_stand in walks:
         cycles = cycles_of(r, period)
         line = f"  {name}: " + ("fell" if r.fell else steady_orbit(cycles).describe())
@@ -115,7 +128,8 @@ def main(argv=None) -> int:
         if args.cycles:
             print("    " + " ".join(f"{c.energy:.0f}J/{c.speed:.2f}" for c in cycles))
         report["walks"][name] = {
-            "fell": r.fell, "electrical_J_per_m": r.electrical_energy / r.distance if r.distance > 0 else None,
+            "fell": r.fell,  # J/m from a stand; none for the hand-over, half policy and half path
+            "electrical_J_per_m": r.electrical_energy / r.distance if from_stand and r.distance > 0 else None,
             "orbit": None if r.fell else dataclasses.asdict(steady_orbit(cycles)),
             "cycles": [{"t_start_s": c.t_start, "energy_J": c.energy, "speed_mps": c.speed} for c in cycles]}
     print(f"  (period: the smallest p ≤ {MAX_PERIOD} with the cycles p apart alike, within {TOLERANCE:.0%}, over the "

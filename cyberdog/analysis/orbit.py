@@ -4,7 +4,7 @@ A foot-mode policy walks in closed loop; its extracted path is a fixed function 
 open loop through the IK + PID trot. The two can walk the same mean foot path and still settle into different
 orbits: measured on one hardware-like robot, a policy whose shifts vary by half a millimetre from cycle to cycle
 holds a period-1 gait (every cycle alike), while its mean path, replayed, settles into a cycle that repeats
-only every third step, with 15 % more energy per cycle. `steady_orbit` says which: the gait-clock cycles'
+only every third step, with 17 % more energy per cycle. `steady_orbit` says which: the gait-clock cycles'
 Eq. (7) energy and speed (`cyberdog.analysis.extract.clock_cycles`) over the last `window` cycles, the
 smallest period p ≤ `max_period` with which they repeat (the cycles p apart within a band of `tolerance` of
 their mean, so that a slow drift is no period), or None, and the spread of the speed over the window.

@@ -222,7 +222,8 @@ class Agent:
 
     def _actor_objective(self, batch: TensorDictBase) -> torch.Tensor:
         """The actor loss (−Q₁(s, μ(s)), by `FastTD3Losses` or the TorchRL loss's own) plus `_penalties`, with
-        μ(s) (and μ(s') for the smoothness term) from one forward pass through the loss's actor parameters."""
+        μ(s) (and μ(s') and μ(s̃) for the smoothness terms) from one forward pass through the loss's actor
+        parameters."""
         obs = batch["observation"]
         parts = [obs]
         if self.cfg.action_smoothness > 0:
