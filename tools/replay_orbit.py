@@ -121,7 +121,8 @@ def main(argv=None) -> int:
         walks += (("path without its sideways shift", sagittal, True),)
     for name, r, from_stand in walks:
         cycles = cycles_of(r, period)
-        line = f"  {name}: " + ("fell" if r.fell else steady_orbit(cycles).describe())
+        orbit = None if r.fell else steady_orbit(cycles)
+        line = f"  {name}: " + ("fell" if orbit is None else orbit.describe())
         if from_stand and not r.fell:
             line += f"; {r.electrical_energy / r.distance:.1f} J/m electrical from a stand"
         print(line)
@@ -130,7 +131,7 @@ def main(argv=None) -> int:
         report["walks"][name] = {
             "fell": r.fell,  # J/m from a stand; none for the hand-over, half policy and half path
             "electrical_J_per_m": r.electrical_energy / r.distance if from_stand and r.distance > 0 else None,
-            "orbit": None if r.fell else dataclasses.asdict(steady_orbit(cycles)),
+            "orbit": None if orbit is None else dataclasses.asdict(orbit),
             "cycles": [{"t_start_s": c.t_start, "energy_J": c.energy, "speed_mps": c.speed} for c in cycles]}
     print(f"  (period: the smallest p ≤ {MAX_PERIOD} with the cycles p apart alike, within {TOLERANCE:.0%}, over the "
           f"last {STEADY_WINDOW} cycles)")
