@@ -178,11 +178,13 @@ class ControllerConfig:
     speed_gain: float = 1.0  # 1/s, integral gain on the speed error (m/s) that corrects the step length; 0 = open loop
     max_speed_correction: float = 0.3  # share of the commanded speed the speed integral may add or remove
     lateral_placement_gain: float = 0.05  # s, swing-foot y shift per m/s of sideways body speed (Raibert-style)
+    sagittal_placement_gain: float = 0.0  # s, touchdown x shift per m/s of forward speed above the command
+    #                                       (Raibert 1986's foot placement; 0 = off, the paper's trot)
     speed_ramp_time: float = 1.0  # s, the commanded speed rises linearly from 0 over this time after a reset
 
     def __post_init__(self) -> None:
         _non_negative(self, "heading_gain", "lateral_gain", "speed_gain", "max_speed_correction",
-                      "lateral_placement_gain", "speed_ramp_time")
+                      "lateral_placement_gain", "sagittal_placement_gain", "speed_ramp_time")
 
 
 @dataclass(frozen=True)

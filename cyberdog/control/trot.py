@@ -16,6 +16,9 @@ NOTES' measurement on a similar robot found plain PD tracking reached only about
   feet slip and the body sags, so S = v·T_stance alone walks a few per cent off the command;
 - sideways foot placement in proportion to the body's sideways speed (Raibert's foot-placement idea), which
   damps the roll/sway that otherwise topples the trot at 1.2–1.4 m/s;
+- sagittal foot placement, off by default (`sagittal_placement_gain`): each touchdown moved ahead by
+  k·(v − v_cmd), Raibert's rule for the forward speed; measured as a stabiliser of replayed learned paths
+  (docs/stiffness.md), not part of the paper's trot;
 - a start-up ramp of the commanded speed (`speed_ramp_time`, 1 s): stepping from rest to full speed at once
   rolled the body by up to 0.8 rad and toppled the straight-line trot at 1.4 m/s. A learned path's per-leg
   shift (`foot_offset_path`) is blended in over the same ramp, in proportion to the commanded speed.
@@ -36,7 +39,7 @@ from cyberdog.core.pid import JointPID
 from cyberdog.core.trajectories import FootTrajectory, check_gait_args, make_trajectory, point_evaluator
 
 SIDES = (np.array([0, 2]), np.array([1, 3]))  # leg indices of the left (LF, LH) and right (RF, RH) legs
-MAX_ATTITUDE_SHIFT = 0.03  # m, bound on the sideways foot-placement shift of the foot targets
+MAX_ATTITUDE_SHIFT = 0.03  # m, bound on each foot-placement shift of the foot targets (sideways, and sagittal)
 LEG_SIDE = tuple(float(s) for s in kin.LEFT_RIGHT)  # +1 left, −1 right, per leg LF, RF, LH, RH
 LEG_IS_LEFT = tuple(s > 0 for s in LEG_SIDE)
 
@@ -123,6 +126,11 @@ class TrotController:
         self._swing_time, self._stance_time = g.swing_time, g.stance_time  # s
         self._swing_fraction = self.scheduler.gait.swing_fraction
         self._links = (r.l1, r.l2, r.l3)  # m
+        # sagittal foot placement (ControllerConfig.sagittal_placement_gain): per leg, the x shift its stance
+        # holds (set at touchdown) and the one its swing reached last period, m; whether it was swinging
+        self._placement_held = [0.0] * 4
+        self._placement_swing = [0.0] * 4
+        self._was_swinging = [False] * 4
 
     def reset(self) -> None:
         self.pid.reset()
@@ -130,6 +138,7 @@ class TrotController:
         self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (the unshifted one went)
         self.foot_offsets = self.foot_offset_rates = self.foot_offset_time = None
         self.last_foot_targets = self.last_foot_offsets = None
+        self._placement_held, self._placement_swing, self._was_swinging = [0.0] * 4, [0.0] * 4, [False] * 4
 
     def set_foot_offsets(self, offsets: np.ndarray | None, rates: np.ndarray | None = None,
                          at_time: float | None = None) -> None:
@@ -254,6 +263,31 @@ class TrotController:
                     (a + d, b + e, c + f) for (a, b, c), (d, e, f) in zip(rates, path_rates)]
         return offsets, rates
 
+    def _sagittal_placement(self, t: float, body: BodyFeedback, phases: list[float]):
+        """Per leg (x shift m, its rate m/s) of the sagittal foot placement, or None when it is off: each swing
+        moves the foot's touchdown by k·(v − v_cmd) (Raibert 1986: a body faster than commanded steps further
+        ahead, which brakes it), from the shift its last stance held, linearly over the swing; the stance holds
+        the shift it touched down with, so the stance stroke, and with it the commanded speed, is unchanged."""
+        k = self.cfg.controller.sagittal_placement_gain
+        if k <= 0 or body.forward_speed is None:
+            return None
+        dx = k * (body.forward_speed - self.commanded_speed(t))
+        dx = -MAX_ATTITUDE_SHIFT if -MAX_ATTITUDE_SHIFT > dx else MAX_ATTITUDE_SHIFT if MAX_ATTITUDE_SHIFT < dx else dx
+        beta, swing_time = self._swing_fraction, self._swing_time
+        out = []
+        for leg, phase in enumerate(phases):
+            held = self._placement_held[leg]
+            if phase < beta:  # swing: from the held shift toward today's, reached at touchdown
+                shift = held + (dx - held) * (phase / beta)
+                self._placement_swing[leg], self._was_swinging[leg] = shift, True
+                out.append((shift, (dx - held) / swing_time))
+            else:
+                if self._was_swinging[leg]:  # touchdown: the stance keeps where the swing put the foot
+                    held = self._placement_held[leg] = self._placement_swing[leg]
+                    self._was_swinging[leg] = False
+                out.append((held, 0.0))
+        return out
+
     def _leg_targets(self, t: float, body: BodyFeedback, periods: int = 1):
         """Foot targets (4 × (x, y, z)), foot velocities (4 × (vx, vy, vz)), joint targets and joint speed
         targets (12 floats each) and the swing flags (4 bools) at time t, in plain Python values."""
@@ -265,6 +299,7 @@ class TrotController:
         dy = -MAX_ATTITUDE_SHIFT if -MAX_ATTITUDE_SHIFT > dy else MAX_ATTITUDE_SHIFT if MAX_ATTITUDE_SHIFT < dy else dy
         l1, l2, l3 = self._links
         stand, feedforward = self.stand_height, c.velocity_feedforward
+        placement = self._sagittal_placement(t, body, phases)
         offsets, rates = self._shift(t, phases)
         applied = offsets  # the shifts the robot gets (a copy is made only if one is dropped)
         ik = kin.leg_inverse_kinematics_velocity
@@ -272,6 +307,8 @@ class TrotController:
         for leg, (x, z, vx, vz) in enumerate(self._foot_points(phases, S)):
             side = LEG_SIDE[leg]
             y, z = side * l1 + dy, z - stand
+            if placement is not None:
+                x, vx = x + placement[leg][0], vx + placement[leg][1]
             vy = 0.0
             if offsets is None:
                 fx, fy, fz, wx, wy, wz = x, y, z, vx, vy, vz
