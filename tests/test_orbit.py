@@ -100,7 +100,7 @@ spec.loader.exec_module(tool)
 
 @pytest.mark.parametrize("extra", [["--speed", "0"], ["--speed", "1.2", "--handover", "30"],
                                    ["--speed", "1.2", "--duration", "6"], ["--speed", "1.2", "--pd-scale", "-1"],
-                                   ["--speed", "1.2", "--handover", "8.01"]])
+                                   ["--speed", "1.2", "--handover", "8.01"], ["--speed", "1.2", "--placement", "-0.1"]])
 def test_the_tool_refuses_bad_walks_before_walking(extra, tmp_path):
     with pytest.raises(SystemExit):
         tool.main(["--actor", str(BATTERY_ACTOR), "--out", str(tmp_path / "o.json"), *extra])
@@ -136,3 +136,16 @@ def test_the_tool_walks_the_policy_its_path_the_hand_over_and_the_sagittal_path(
     # until the hand-over the hand-over walk is the policy's walk, cycle for cycle
     assert walks["policy, then path from 2 s"]["cycles"][:5] == walks["policy"]["cycles"][:5]
     assert "period" in capsys.readouterr().out
+
+
+def test_the_tools_placement_reaches_the_replayed_path_only(tmp_path):
+    """--placement K: the path's replay walks with the trot's sagittal foot placement, the policy as trained."""
+    runs = {}
+    for k in ("0", "0.3"):
+        out = tmp_path / f"orbit_{k}.json"
+        assert tool.main(["--actor", str(BATTERY_ACTOR), "--speed", "1.2", "--duration", "7", "--handover", "2",
+                          "--placement", k, "--out", str(out)]) == 0
+        runs[k] = json.loads(out.read_text())
+    assert runs["0.3"]["sagittal_placement_gain_s"] == 0.3
+    assert runs["0.3"]["walks"]["policy"] == runs["0"]["walks"]["policy"]
+    assert runs["0.3"]["walks"]["path"]["cycles"] != runs["0"]["walks"]["path"]["cycles"]
