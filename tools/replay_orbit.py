@@ -14,7 +14,8 @@ seeds 0 .., nor the extraction check's, 1000–1005), at one speed, three walks 
 4. with `--sagittal`, the path without its sideways (y) shift, from a stand: the x-z part alone.
 
 With `--placement K` the paths (walks 2 and 4) are replayed by a trot with sagittal foot placement at gain K s
-(`ControllerConfig.sagittal_placement_gain`, off by default): does foot placement hold the orbit the path loses?
+(`ControllerConfig.sagittal_placement_gain`; without it, the policy's own trot's, off unless it was trained with
+it): does foot placement hold the orbit the path loses?
 
 For each: the steady orbit of its last cycles (`cyberdog.analysis.orbit`: the period with which the cycles'
 Eq. (7) energy and speed repeat, their means, the speed's spread) and the electrical energy per metre of the
@@ -61,16 +62,16 @@ def main(argv=None) -> int:
                    "(default 8; a multiple of the agent step)")
     p.add_argument("--sagittal", action="store_true", help="also walk the path without its sideways shift (its "
                    "x-z part, the paper's kind of foot trajectory) from a stand")
-    p.add_argument("--placement", type=float, default=0.0, metavar="K",
+    p.add_argument("--placement", type=float, default=None, metavar="K",
                    help="replay the paths (walks 2 and 4) with the trot's sagittal foot placement at gain K s "
-                        "(ControllerConfig.sagittal_placement_gain; default 0, off); the policy and the hand-over "
-                        "keep the controller the policy was trained with")
+                        "(ControllerConfig.sagittal_placement_gain; default: the policy's own, 0 unless it was "
+                        "trained with it); the policy and the hand-over keep the controller it was trained with")
     p.add_argument("--cycles", action="store_true", help="print every cycle's energy and speed")
     p.add_argument("--out", type=Path, help="a JSON file for the three walks' cycles and orbits (not overwritten)")
     args = p.parse_args(argv)
     if not (math.isfinite(args.speed) and args.speed > 0):
         p.error(f"--speed must be > 0 m/s, got {args.speed}")
-    if not (math.isfinite(args.placement) and args.placement >= 0):
+    if args.placement is not None and not (math.isfinite(args.placement) and args.placement >= 0):
         p.error(f"--placement must be >= 0 s, got {args.placement}")
     if not (math.isfinite(args.pd_scale) and args.pd_scale > 0):
         p.error(f"--pd-scale must be > 0, got {args.pd_scale}")
@@ -103,9 +104,11 @@ def main(argv=None) -> int:
         print(f"the policy's walk gives no path: {err}", file=sys.stderr)
         return 1
     path = LearnedPath("policy", ex.path)
-    replay_cfg = dataclasses.replace(walk_cfg, controller=dataclasses.replace(
-        walk_cfg.controller, sagittal_placement_gain=args.placement))
-    cfg, trajectory, offsets = path.walk_args(replay_cfg, v)
+    if args.placement is not None:
+        walk_cfg = dataclasses.replace(walk_cfg, controller=dataclasses.replace(
+            walk_cfg.controller, sagittal_placement_gain=args.placement))
+    placement = walk_cfg.controller.sagittal_placement_gain  # what the paths are replayed with (the env is built)
+    cfg, trajectory, offsets = path.walk_args(walk_cfg, v)
     replay = walk(cfg, args.duration, trajectory, foot_offsets=offsets, hardware=hw, record=True)
     handed = rollout(actor, speed=v, duration=args.duration, env_config=env, hardware_robot=True,
                      then_path=(args.handover, ex.path.offsets))
@@ -114,19 +117,19 @@ def main(argv=None) -> int:
         table = ex.path.offsets.offsets.copy()
         table[:, :, 1] = 0.0  # no sideways shift
         xz = dataclasses.replace(ex.path, offsets=FootOffsetPath(table, ex.path.offsets.period))
-        cfg, trajectory, offsets = LearnedPath("policy", xz).walk_args(replay_cfg, v)
+        cfg, trajectory, offsets = LearnedPath("policy", xz).walk_args(walk_cfg, v)
         sagittal = walk(cfg, args.duration, trajectory, foot_offsets=offsets, hardware=hw, record=True)
 
     shifts = np.stack([np.asarray(policy.traces["foot_offsets"])[ex.cycles[i].start:ex.cycles[i].end]
                        for i in ex.used])  # (cycles, samples, 4, 3) m
     variation = 1e3 * shifts.std(axis=0).mean(axis=(0, 1))
-    placed = f", paths with sagittal placement {args.placement:g} s" if args.placement else ""
+    placed = f", paths with sagittal placement {placement:g} s" if placement else ""
     rms = np.round(1e3 * ex.path.offsets.rms().mean(axis=0), 1).tolist()
     print(f"{args.actor} at {v:g} m/s on hardware-like robot {args.hardware_seed}, PD {args.pd_scale:g}x{placed}; "
           f"the mean path of {len(ex.used)} cycles (shift rms {rms} mm, cycle-to-cycle std "
           f"{np.round(variation, 2).tolist()} mm in x, y, z)")
     report = {"actor": str(args.actor), "speed_mps": v, "hardware_seed": args.hardware_seed,
-              "pd_scale": args.pd_scale, "sagittal_placement_gain_s": args.placement, "duration_s": args.duration,
+              "pd_scale": args.pd_scale, "sagittal_placement_gain_s": placement, "duration_s": args.duration,
               "handover_s": args.handover,
               "shift_cycle_std_mm": variation.tolist(), "walks": {}}
     walks = (("policy", policy, True), ("path", replay, True),
