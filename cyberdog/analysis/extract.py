@@ -40,7 +40,7 @@ deterministic rollout of the trained stage-2 policy (`cyberdog.rl.rollout.rollou
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -283,10 +283,13 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
 
 
 def rollout_provenance(rollout, env_config, provenance: dict | None = None) -> dict:
-    """What an extracted trajectory records of the rollout it came from (and a warning if it fell)."""
+    """What an extracted trajectory records of the rollout it came from (and a warning if it fell), with the
+    trot controller's settings it walked under (`controller`: a path learned with, e.g., foot placement is
+    recorded as such)."""
     prov = {"rollout_mean_speed_mps": rollout.mean_speed, "rollout_fell": bool(rollout.fell),
             "rollout_duration_s": rollout.duration, "rollout_energy_J": rollout.energy,
-            "action_mode": env_config.action_mode, **(provenance or {})}
+            "action_mode": env_config.action_mode, "controller": asdict(env_config.walk.controller),
+            **(provenance or {})}
     if rollout.fell:
         prov["warning"] = f"the rollout fell after {rollout.duration:.2f} s"
     return prov

@@ -16,6 +16,11 @@ several; a sampled path at any speed. A label without one is an error, never a s
 What a reader needs of a path, whatever its kind: its own lift height (the matched-lift baselines' H), the walk
 config, foot trajectory and foot offsets to replay it (`walk_args`), the x-z path a figure draws (`figure_path`),
 its provenance (policy, seed, speed, extraction options) and its file. Pure numpy; files are JSON.
+
+A path is recorded under one trot controller (the policy's: `ControllerConfig`, e.g. with or without sagittal
+foot placement), and a path learned under one controller need not walk the same under another. Extraction
+writes the controller into the provenance (`recorded_controller`), so that an evaluation that walks the path
+under another can say so (`cyberdog.evaluation.learned.note_controllers`).
 """
 from __future__ import annotations
 
@@ -70,6 +75,12 @@ class LearnedPath:
     @property
     def provenance(self) -> dict:
         return self.path.provenance
+
+    @property
+    def recorded_controller(self) -> dict | None:
+        """The trot controller's settings (`ControllerConfig` fields) the path was recorded under; None where the
+        file does not say (extracted before the record was kept)."""
+        return self.provenance.get("controller")
 
     def serves(self, speed: float) -> bool:
         """Whether this path walks at `speed` (m/s) by the set's rule."""

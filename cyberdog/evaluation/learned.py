@@ -3,6 +3,7 @@ first. Labels are the provenance's seed ("seed3"), else the file or run folder n
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -171,6 +172,10 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
     the prototype's) is the path. The candidates and the rejected paths are in its provenance; none replaying
     is an error."""
     rejected, passed = [], []
+    if args.replay_check:
+        note = controller_note(actor.config.env.walk.controller, (cfg or C.WalkConfig()).controller)
+        if note:
+            log(f"  note: the replay check walks another trot than the policy's: {note}")
     for k in range(args.replay_attempts if args.replay_check else 1):
         r = _rollout(actor, path, speed, args, args.rollout_seed + k, log)
         for cycle in dict.fromkeys((args.cycle, *CYCLE_CHOICES)):
@@ -205,7 +210,8 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         "selected_by": "least electrical energy per metre on the hardware-like check robots",
         "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
         "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
-        "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS), "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES)}
+        "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS), "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES),
+        "controller": dataclasses.asdict((cfg or C.WalkConfig()).controller)}  # the trot the check walked
     in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
     if check.dropped_shifts or in_rollout:
         log(f"  foot shifts out of reach, dropped (the unshifted target sent): {in_rollout} leg-periods in the "
@@ -214,6 +220,35 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         log(f"  kept the {ex.path.provenance.get('cycle', args.cycle)} path of env seed "
             f"{ex.path.provenance['rollout_seed']}, the cheapest of {len(passed)} candidates")
     return ex
+
+
+def controller_note(recorded: C.ControllerConfig | dict | None, walked: C.ControllerConfig) -> str:
+    """Where the trot controller `walked` differs from `recorded` (a path's, a policy's), as a sentence with the
+    `--set` that walks under the recorded one; "" where they agree or nothing was recorded."""
+    if recorded is None:
+        return ""
+    rec = recorded if isinstance(recorded, dict) else dataclasses.asdict(recorded)
+    now = dataclasses.asdict(walked)
+    diff = {k: (v, now[k]) for k, v in rec.items() if k in now and now[k] != v}
+    if not diff:
+        return ""
+    what = ", ".join(f"{k} {r:g} recorded, {w:g} here" if isinstance(r, (int, float)) and not isinstance(r, bool)
+                     else f"{k} {r} recorded, {w} here" for k, (r, w) in diff.items())
+    sets = " ".join(f"controller.{k}={r}" for k, (r, _) in diff.items())
+    return f"{what} (--set {sets} walks every trajectory under the recorded one)"
+
+
+def note_controllers(learned: LearnedSet, cfg: C.WalkConfig, log=print) -> list[str]:
+    """Log, and return, one note per learned path recorded under another trot controller than `cfg`'s (e.g. a
+    policy trained with sagittal foot placement, walked here without it): its saving may not carry over."""
+    notes = []
+    for p in learned.paths():
+        note = controller_note(p.recorded_controller, cfg.controller)
+        if note:
+            notes.append(f"note: {p.label}'s path ({p.file_name()}) was recorded under another trot controller: "
+                         f"{note}")
+            log(notes[-1])
+    return notes
 
 
 def check_learned_inputs(args) -> None:
@@ -305,6 +340,7 @@ def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C
         learned = load_learned(files)
         if files == [DEFAULT_LEARNED_BATTERY]:
             folder = out / DEFAULT_LEARNED_BATTERY.name
+    note_controllers(learned, cfg or C.WalkConfig(), log)
     learned.save(folder, overwrite=False)
     return learned
 
