@@ -21,6 +21,11 @@ Writes the optimised path to --result (default results/optimized_trajectory_H<H>
 JSON with provenance: parameters, objective, H, speeds, evaluations, git commit) and into --out (default
 runs/optimize-<time>/): optimized_trajectory.json, history.csv (every evaluation), table.{md,csv},
 summary.json. `--replay-only FILE` skips the optimisation and replays a saved path.
+
+`--set SECTION.FIELD=VALUE` changes the walk config of every walk, search and replay alike (e.g. the trot with
+sagittal foot placement, `--set controller.sagittal_placement_gain=0.1`, so that the shape is searched under the
+trot the learned paths it is compared with walk under); the overrides are recorded in the path's provenance, and
+with any the path is written only into --out unless --result names a file.
 """
 from __future__ import annotations
 
@@ -40,7 +45,7 @@ from cyberdog.core import path_shape as so  # noqa: E402
 from cyberdog.analysis import shape_search  # noqa: E402
 from cyberdog.analysis.compare import WalkJob, reduction, run_jobs, walk_config  # noqa: E402
 from cyberdog.analysis.report import json_safe  # noqa: E402
-from cyberdog.config import HARDWARE_LIKE, GaitConfig, WalkConfig  # noqa: E402
+from cyberdog.config import HARDWARE_LIKE, GaitConfig, WalkConfig, add_override_option, override  # noqa: E402
 from cyberdog.core.trajectories import SampledTrajectory  # noqa: E402
 from cyberdog.provenance import portable_command, portable_path  # noqa: E402
 
@@ -85,6 +90,8 @@ def parse_args(argv=None) -> argparse.Namespace:
                         "--objective or --robot, results/optimized_trajectory_H<H>_<objective>_<robot>.json)")
     p.add_argument("--replay-only", type=Path, default=None, metavar="FILE",
                    help="skip the optimisation; replay this saved path (its provenance's H must match)")
+    add_override_option(p, "controller.sagittal_placement_gain=0.1",
+                        "; every walk, search and replay, under it; recorded in the path's provenance")
     args = p.parse_args(argv)
     # every check before any long work starts
     try:
@@ -101,7 +108,13 @@ def parse_args(argv=None) -> argparse.Namespace:
         p.error(f"--replay-duration must be > 0 s, got {args.replay_duration}")
     if args.replay_only is not None and not args.replay_only.is_file():
         p.error(f"--replay-only file {str(args.replay_only)!r} does not exist")
+    try:
+        args.base = override(WalkConfig(), args.overrides)
+    except ValueError as err:
+        p.error(str(err))
     args.out = args.out or REPO / "runs" / time.strftime("optimize-%Y%m%d-%H%M%S")
+    if args.overrides and args.result is None:  # a search under another walk config never replaces a shipped path
+        args.result = args.out / "optimized_trajectory.json"
     name = (f"optimized_trajectory_H{args.lift_height:.2f}" if (args.objective, args.robot) == ("eq7", "ideal")
             else f"optimized_trajectory_H{args.lift_height:.3f}_{args.objective}_{args.robot}")
     args.result = args.result or REPO / "results" / f"{name}.json"
@@ -117,9 +130,10 @@ def write_csv(path: Path, rows: list[dict]) -> None:
 
 
 def replay_rows(optimized: SampledTrajectory, start: SampledTrajectory, lift_height: float, speeds, duration: float,
-                workers: int) -> list[dict]:
-    """The optimised path, the sampled start, the cycloid and the straight line at every speed; D_t columns."""
-    base = WalkConfig()
+                workers: int, base: WalkConfig | None = None) -> list[dict]:
+    """The optimised path, the sampled start, the cycloid and the straight line at every speed, each walked
+    with `base` (default WalkConfig()) at that speed and H; D_t columns."""
+    base = base or WalkConfig()
     jobs = []
     for v in speeds:
         for name, path in (("optimized", optimized), ("cycloid (sampled)", start), ("cycloid", None),
@@ -180,7 +194,8 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     gait = GaitConfig(speed=args.speeds[0], lift_height=args.lift_height)
     command = "python tools/optimize_trajectory.py " + portable_command(sys.argv[1:] if argv is None else argv)
-    summary: dict = {"command": command, "lift_height_m": args.lift_height, "speeds_mps": args.speeds, **git_state()}
+    summary: dict = {"command": command, "lift_height_m": args.lift_height, "speeds_mps": args.speeds, **git_state(),
+                     "walk_overrides": list(args.overrides)}
     if args.replay_only is not None:
         optimized = SampledTrajectory.load(args.replay_only)
         h = optimized.provenance.get("lift_height_m", optimized.lift_height)
@@ -193,7 +208,7 @@ def main(argv=None) -> int:
               f"{args.workers} worker(s) → {args.out}")
         res = shape_search.optimize_shape(args.lift_height, args.speeds, args.duration, args.measure_from, args.max_evals,
                                 args.workers, initial_step=args.initial_step, objective=args.objective,
-                                hardware=HARDWARE_LIKE if args.robot == "hardware" else None)
+                                hardware=HARDWARE_LIKE if args.robot == "hardware" else None, base=args.base)
         write_csv(args.out / "history.csv", [e.row() for e in res.history])
         cpu_s = sum(w["cpu_s"] for e in res.history for w in e.walks)
         print(f"done: {len(res.history)} evaluations in {res.wall_s:.0f} s wall ({cpu_s:.0f} s CPU in walks); "
@@ -227,7 +242,7 @@ def main(argv=None) -> int:
         print("the optimum is the start point (the cycloid)")
     print(f"replaying optimized, cycloid (sampled), cycloid, straight at H = {args.lift_height} m for "
           f"{args.replay_duration} s at {args.speeds} m/s")
-    rows = replay_rows(optimized, start, args.lift_height, args.speeds, args.replay_duration, args.workers)
+    rows = replay_rows(optimized, start, args.lift_height, args.speeds, args.replay_duration, args.workers, args.base)
     md = table_markdown(rows, args.lift_height, args.replay_duration)
     print("\n" + md)
     (args.out / "table.md").write_text(md)

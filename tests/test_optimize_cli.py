@@ -1,0 +1,44 @@
+"""tools/optimize_trajectory.py --set: the shape is searched and replayed under the walk config asked for, and
+a search under another config never replaces a shipped path."""
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("optimize_trajectory", ROOT / "tools/optimize_trajectory.py")
+tool = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(tool)
+
+
+def test_overrides_reach_the_walk_config_and_keep_the_result_in_the_run_folder(tmp_path):
+    args = tool.parse_args(["--set", "controller.sagittal_placement_gain=0.1", "--out", str(tmp_path)])
+    assert args.base.controller.sagittal_placement_gain == 0.1
+    assert args.result == tmp_path / "optimized_trajectory.json"
+    plain = tool.parse_args(["--out", str(tmp_path)])
+    assert plain.base.controller.sagittal_placement_gain == 0.0
+    assert plain.result.parent == ROOT / "results"
+
+
+def test_a_bad_override_fails_before_any_walk(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        tool.parse_args(["--set", "controller.no_such_gain=1", "--out", str(tmp_path)])
+    assert "no_such_gain" in capsys.readouterr().err
+
+
+def test_the_search_walks_under_the_overridden_config(tmp_path, monkeypatch):
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def fake_search(*a, **kw):
+        seen.update(kw)
+        raise Stop
+
+    monkeypatch.setattr(tool.shape_search, "optimize_shape", fake_search)
+    with pytest.raises(Stop):
+        tool.main(["--set", "controller.sagittal_placement_gain=0.2", "--out", str(tmp_path), "--max-evals", "2"])
+    assert seen["base"].controller.sagittal_placement_gain == 0.2
