@@ -53,3 +53,21 @@ def test_extraction_outside_the_training_speeds_names_policy_speed_and_warns_whe
     assert extraction_speeds(env, [0.8], 0.8, log=said.append) == [0.8]
     assert len(said) == 1 and "extrapolation" in said[0]
     assert extraction_speeds(env, [1.2], 1.2, log=said.append) == [1.2] and len(said) == 1  # inside: no warning
+
+
+def test_a_partial_section_in_a_file_changes_only_the_fields_it_names(tmp_path):
+    """A YAML section that names one field keeps the parent's default for the rest: EnvConfig's walk lifts
+    0.10 m (WalkConfig() alone: 0.15 m), and train.stage2 stays the energy stage."""
+    f = tmp_path / "partial.yaml"
+    f.write_text("env:\n  walk:\n    controller: {sagittal_placement_gain: 0.1}\n"
+                 "train:\n  stage2: {max_env_steps: 5}\n")
+    cfg = C.load(C.ExperimentConfig, f)
+    default = C.ExperimentConfig()
+    assert cfg.env.walk.controller.sagittal_placement_gain == 0.1
+    assert cfg.env.walk.gait == default.env.walk.gait
+    assert cfg.env.walk.gait.lift_height == 0.10
+    assert cfg.train.stage2.max_env_steps == 5
+    assert (cfg.train.stage2.reward, cfg.train.stage2.stop_score) == ("stage2", default.train.stage2.stop_score)
+    # and the same as --set on the defaults
+    assert cfg == C.override(default, ["env.walk.controller.sagittal_placement_gain=0.1",
+                                       "train.stage2.max_env_steps=5"])

@@ -114,14 +114,37 @@ def from_dict(cls: type, data: dict | None, _path: str = "") -> Any:
         raise ValueError(f"unknown {cls.__name__} field(s) {unknown}{f' in {_path}' if _path else ''}"
                          f"{f' ({hint})' if hint else ''}; allowed: {sorted(known)}")
     kwargs = {}
+    defaults = {f.name: f for f in fields(cls)}
     for name, value in data.items():
         hint, path = hints[name], f"{_path}.{name}" if _path else name
         if is_dataclass(hint):
+            # a partial section changes the fields it names of the parent's default for it (e.g. EnvConfig's
+            # walk, whose trot lifts 0.10 m, not WalkConfig()'s 0.15 m): the file overrides, as --set does
+            base = _default_of(defaults[name])
+            if isinstance(value, dict) and is_dataclass(base):
+                value = _merged(to_dict(base), value)
             kwargs[name] = from_dict(hint, value, path)
         else:
             where = f"{cls.__name__}.{name}" + (f" ({path})" if _path else "")
             kwargs[name] = _convert(value, hint, where)
     return cls(**kwargs)
+
+
+def _default_of(f: dataclasses.Field) -> Any:
+    """A dataclass field's default value (None where it has none)."""
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    return None
+
+
+def _merged(base: dict, changes: dict) -> dict:
+    """`base` with `changes` laid over it, nested mappings merged key by key."""
+    out = dict(base)
+    for k, v in changes.items():
+        out[k] = _merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
 
 
 def load(cls: type, path: str | Path) -> Any:
