@@ -219,6 +219,26 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     assert not (tmp_path / "none" / "learned" / "seed0_1mps.json").exists()
 
 
+def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys, monkeypatch):
+    """Each path is saved as it is extracted: an extraction that fails at its second speed (minutes of replay
+    checks later) leaves the first speed's path, with its recorded trot controller, on disk."""
+    import evaluate
+    from cyberdog.analysis.replay_check import ReplayCheck
+    from cyberdog.core.commanded_path import CommandedPath
+    from cyberdog.evaluation import learned as learned_module
+
+    _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
+    checks = iter([ReplayCheck("ok", 30.0), ReplayCheck("fell at 2.00 s"), ReplayCheck("fell at 2.00 s")])
+    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.0", "1.2", "--rollout-duration",
+                          "3.0", "--speed-tolerance", "0.3", "--replay-attempts", "1", "--candidates", "1",
+                          "--out", str(tmp_path / "ex")]) == 2
+    assert "no candidate path replays" in capsys.readouterr().err
+    kept = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json")
+    assert kept.provenance["controller"] == dataclasses.asdict(C.EnvConfig().walk.controller)
+    assert not (tmp_path / "ex" / "learned" / "seed0_1.2mps.json").exists()
+
+
 def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, capsys, monkeypatch):
     """With --candidates N the first N rollouts whose path replays each give one candidate, and the path kept is
     the one with the least electrical energy per metre on the check's robots; with fewer rollouts that replay

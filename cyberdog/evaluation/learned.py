@@ -100,32 +100,30 @@ def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float
 def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print,
                      cfg: C.WalkConfig | None = None) -> LearnedSet:
     """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
-    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv. A commanded path must
-    replay (`_extract_commanded`); `cfg`: the walk config of that replay (default WalkConfig())."""
+    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv, each as soon as it is
+    extracted (a failure at a later speed or policy keeps what was done). A commanded path must replay
+    (`_extract_commanded`); `cfg`: the walk config of that replay (default WalkConfig())."""
     from cyberdog.rl.rollout import load_actor  # torch: only here, only when asked
 
-    results, labels = [], []
-    for path in paths:
-        actor = load_actor(path)
+    actors, kinds = [load_actor(path) for path in paths], []
+    for path, actor in zip(paths, actors):  # every policy checked before the first rollout
         env = actor.config.env
         kind = args.path_kind if args.path_kind != "auto" else ("commanded" if env.action_mode == "foot"
                                                                   else "measured")
         if kind == "commanded" and env.action_mode != "foot":
             raise UsageError(f"{path}: a policy of action_mode {env.action_mode!r} commands no foot path; use "
                              "--path measured")
-        seed = actor.config.train.seed
-        found = {}
-        for speed in extraction_speeds(env, speeds, args.policy_speed, log):
-            prov = {"policy": portable_path(path), "seed": seed, "policy_meta": actor.meta}
-            extract = _extract_commanded if kind == "commanded" else _extract_measured
-            found[speed] = extract(actor, path, speed, args, prov, cfg, log)
-        results.append((kind, found))
-        labels.append(f"seed{seed}")
+        kinds.append(kind)
+    labels = [f"seed{actor.config.train.seed}" for actor in actors]
     if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
         labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
     learned = LearnedSet()
-    for label, (kind, found) in zip(unique_labels(labels), results):
-        for speed, ex in found.items():
+    for path, actor, kind, label in zip(paths, actors, kinds, unique_labels(labels)):
+        seed = actor.config.train.seed
+        for speed in extraction_speeds(actor.config.env, speeds, args.policy_speed, log):
+            prov = {"policy": portable_path(path), "seed": seed, "policy_meta": actor.meta}
+            extract = _extract_commanded if kind == "commanded" else _extract_measured
+            ex = extract(actor, path, speed, args, prov, cfg, log)
             p = LearnedPath(label, ex.path if kind == "commanded" else ex.trajectory)
             if kind != "commanded" and label in learned.labels:
                 continue  # a measured path is rescaled to every speed: the first one
