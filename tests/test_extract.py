@@ -221,7 +221,8 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
 
 def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys, monkeypatch):
     """Each path is saved as it is extracted: an extraction that fails at its second speed (minutes of replay
-    checks later) leaves the first speed's path, with its recorded trot controller, on disk."""
+    checks later) leaves the first speed's path, with its recorded trot controller, on disk; a replay check
+    walked under another trot than the policy's is said and recorded."""
     import evaluate
     from cyberdog.analysis.replay_check import ReplayCheck
     from cyberdog.core.commanded_path import CommandedPath
@@ -237,6 +238,17 @@ def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys
     kept = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json")
     assert kept.provenance["controller"] == dataclasses.asdict(C.EnvConfig().walk.controller)
     assert not (tmp_path / "ex" / "learned" / "seed0_1.2mps.json").exists()
+    # a replay check under another trot than the policy's is said, and recorded
+    checks = iter([ReplayCheck("ok", 30.0)])
+    assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
+                          "--speed-tolerance", "0.3", "--replay-attempts", "1", "--candidates", "1",
+                          "--set", "controller.sagittal_placement_gain=0.1", "--out", str(tmp_path / "placed")]) == 0
+    out = capsys.readouterr().out
+    assert "the replay check walks another trot than the policy's" in out
+    assert "sagittal_placement_gain 0 recorded, 0.1 here" in out
+    prov = CommandedPath.load(tmp_path / "placed" / "learned" / "seed0_1mps.json").provenance
+    assert prov["controller"]["sagittal_placement_gain"] == 0.0
+    assert prov["replay_check"]["controller"]["sagittal_placement_gain"] == 0.1
 
 
 def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, capsys, monkeypatch):
