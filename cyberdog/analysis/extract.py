@@ -283,9 +283,8 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
 
 
 def rollout_provenance(rollout, env_config, provenance: dict | None = None) -> dict:
-    """What an extracted trajectory records of the rollout it came from (and a warning if it fell), with the
-    trot controller's settings it walked under (`controller`: a path learned with, e.g., foot placement is
-    recorded as such)."""
+    """What an extracted trajectory records of the rollout it came from: its walk, the trot controller it walked
+    under (`controller`, e.g. with foot placement) and a warning if it fell."""
     prov = {"rollout_mean_speed_mps": rollout.mean_speed, "rollout_fell": bool(rollout.fell),
             "rollout_duration_s": rollout.duration, "rollout_energy_J": rollout.energy,
             "action_mode": env_config.action_mode, "controller": asdict(env_config.walk.controller),

@@ -170,8 +170,9 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
     the prototype's) is the path. The candidates and the rejected paths are in its provenance; none replaying
     is an error."""
     rejected, passed = [], []
+    check_controller = (cfg or C.WalkConfig()).controller  # the trot the replay check walks
     if args.replay_check:
-        note = controller_note(actor.config.env.walk.controller, (cfg or C.WalkConfig()).controller)
+        note = controller_note(actor.config.env.walk.controller, check_controller)
         if note:
             log(f"  note: the replay check walks another trot than the policy's: {note}")
     for k in range(args.replay_attempts if args.replay_check else 1):
@@ -209,7 +210,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
         "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
         "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS), "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES),
-        "controller": dataclasses.asdict((cfg or C.WalkConfig()).controller)}  # the trot the check walked
+        "controller": dataclasses.asdict(check_controller)}
     in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
     if check.dropped_shifts or in_rollout:
         log(f"  foot shifts out of reach, dropped (the unshifted target sent): {in_rollout} leg-periods in the "
