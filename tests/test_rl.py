@@ -1,7 +1,6 @@
 """Unit tests of the rl layer: agent updates, exploration, replay buffer, checkpoints and guards."""
 from __future__ import annotations
 
-import numpy as np
 import pytest
 import torch
 from tensordict import TensorDict
@@ -13,31 +12,9 @@ from cyberdog.rl.agent import Agent, ForeachSoftUpdate, NonFiniteError, make_los
 from cyberdog.rl.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector
 from cyberdog.rl.networks import TanhActor, make_actor, make_critic
-from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, relabel_rewards, sample_batches
+from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, sample_batches
 from cyberdog.rl.trainer import Trainer
-
-OBS, ACT = 50, 12
-
-
-def batch(n: int = 16, reward: float | None = None) -> TensorDict:
-    g = torch.Generator().manual_seed(1)
-    r = torch.randn(n, 1, generator=g) if reward is None else torch.full((n, 1), reward)
-    return TensorDict({"observation": torch.randn(n, OBS, generator=g),
-                       "action": torch.rand(n, ACT, generator=g) * 2 - 1,
-                       "next": {"observation": torch.randn(n, OBS, generator=g), "reward": r,
-                                "done": torch.zeros(n, 1, dtype=torch.bool),
-                                "terminated": torch.zeros(n, 1, dtype=torch.bool),
-                                "energy_J": torch.rand(n, 1, generator=g) * 5}}, [n])
-
-
-def snapshot(agent: Agent) -> dict[str, torch.Tensor]:
-    return {k: v.detach().clone() for k, v in agent.loss.state_dict().items()}
-
-
-def changed(before: dict, after: dict, prefix: str) -> bool:
-    keys = [k for k in before if k.startswith(prefix)]
-    assert keys, prefix
-    return any(not torch.equal(before[k], after[k]) for k in keys)
+from rl_helpers import ACT, OBS, batch, changed, snapshot, tiny_config
 
 
 @pytest.mark.parametrize("algorithm", ["td3", "ddpg"])
@@ -107,19 +84,14 @@ def test_config_validation_names_the_field():
         C.StageConfig(reward="stage3")
 
 
-def _tiny(hidden=(8,)) -> C.ExperimentConfig:
-    cfg = C.load(C.ExperimentConfig, "configs/tiny.yaml")
-    return C.override(cfg, [f"agent.hidden_sizes={list(hidden)}"])
-
-
 def test_corrupt_checkpoint_raises_clear_error(tmp_path):
-    trainer = Trainer(_tiny(), tmp_path / "run", progress=False)
+    trainer = Trainer(tiny_config(), tmp_path / "run", progress=False)
     path = trainer.save()
     trainer.close()  # releases the run folder
     data = path.read_bytes()
     path.write_bytes(data[: len(data) // 2])
     with pytest.raises(CheckpointError, match="corrupt"):
-        Trainer(_tiny(), tmp_path / "run", resume=True, progress=False)
+        Trainer(tiny_config(), tmp_path / "run", resume=True, progress=False)
     path.write_bytes(b"")
     with pytest.raises(CheckpointError, match="corrupt"):
         load_checkpoint(path)
@@ -128,19 +100,19 @@ def test_corrupt_checkpoint_raises_clear_error(tmp_path):
 
 
 def test_mismatched_checkpoint_raises_clear_error(tmp_path):
-    trainer = Trainer(_tiny((8,)), tmp_path / "small", progress=False)
+    trainer = Trainer(tiny_config((8,)), tmp_path / "small", progress=False)
     path = trainer.save()
     trainer.close()  # releases the run folder
     with pytest.raises(CheckpointError, match="does not match the configured networks"):
-        Trainer(_tiny((16,)), tmp_path / "big", init_from=path, progress=False)
+        Trainer(tiny_config((16,)), tmp_path / "big", init_from=path, progress=False)
     # resuming with an edited config.yaml is refused too
-    C.save(_tiny((16,)), tmp_path / "small" / "config.yaml")
+    C.save(tiny_config((16,)), tmp_path / "small" / "config.yaml")
     with pytest.raises(CheckpointError, match="another configuration"):
-        Trainer(_tiny((16,)), tmp_path / "small", resume=True, progress=False)
+        Trainer(tiny_config((16,)), tmp_path / "small", resume=True, progress=False)
 
 
 def test_non_finite_update_stops_training_with_a_diagnostic_checkpoint(tmp_path, monkeypatch):
-    cfg = C.override(_tiny(), ["train.init_random_frames=0", "train.stage1.max_env_steps=100"])
+    cfg = C.override(tiny_config(), ["train.init_random_frames=0", "train.stage1.max_env_steps=100"])
     trainer = Trainer(cfg, tmp_path, stages=(1,), progress=False)
 
     def broken_update(batch, actor=True, targets=None):
@@ -264,7 +236,7 @@ def test_action_penalty_must_be_non_negative():
 def test_a_stage_can_set_its_own_action_penalty(tmp_path):
     """StageConfig.action_l2 and actor_lr replace the agent's for that stage only (None keeps the agent's);
     fresh_actor_optimizer starts the stage with new Adam moments."""
-    cfg = C.override(_tiny(), ["agent.action_l2=0.5", "train.stage2.action_l2=0.0", "train.init_random_frames=0",
+    cfg = C.override(tiny_config(), ["agent.action_l2=0.5", "train.stage2.action_l2=0.0", "train.init_random_frames=0",
                                "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100",
                                "agent.actor_lr=0.001", "train.stage2.actor_lr=0.0002",
                                "train.stage2.fresh_actor_optimizer=true"])
@@ -301,77 +273,6 @@ def test_update_without_actor_trains_the_critics_only():
     assert not changed(before, after, "actor_network_params")
     assert not changed(before, after, "target_qvalue_network_params")
     assert agent.updates == 1 and agent.actor_updates == 0
-
-
-def test_relabel_adds_the_weight_changes_to_each_stored_reward():
-    rb = make_replay_buffer(10, 2)
-    data = batch(6, reward=1.0)
-    data["next", "energy_J"] = torch.arange(6.0).reshape(6, 1)
-    rb.extend(data)
-    relabel_rewards(rb, -0.5, 0.25)
-    assert torch.allclose(rb[:6]["next", "reward"].reshape(-1), 1.25 - 0.5 * torch.arange(6.0))
-    relabel_rewards(make_replay_buffer(10, 2), -0.5)  # an empty buffer is left as it is
-
-
-def test_relabelled_buffer_carries_stage1_experience_with_stage2_rewards(tmp_path):
-    """buffer_between_stages="relabel": stage 2 starts with stage 1's transitions, each reward recomputed with
-    stage 2's energy weight; critic_warmup_updates holds the actor for the stage's first updates."""
-    e2, d2 = -0.05, 40.0
-    cfg = C.override(_tiny(), ["train.buffer_between_stages=relabel", f"train.stage2.energy_weight={e2}",
-                               f"train.stage2.keep_moving_weight={d2}",
-                               "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100",
-                               "train.init_random_frames=0", "train.stage2.critic_warmup_updates=1000"])
-    trainer = Trainer(cfg, tmp_path, progress=False)
-    stored = {}
-    carry = trainer._carry_buffer
-
-    def recording_carry(old, new):
-        stored["before"] = trainer.rb[:len(trainer.rb)].clone()
-        stored["actor"] = snapshot(trainer.agent)
-        carry(old, new)
-        stored["after"] = trainer.rb[:len(trainer.rb)].clone()
-
-    trainer._carry_buffer = recording_carry
-    trainer.run()
-    trainer.logger.close()
-    before, after = stored["before"], stored["after"]
-    assert len(before) == len(after) == 100 and len(trainer.rb) == 200
-    energy = before["next", "energy_J"].reshape(-1)
-    assert (energy > 0).all(), "every stored step carries its energy (J)"
-    per_step = (d2 - 25.0) * cfg.env.control_dt / cfg.env.episode_time  # stage 1 keeps the paper's D = 25
-    assert torch.allclose(after["next", "reward"].reshape(-1),
-                          before["next", "reward"].reshape(-1) + e2 * energy + per_step)
-    assert trainer.c["stage_updates"] > 0
-    assert not changed(stored["actor"], snapshot(trainer.agent), "actor_network_params"), \
-        "within critic_warmup_updates the actor waits"
-    with pytest.raises(ValueError, match="buffer_between_stages"):
-        C.TrainConfig(buffer_between_stages="relabel-all")
-    with pytest.raises(ValueError, match="critic_warmup_updates"):
-        C.StageConfig(critic_warmup_updates=-1)
-    with pytest.raises(ValueError, match="keep_moving_weight"):
-        C.StageConfig(keep_moving_weight=-1.0)
-
-
-def test_relabel_formula_gives_the_reward_the_next_stage_would_have_given():
-    """The same steps (same seed, same actions) under the stage-1 and the stage-2 reward differ by exactly
-    ΔE · energy + ΔD · Ts/Tf, the correction `relabel_rewards` applies."""
-    from cyberdog.envs.cyberdog_env import CyberDogEnv
-    s1 = C.StageConfig()
-    s2 = C.StageConfig(reward="stage2", energy_weight=-0.05, keep_moving_weight=40.0)
-    w1, w2 = C.stage_reward(s1).weights, C.stage_reward(s2).weights
-    assert (w2["energy"], w2["keep_moving"]) == (-0.05, 40.0) and w1["energy"] == 0.0
-    env_cfg = _tiny().env
-    runs = []
-    for stage in (s1, s2):
-        env = CyberDogEnv(config=env_cfg, reward=C.stage_reward(stage))
-        env.reset(seed=3)
-        steps = [env.step(np.full(12, 0.2 * (-1) ** k))[1:5:3] for k in range(5)]
-        env.close()
-        runs.append([(r, info["step_energy_J"]) for r, info in steps])
-    per_step = (40.0 - 25.0) * env_cfg.control_dt / env_cfg.episode_time
-    for (r1, e1), (r2, e2) in zip(*runs):
-        assert e1 == e2 > 0
-        assert r2 == pytest.approx(r1 - 0.05 * e1 + per_step, abs=1e-9)
 
 
 def test_action_smoothness_pulls_consecutive_actions_together():
