@@ -109,6 +109,26 @@ def test_each_stiffness_is_its_own_comparison_and_a_fall_is_reported_in_its_row(
     assert (tmp_path / "stiffness.json").is_file() and (tmp_path / "stiffness_walks.json").is_file()
 
 
+def test_a_row_whose_walks_ran_the_speed_loop_at_its_bound_says_so(tmp_path):
+    """The speed loop is averaged over every walk of a row, the one that fell behind included, and a row at its
+    bound for LOOP_NOTE_PCT % of the time or more says how long; rows without the fields (older files) do not."""
+    rows = [row("cycloid", "s0", 1.4, 1.0, speed_loop_pct=-4.0, speed_loop_at_limit_pct=0.0),
+            row("straight", "s0", 1.4, 1.2, speed_loop_pct=-3.0, speed_loop_at_limit_pct=0.0),
+            row("learned", "s0", 1.4, 0.9, speed_loop_pct=28.0, speed_loop_at_limit_pct=60.0),
+            row("learned", "s0", 1.4, 0.9, speed_loop_pct=30.0, speed_loop_at_limit_pct=90.0, mean_speed_mps=1.3)]
+    rows[-1]["draw"] = 1
+    table = {r["trajectory"]: r for r in st.stiffness_table(rows)}
+    assert table["learned"]["speed_loop_pct"] == pytest.approx(29.0)  # the slow walk, not counted, is in it
+    assert table["learned"]["speed_loop_at_limit_pct"] == pytest.approx(75.0)
+    assert table["cycloid"]["speed_loop_pct"] == pytest.approx(-4.0)
+    md = st.write_stiffness(rows, tmp_path)
+    assert "speed loop at its bound 75 % of the time" in next(x for x in md.splitlines() if x.startswith("| learned"))
+    assert "speed loop" not in next(x for x in md.splitlines() if x.startswith("| cycloid"))
+    old = [{k: v for k, v in r.items() if not k.startswith("speed_loop")} for r in rows]
+    assert "speed loop" not in st.write_stiffness(old, tmp_path / "old")
+    assert math.isnan(st.stiffness_table(old)[0]["speed_loop_pct"])
+
+
 def test_bad_scales_are_refused():
     for bad in ([], [0.0], [1.0, 1.0], [float("nan")]):
         with pytest.raises(ValueError, match="PD stiffness scales"):

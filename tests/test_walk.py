@@ -1,4 +1,4 @@
-"""The robot walks (issue: the robot walks): scripted trot in PyBullet, its metrics, and evaluate.py baselines."""
+"""The robot walks: scripted trot in PyBullet, its metrics, and evaluate.py baselines."""
 import dataclasses
 import json
 

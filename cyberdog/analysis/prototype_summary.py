@@ -75,7 +75,8 @@ def summary_rows(rows: list[dict]) -> list[dict]:
     """Per joint-PD stiffness (`pd_scale`, 1 where a row has none), robot, speed and trajectory: walks, counting
     walks, falls, seeds, and every metric's mean and 95 % CI across seeds; every row but the common trajectories'
     adds the battery saving against the cheaper common trajectory, and the learned path's and the policy's the
-    saving against the searched shape where it was walked."""
+    saving against the searched shape where it was walked; the trot's speed loop (`speed_loop_pct`,
+    `speed_loop_at_limit_pct`) is the mean over all the walks, where the rows carry it."""
     out = []
     for scale in dict.fromkeys(r.get("pd_scale", 1.0) for r in rows):
         out += [{"pd_scale": scale, **r} for r in _summary_at([r for r in rows if r.get("pd_scale", 1.0) == scale])]
@@ -97,6 +98,7 @@ def _summary_at(rows: list[dict]) -> list[dict]:
                        "draws": len(dict.fromkeys(w.get("draw", 0) for w in walks))}
                 for key, value in METRICS.items():
                     row[f"{key}_mean"], row[f"{key}_ci95"] = mean_ci(_seed_means(walks, value))
+                row.update(_speed_loop(walks))
                 if name not in COMMON:
                     savings = battery_savings(rows, robot, v, of=name)
                     row["battery_saving_pct_mean"], row["battery_saving_pct_ci95"] = mean_ci(savings)
@@ -105,6 +107,16 @@ def _summary_at(rows: list[dict]) -> list[dict]:
                         row["battery_vs_searched_pct_mean"], row["battery_vs_searched_pct_ci95"] = mean_ci(
                             battery_savings(rows, robot, v, against=(REFERENCE,), of=name))
                 out.append(row)
+    return out
+
+
+def _speed_loop(walks: list[dict]) -> dict:
+    """The trot's speed loop over all `walks` (counted or not: a walk that fell behind is where it ran out): the
+    mean stride it added, % of the command, and the mean share of a walk it spent at its bound, %."""
+    out = {}
+    for key in ("speed_loop_pct", "speed_loop_at_limit_pct"):
+        vals = [w[key] for w in walks if math.isfinite(w.get(key, math.nan))]
+        out[key] = sum(vals) / len(vals) if vals else math.nan
     return out
 
 

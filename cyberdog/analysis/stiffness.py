@@ -22,6 +22,7 @@ from cyberdog.analysis.prototype_summary import COMMON, summary_rows
 from cyberdog.analysis.report import json_safe, markdown_table, write_rows
 
 DEFAULT_SCALES = (0.7, 1.0, 1.4)  # × the joint PD's stiffness: 30 % softer, as configured, 40 % stiffer
+LOOP_NOTE_PCT = 10.0  # % of a walk with the trot's speed loop at its bound from which a cell says so
 
 
 def check_scales(scales) -> tuple[float, ...]:
@@ -54,6 +55,8 @@ def stiffness_table(rows: list[dict], robot: str = "hardware") -> list[dict]:
         for k in keys:
             row[f"{k}_mean"] = r.get(f"{k}_mean", math.nan)
             row[f"{k}_ci95"] = r.get(f"{k}_ci95", math.nan)
+        row["speed_loop_pct"] = r.get("speed_loop_pct", math.nan)  # % of the command, mean over the walks
+        row["speed_loop_at_limit_pct"] = r.get("speed_loop_at_limit_pct", math.nan)
         out.append(row)
     return out
 
@@ -67,7 +70,9 @@ def _cell(row: dict, key: str) -> str:
 
 def stiffness_markdown(table: list[dict]) -> str:
     """One line per trajectory and stiffness, one column per speed: the battery saving against the cheaper common
-    trajectory (mean ± 95 % CI across seeds) and, where any walk did not count, how many of how many fell."""
+    trajectory (mean ± 95 % CI across seeds) and, where any walk did not count, how many of how many fell; where
+    the walks ran the trot's speed loop at its bound for `LOOP_NOTE_PCT` % of the time or more, how long (the
+    walk needed a longer stride than the loop may add: it falls behind the command)."""
     speeds = sorted(dict.fromkeys(r["speed_mps"] for r in table))
     index = {(r["trajectory"], r["pd_scale"], r["speed_mps"]): r for r in table}
     lines = []
@@ -86,8 +91,10 @@ def stiffness_markdown(table: list[dict]) -> str:
                 else:
                     saving = "–"
                 missed = r["walks"] - r["counted"]
-                cells[f"{v:g} m/s"] = saving + (f" ({missed} of {r['walks']} did not count, {r['fell']} fell)"
-                                                if missed else "")
+                notes = [f"{missed} of {r['walks']} did not count, {r['fell']} fell"] if missed else []
+                if r.get("speed_loop_at_limit_pct", math.nan) >= LOOP_NOTE_PCT:
+                    notes.append(f"speed loop at its bound {r['speed_loop_at_limit_pct']:.0f} % of the time")
+                cells[f"{v:g} m/s"] = saving + (f" ({'; '.join(notes)})" if notes else "")
             lines.append({"trajectory": name, "PD stiffness": f"{scale:g}x", **cells})
     return markdown_table(lines)
 
@@ -106,5 +113,5 @@ def write_stiffness(rows: list[dict], folder: str | Path) -> str:
     return md
 
 
-__all__ = ["DEFAULT_SCALES", "check_scales", "run_stiffness", "stiffness_markdown", "stiffness_table",
+__all__ = ["DEFAULT_SCALES", "LOOP_NOTE_PCT", "check_scales", "run_stiffness", "stiffness_markdown", "stiffness_table",
            "write_stiffness"]

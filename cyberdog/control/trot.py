@@ -110,6 +110,7 @@ class TrotController:
         self.body_weight = self.robot.total_mass * cfg.sim.gravity  # N
         self.speed = cfg.gait.speed
         self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
+        self.speed_correction_limit = 0.0  # m/s, ± the integral's bound at the last command (0: none yet)
         self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (see reset)
         self.foot_offsets: list[tuple[float, float, float]] | None = None  # m, see set_foot_offsets
         self.foot_offset_rates: list[tuple[float, float, float]] | None = None  # m/s
@@ -135,6 +136,7 @@ class TrotController:
     def reset(self) -> None:
         self.pid.reset()
         self.speed_correction = 0.0
+        self.speed_correction_limit = 0.0  # m/s, ± the speed integral's bound at the last command
         self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (the unshifted one went)
         self.foot_offsets = self.foot_offset_rates = self.foot_offset_time = None
         self.last_foot_targets = self.last_foot_offsets = None
@@ -214,6 +216,7 @@ class TrotController:
                 self.cfg.sim.controller_dt if periods == 1 else periods * self.cfg.sim.controller_dt)
             correction = -limit if -limit > correction else correction  # np.clip on a scalar
             self.speed_correction = float(limit if limit < correction else correction)
+            self.speed_correction_limit = limit  # m/s, what the integral may add or remove at this command
         S = (v + self.speed_correction) * self._stance_time
         # heading set-point turns back toward the path (y = 0); positive yaw error → lengthen left steps
         skew = c.heading_gain * (body.yaw + c.lateral_gain * body.lateral_offset)

@@ -40,6 +40,10 @@ class WalkResult:
     score: float | None = None  # sum of the env's rewards, for a policy rollout (None for a scripted walk)
     dropped_shifts: int = 0  # leg-periods in which a shifted foot target was out of reach and the unshifted
     #                          one was sent instead (a learned path's or a policy's shift the robot never got)
+    speed_loop_share: float = float("nan")  # the trot's speed integral, mean over the walk, / the command: what
+    #                          the speed loop added to the stride (+0.25: strides 25 % longer than v·stance time)
+    speed_loop_at_limit: float = float("nan")  # share of the walk's periods with the integral at its bound
+    #                          (ControllerConfig.max_speed_correction): a walk that needs more falls behind
 
     @property
     def reached(self) -> bool:
@@ -108,7 +112,11 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
     if walker.gait_metrics and cycles > 0 and walker.slip_xy[first_sample:]:
         slip = float(en.foot_slip(np.reshape(walker.slip_xy[first_sample:], (-1, 4, 2)),
                                   np.reshape(walker.slip_contacts[first_sample:], (-1, 4))).mean() / cycles)
+    loop = walker.speed_loop.view(since)  # (correction, bound) per driven period, m/s; none in torque mode
+    at_limit = (np.abs(loop[:, 0]) >= loop[:, 1] - 1e-9) & (loop[:, 1] > 0) if len(loop) else None
     return WalkResult(
+        speed_loop_share=float(loop[:, 0].mean() / speed_command) if len(loop) and speed_command > 0 else float("nan"),
+        speed_loop_at_limit=float(at_limit.mean()) if at_limit is not None else float("nan"),
         speed_command=float(speed_command), duration=n * dt, fell=bool(fell),
         mean_speed=float(np.mean(vx[n // 2:])) if n else 0.0,
         lateral_drift=float(abs(end[1] - start[1])),

@@ -160,6 +160,9 @@ class Walker:
         self.q_rows = _Rows((12,))  # joint angles, rad, at the reset and after each step (`joint_speeds`)
         self.q_rows.append(self.reading.q)
         self.body = _Rows((5,))  # body state at the step start: forward speed (m/s), roll, pitch, yaw (rad), z (m)
+        # with body_trace, the trot's speed integral per driven period after its command: (correction, its bound),
+        # m/s: what the speed loop added to the commanded stride and how near its limit it ran (`walk_result`)
+        self.speed_loop = _Rows((2,))
         self._traces: dict[str, _Rows] = {}
         self.non_foot_contacts: set[str] = set()
         self.slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_PERIOD
@@ -244,6 +247,8 @@ class Walker:
                 q, dq, v_world = sensing.read(k, s, self.robot.foot_contacts)
                 feedback = self.body_feedback(s, v_world)
             command = self.controller.command(k * self.dt, q, feedback)
+            if self.body_trace:
+                self.speed_loop.append((self.controller.speed_correction, self.controller.speed_correction_limit))
         stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
         # the latency holds the whole command (targets, feedforward, the added torques); the drivers' PD then
         # acts on the joint state read now (q, dq of this period)
