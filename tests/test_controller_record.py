@@ -1,13 +1,15 @@
-"""A learned path records the trot controller it was learned under, and an evaluation that walks it under
-another says so: a path from a policy trained with sagittal foot placement need not save without it."""
+"""A learned path records the trot controller it was learned under; a comparison walks every trajectory under
+that trot unless the command line chooses another, and then says so: a path from a policy trained with
+sagittal foot placement need not save without it."""
 import dataclasses
 from types import SimpleNamespace
 
 from conftest import commanded, learned_set
 from cyberdog import config as C
 from cyberdog.analysis.extract import rollout_provenance
-from cyberdog.core.learned_set import LearnedSet
-from cyberdog.evaluation.learned import controller_note, note_controllers
+from cyberdog.core.learned_set import LearnedPath, LearnedSet
+from cyberdog.evaluation.trot import (controller_note, note_controllers, recorded_trot, walk_under_recorded_trot,
+                                      with_trot)
 
 PLACED = dataclasses.replace(C.ControllerConfig(), sagittal_placement_gain=0.1)
 
@@ -53,3 +55,81 @@ def test_a_path_without_a_record_or_with_the_same_controller_gets_no_note():
     note = controller_note(other, C.ControllerConfig())
     assert "gravity_compensation False recorded, True here" in note
     assert "speed_gain 2 recorded, 1 here" in note
+
+
+def _placed_set(*seeds: int) -> LearnedSet:
+    paths = {}
+    for seed in seeds:
+        path = commanded(1.0, 0.01, seed=seed)
+        path.provenance["controller"] = dataclasses.asdict(PLACED)
+        paths[f"seed{seed}"] = [path]
+    return learned_set(**paths)
+
+
+def _args(*overrides: str, config=None, no_recorded_trot=False) -> SimpleNamespace:
+    return SimpleNamespace(overrides=list(overrides), config=config, no_recorded_trot=no_recorded_trot)
+
+
+def test_a_comparison_walks_under_the_trot_its_learned_paths_share():
+    logged = []
+    walked = walk_under_recorded_trot(_args("pid.kp=[84,84,84]"), C.WalkConfig(), _placed_set(0, 3), logged.append)
+    assert walked.controller == PLACED  # every trajectory of the comparison walks the paths' trot
+    assert walked.pid == C.WalkConfig().pid and walked.gait == C.WalkConfig().gait  # nothing else changes
+    assert len(logged) == 1 and "controller.sagittal_placement_gain=0.1" in logged[0]
+    assert "--no-recorded-trot" in logged[0]
+    # already walked under it: the config as it is, nothing said
+    placed = dataclasses.replace(C.WalkConfig(), controller=PLACED)
+    assert walk_under_recorded_trot(_args(), placed, _placed_set(0), logged.append) is placed
+    assert len(logged) == 1
+
+
+def test_a_trot_the_command_line_chose_wins_and_the_difference_is_noted(tmp_path):
+    yaml_with_trot = tmp_path / "walk.yaml"
+    yaml_with_trot.write_text("controller:\n  speed_gain: 1.0\n")
+    yaml_without = tmp_path / "plain.yaml"
+    yaml_without.write_text("pid:\n  kp: [60, 60, 60]\n")
+    for args in (_args("controller.max_speed_correction=0.3"), _args(no_recorded_trot=True),
+                 _args(config=yaml_with_trot)):
+        logged = []
+        walked = walk_under_recorded_trot(args, C.WalkConfig(), _placed_set(0), logged.append)
+        assert walked.controller == C.ControllerConfig()
+        assert len(logged) == 1 and "sagittal_placement_gain 0.1 recorded, 0 here" in logged[0]
+    # a config file without a controller section does not choose the trot
+    assert walk_under_recorded_trot(_args(config=yaml_without), C.WalkConfig(), _placed_set(0),
+                                    print).controller == PLACED
+
+
+def test_paths_of_different_trots_walk_as_configured_each_with_its_note():
+    mixed = _placed_set(0)
+    mixed.add(LearnedPath("seed1", commanded(1.0, 0.0, seed=1)))  # recorded without a trot: walked as configured
+    logged = []
+    assert recorded_trot(mixed) is None
+    assert walk_under_recorded_trot(_args(), C.WalkConfig(), mixed, logged.append) == C.WalkConfig()
+    assert len(logged) == 1 and "seed0" in logged[0]
+    # a record holding a field this ControllerConfig no longer has, and lacking a newer one
+    old = {k: v for k, v in dataclasses.asdict(PLACED).items() if k != "speed_ramp_time"}
+    cfg = with_trot(C.WalkConfig(), {**old, "retired_gain": 2.0})
+    assert cfg.controller == PLACED
+
+
+def test_the_prototype_run_walks_every_trajectory_under_the_learned_trot(tmp_path, monkeypatch, capsys):
+    """End to end: the common trajectory and the learned path of a `evaluate.py prototype` run both build their
+    trot controller with the paths' recorded foot placement, and the run's config.yaml says so."""
+    import evaluate
+    from cyberdog.control import trot as trot_module
+
+    _placed_set(0).save(tmp_path / "learned")
+    built = []
+    original = trot_module.TrotController.__init__
+
+    def recording(self, cfg, *args, **kwargs):
+        original(self, cfg, *args, **kwargs)
+        built.append(cfg.controller)
+    monkeypatch.setattr(trot_module.TrotController, "__init__", recording)
+    out = tmp_path / "proto"
+    assert evaluate.main(["prototype", "--learned", str(tmp_path / "learned"), "--speeds", "1.0",
+                          "--prototype-distance", "0.2", "--prototype-run-up", "0", "--prototype-modes", "ideal",
+                          "--no-prototype-reference", "--workers", "1", "--out", str(out)]) == 0
+    assert "recorded under the trot controller controller.sagittal_placement_gain=0.1" in capsys.readouterr().out
+    assert len(built) >= 3 and all(c == PLACED for c in built)  # learned, cycloid, straight line
+    assert C.load(C.WalkConfig, out / "config.yaml").controller == PLACED

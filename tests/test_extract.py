@@ -244,11 +244,25 @@ def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys
                           "--speed-tolerance", "0.3", "--replay-attempts", "1", "--candidates", "1",
                           "--set", "controller.sagittal_placement_gain=0.1", "--out", str(tmp_path / "placed")]) == 0
     out = capsys.readouterr().out
-    assert "the replay check walks another trot than the policy's" in out
+    assert "recorded under another trot controller" in out
     assert "sagittal_placement_gain 0 recorded, 0.1 here" in out
     prov = CommandedPath.load(tmp_path / "placed" / "learned" / "seed0_1mps.json").provenance
     assert prov["controller"]["sagittal_placement_gain"] == 0.0
     assert prov["replay_check"]["controller"]["sagittal_placement_gain"] == 0.1
+    # a policy trained under foot placement: without a --set its replay check walks the policy's own trot
+    placed_walk = C.replace(C.EnvConfig().walk, controller=C.replace(C.ControllerConfig(),
+                                                                     sagittal_placement_gain=0.2))
+    (tmp_path / "placed_policy").mkdir()
+    _zero_actor_file(tmp_path / "placed_policy" / "stage2_actor.pt", action_mode="foot",
+                     target_speed_range=(1.0, 1.4), walk=placed_walk)
+    checks = iter([ReplayCheck("ok", 30.0)])
+    assert evaluate.main(["extract", "--policy", str(tmp_path / "placed_policy"), "--speeds", "1.0",
+                          "--rollout-duration", "3.0", "--speed-tolerance", "0.3", "--replay-attempts", "1",
+                          "--candidates", "1", "--out", str(tmp_path / "own")]) == 0
+    assert "recorded under the trot controller controller.sagittal_placement_gain=0.2" in capsys.readouterr().out
+    prov = CommandedPath.load(tmp_path / "own" / "learned" / "seed0_1mps.json").provenance
+    assert prov["controller"]["sagittal_placement_gain"] == 0.2
+    assert prov["replay_check"]["controller"]["sagittal_placement_gain"] == 0.2
 
 
 def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, capsys, monkeypatch):

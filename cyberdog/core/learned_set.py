@@ -19,8 +19,9 @@ its provenance (policy, seed, speed, extraction options) and its file. Pure nump
 
 A path is recorded under one trot controller (the policy's: `ControllerConfig`, e.g. with or without sagittal
 foot placement), and a path learned under one controller need not walk the same under another. Extraction
-writes the controller into the provenance (`recorded_controller`), so that an evaluation that walks the path
-under another can say so (`cyberdog.evaluation.learned.note_controllers`).
+writes the controller into the provenance (`recorded_controller`), so that an evaluation walks every trajectory
+of a comparison under the paths' own by default, and says so where it walks them under another
+(`cyberdog.evaluation.trot`).
 """
 from __future__ import annotations
 

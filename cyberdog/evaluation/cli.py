@@ -130,6 +130,11 @@ def _output_options() -> argparse.ArgumentParser:
                    help="YAML walk config (WalkConfig sections: robot, actuator, sim, gait, pid, controller, "
                         "energy); default: the built-in defaults (paper lift height 0.15 m)")
     add_override_option(g, "gait.lift_height=0.1 --set gait.straight_shape=trapezoid")
+    g.add_argument("--no-recorded-trot", action="store_true",
+                   help="walk under the config's trot controller even where the learned paths (or the policies "
+                        "extracted) were recorded under another; by default every trajectory of a comparison walks "
+                        "under the trot its learned paths were recorded under, unless --set controller.* or a "
+                        "--config controller section chooses one")
     g.add_argument("--out", type=Path, default=None, help="output folder (default runs/evaluate-<time>)")
     g.add_argument("--force", action="store_true",
                    help="write into an --out folder that already holds results: the files earlier evaluate.py runs "

@@ -17,6 +17,7 @@ from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
+from cyberdog.evaluation.trot import trot_for
 from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -170,11 +171,10 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
     the prototype's) is the path. The candidates and the rejected paths are in its provenance; none replaying
     is an error."""
     rejected, passed = [], []
-    check_controller = (cfg or C.WalkConfig()).controller  # the trot the replay check walks
-    if args.replay_check:
-        note = controller_note(actor.config.env.walk.controller, check_controller)
-        if note:
-            log(f"  note: the replay check walks another trot than the policy's: {note}")
+    # the replay check walks the policy's trot, unless the command line chose one (then a note says so)
+    cfg = trot_for(args, cfg or C.WalkConfig(), actor.config.env.walk.controller if args.replay_check else None,
+                   f"the policy {path}", lambda m: log(f"  {m}"))
+    check_controller = cfg.controller
     for k in range(args.replay_attempts if args.replay_check else 1):
         r = _rollout(actor, path, speed, args, args.rollout_seed + k, log)
         for cycle in dict.fromkeys((args.cycle, *CYCLE_CHOICES)):
@@ -219,35 +219,6 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         log(f"  kept the {ex.path.provenance.get('cycle', args.cycle)} path of env seed "
             f"{ex.path.provenance['rollout_seed']}, the cheapest of {len(passed)} candidates")
     return ex
-
-
-def controller_note(recorded: C.ControllerConfig | dict | None, walked: C.ControllerConfig) -> str:
-    """Where the trot controller `walked` differs from `recorded` (a path's, a policy's), as a sentence with the
-    `--set` that walks under the recorded one; "" where they agree or nothing was recorded."""
-    if recorded is None:
-        return ""
-    rec = recorded if isinstance(recorded, dict) else dataclasses.asdict(recorded)
-    now = dataclasses.asdict(walked)
-    diff = {k: (v, now[k]) for k, v in rec.items() if k in now and now[k] != v}
-    if not diff:
-        return ""
-    what = ", ".join(f"{k} {r:g} recorded, {w:g} here" if isinstance(r, (int, float)) and not isinstance(r, bool)
-                     else f"{k} {r} recorded, {w} here" for k, (r, w) in diff.items())
-    sets = " ".join(f"controller.{k}={r}" for k, (r, _) in diff.items())
-    return f"{what} (--set {sets} walks every trajectory under the recorded one)"
-
-
-def note_controllers(learned: LearnedSet, cfg: C.WalkConfig, log=print) -> list[str]:
-    """Log, and return, one note per learned path recorded under another trot controller than `cfg`'s (e.g. a
-    policy trained with sagittal foot placement, walked here without it): its saving may not carry over."""
-    notes = []
-    for p in learned.paths():
-        note = controller_note(p.recorded_controller, cfg.controller)
-        if note:
-            notes.append(f"note: {p.label}'s path ({p.file_name()}) was recorded under another trot controller: "
-                         f"{note}")
-            log(notes[-1])
-    return notes
 
 
 def check_learned_inputs(args) -> None:
@@ -339,7 +310,6 @@ def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C
         learned = load_learned(files)
         if files == [DEFAULT_LEARNED_BATTERY]:
             folder = out / DEFAULT_LEARNED_BATTERY.name
-    note_controllers(learned, cfg or C.WalkConfig(), log)
     learned.save(folder, overwrite=False)
     return learned
 

@@ -1,0 +1,119 @@
+"""The trot controller a comparison walks under.
+
+A learned path is the shift of the trot controller's foot targets that a policy commanded under one trot
+(`ControllerConfig`: foot placement, the speed loop's bound, ...), and extraction writes that trot into the
+path's provenance (`LearnedPath.recorded_controller`). The path and its trot are one gait: walked under another
+trot, a path need not save what it saved. So by default an evaluation walks every trajectory of a comparison,
+the learned paths, the common trajectories and the searched shape alike, under the trot the learned paths were
+recorded under, and says so; the comparison stays at matched conditions, because every row walks the same trot.
+A user who sets the trot (`--set controller.FIELD=VALUE`, a `controller:` section in `--config`) or asks for the
+config's own (`--no-recorded-trot`) gets it, and a note for every path recorded under another.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+from cyberdog import config as C
+from cyberdog.core.learned_set import LearnedSet
+
+
+def controller_note(recorded: C.ControllerConfig | dict | None, walked: C.ControllerConfig) -> str:
+    """Where the trot controller `walked` differs from `recorded` (a path's, a policy's), as a sentence with the
+    `--set` that walks under the recorded one; "" where they agree or nothing was recorded."""
+    if recorded is None:
+        return ""
+    diff = _differences(recorded, walked)
+    if not diff:
+        return ""
+    what = ", ".join(f"{k} {r:g} recorded, {w:g} here" if isinstance(r, (int, float)) and not isinstance(r, bool)
+                     else f"{k} {r} recorded, {w} here" for k, (r, w) in diff.items())
+    return f"{what} (--set {_assignments(diff)} walks every trajectory under the recorded one)"
+
+
+def note_controllers(learned: LearnedSet, cfg: C.WalkConfig, log=print) -> list[str]:
+    """Log, and return, one note per learned path recorded under another trot controller than `cfg`'s (e.g. a
+    policy trained with sagittal foot placement, walked here without it): its saving may not carry over."""
+    notes = []
+    for p in learned.paths():
+        note = controller_note(p.recorded_controller, cfg.controller)
+        if note:
+            notes.append(f"note: {p.label}'s path ({p.file_name()}) was recorded under another trot controller: "
+                         f"{note}")
+            log(notes[-1])
+    return notes
+
+
+def user_sets_trot(args) -> bool:
+    """Whether the command line chose the trot: --no-recorded-trot, a --set controller.FIELD=VALUE, or a
+    --config file with a `controller` section."""
+    if getattr(args, "no_recorded_trot", False):
+        return True
+    if any(str(item).split("=", 1)[0].strip().startswith("controller.") for item in getattr(args, "overrides", [])):
+        return True
+    path = getattr(args, "config", None)
+    if path is None:
+        return False
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except (OSError, yaml.YAMLError):
+        return False  # the config's own loading reports it
+    return isinstance(data, dict) and "controller" in data
+
+
+def recorded_trot(learned: LearnedSet) -> dict | None:
+    """The trot controller every path of `learned` was recorded under; None where a path records none or two
+    paths record different ones (each is then walked as configured, with a note)."""
+    records = [p.recorded_controller for p in learned.paths()]
+    if not records or any(r is None for r in records):
+        return None
+    first = records[0]
+    return dict(first) if all(r == first for r in records[1:]) else None
+
+
+def with_trot(cfg: C.WalkConfig, recorded: dict) -> C.WalkConfig:
+    """`cfg` with its trot controller's fields set to `recorded`'s (fields the record lacks keep `cfg`'s; fields
+    `ControllerConfig` no longer has are ignored)."""
+    names = {f.name for f in dataclasses.fields(C.ControllerConfig)}
+    changes = {k: v for k, v in recorded.items() if k in names}
+    return dataclasses.replace(cfg, controller=dataclasses.replace(cfg.controller, **changes))
+
+
+def trot_for(args, cfg: C.WalkConfig, recorded: C.ControllerConfig | dict | None, what: str,
+             log=print) -> C.WalkConfig:
+    """The walk config to walk `what` (a learned set, a policy) under: `cfg` with the `recorded` trot, unless the
+    command line chose the trot or nothing was recorded. Logs the change, or the note where the user's trot
+    differs from the recorded one."""
+    if recorded is None:
+        return cfg
+    record = recorded if isinstance(recorded, dict) else dataclasses.asdict(recorded)
+    diff = _differences(record, cfg.controller)
+    if not diff:
+        return cfg
+    if user_sets_trot(args):
+        log(f"note: {what}: recorded under another trot controller: {controller_note(record, cfg.controller)}")
+        return cfg
+    log(f"{what}: recorded under the trot controller {_assignments(diff)}, and every trajectory walks under it "
+        f"here (--no-recorded-trot walks the config's own)")
+    return with_trot(cfg, record)
+
+
+def walk_under_recorded_trot(args, cfg: C.WalkConfig, learned: LearnedSet, log=print) -> C.WalkConfig:
+    """The walk config of a comparison of `learned`: under the trot its paths share (`recorded_trot`, `trot_for`);
+    where they do not share one, `cfg` as it is, with a note for each path recorded under another."""
+    shared = recorded_trot(learned)
+    if shared is None:
+        note_controllers(learned, cfg, log)
+        return cfg
+    return trot_for(args, cfg, shared, "the learned paths", log)
+
+
+def _differences(recorded: C.ControllerConfig | dict, walked: C.ControllerConfig) -> dict:
+    rec = recorded if isinstance(recorded, dict) else dataclasses.asdict(recorded)
+    now = dataclasses.asdict(walked)
+    return {k: (v, now[k]) for k, v in rec.items() if k in now and now[k] != v}
+
+
+def _assignments(diff: dict) -> str:
+    return " ".join(f"controller.{k}={r}" for k, (r, _) in diff.items())
