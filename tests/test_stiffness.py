@@ -109,6 +109,28 @@ def test_each_stiffness_is_its_own_comparison_and_a_fall_is_reported_in_its_row(
     assert (tmp_path / "stiffness.json").is_file() and (tmp_path / "stiffness_walks.json").is_file()
 
 
+def test_each_seed_has_its_own_saving_and_says_why_a_walk_did_not_count(tmp_path):
+    """The per-seed table: a seed's saving at one stiffness is its own (not the mean over seeds), its walks that
+    did not count say why (fell, off the band at their speed), and with the searched shape walked each seed
+    has a row against it."""
+    rows = [row("cycloid", "s0", 1.4, 1.0), row("straight", "s0", 1.4, 1.2), row("searched", "s0", 1.4, 0.95),
+            row("learned", "s0", 1.4, 0.8),
+            row("cycloid", "s1", 1.4, 1.0), row("straight", "s1", 1.4, 1.1), row("searched", "s1", 1.4, 0.95),
+            row("learned", "s1", 1.4, 0.5, mean_speed_mps=0.9)]  # off the ±5 % band of 1.0 m/s
+    fell = row("learned", "s1", 1.4, 0.5, fell=True, reached=False, distance_m=4.0)
+    fell["draw"] = 1
+    rows.append(fell)
+    table = {(r["trajectory"], r["seed"]): r for r in st.seed_table(rows)}
+    assert set(table) == {("learned", "s0"), ("learned", "s1"), ("learned against the searched shape", "s0"),
+                          ("learned against the searched shape", "s1")}  # no row for the common or searched ones
+    assert table["learned", "s0"]["1 m/s"] == "20.0 %"
+    assert table["learned against the searched shape", "s0"]["1 m/s"] == f"+{100 * (1 - 0.8 / 0.95):.1f} %"
+    assert table["learned", "s1"]["1 m/s"] == "– (off the band at 0.90 m/s; fell)"
+    md = st.write_stiffness(rows, tmp_path)
+    assert "| 1.4x | learned | s1 | – (off the band at 0.90 m/s; fell) |" in md
+    assert (tmp_path / "stiffness_seeds.csv").is_file()
+
+
 def test_a_row_whose_walks_ran_the_speed_loop_at_its_bound_says_so(tmp_path):
     """The speed loop is averaged over every walk of a row, the one that fell behind included, and a row at its
     bound for LOOP_NOTE_PCT % of the time or more says how long; rows without the fields (older files) do not."""

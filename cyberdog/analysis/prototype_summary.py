@@ -56,8 +56,14 @@ def battery_savings(rows: list[dict], robot: str, speed: float, against: tuple[s
     """Per seed, the battery saving (%) of the walks named `of` (the learned path; also the policy or the
     searched shape) against the cheaper counting trajectory of `against` (default: the common ones) on the same
     robot draw at the same lift, averaged over the draws where both counted."""
+    return list(battery_savings_by_seed(rows, robot, speed, against, of).values())
+
+
+def battery_savings_by_seed(rows: list[dict], robot: str, speed: float, against: tuple[str, ...] = COMMON,
+                            of: str = "learned") -> dict:
+    """`battery_savings` by seed label: {seed: saving %}, seeds without a draw where both counted left out."""
     here = [r for r in rows if r["robot"] == robot and r["speed_mps"] == speed]
-    out = []
+    out = {}
     for seed in dict.fromkeys(r.get("seed", "") for r in here if r["trajectory"] == of):
         per_draw = []
         for learned in (r for r in here if r["trajectory"] == of and r.get("seed", "") == seed):
@@ -67,7 +73,7 @@ def battery_savings(rows: list[dict], robot: str, speed: float, against: tuple[s
             if others and walk_counts(learned):
                 per_draw.append(100.0 * (1.0 - METRICS["battery_pct_per_100m"](learned) / min(others)))
         if per_draw:
-            out.append(sum(per_draw) / len(per_draw))
+            out[seed] = sum(per_draw) / len(per_draw)
     return out
 
 
@@ -147,4 +153,5 @@ def summary_markdown(summary: list[dict], robot: str) -> str:
     return markdown_table(shown)
 
 
-__all__ = ["COMMON", "METRICS", "REFERENCE", "battery_savings", "summary_markdown", "summary_rows", "walk_counts"]
+__all__ = ["COMMON", "METRICS", "REFERENCE", "battery_savings", "battery_savings_by_seed", "summary_markdown",
+           "summary_rows", "walk_counts"]
