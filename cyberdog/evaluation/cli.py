@@ -76,7 +76,8 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                   "by each of --pd-scales (kp x s, kd x sqrt(s), the damping ratio kept): the learned paths, the "
                   "common trajectories at their lift, the searched shape and, with --closed-loop, the policies "
                   "themselves; the battery saving against the cheaper common trajectory at each stiffness, mean "
-                  "± 95 % CI across seeds, falls counted. Writes stiffness.{csv,json,md}, each seed's saving in stiffness_seeds.{csv,json,md}, and stiffness_walks.json."),
+                  "± 95 % CI across seeds, falls counted. Writes stiffness.{csv,json,md}, each seed's saving in "
+                  "stiffness_seeds.{csv,json,md}, and stiffness_walks.json."),
     "figures": ("redraw Figures 4, 6, 7, 10, 13 from saved results",
                 "Figures 4, 6, 7, 10 and 13 from saved results (--from DIR: a folder written by `all` or "
                 "`compare`); by default they are written beside those results."),
