@@ -173,7 +173,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
     rejected, passed = [], []
     # the replay check walks the policy's trot, unless the command line chose one (then a note says so)
     cfg = trot_for(args, cfg or C.WalkConfig(), actor.config.env.walk.controller if args.replay_check else None,
-                   f"the policy {path}", lambda m: log(f"  {m}"))
+                   f"the policy {path}", lambda m: log(f"  {m}"), walked="its replay check walks under it")
     check_controller = cfg.controller
     for k in range(args.replay_attempts if args.replay_check else 1):
         r = _rollout(actor, path, speed, args, args.rollout_seed + k, log)

@@ -80,11 +80,11 @@ def with_trot(cfg: C.WalkConfig, recorded: dict) -> C.WalkConfig:
     return dataclasses.replace(cfg, controller=dataclasses.replace(cfg.controller, **changes))
 
 
-def trot_for(args, cfg: C.WalkConfig, recorded: C.ControllerConfig | dict | None, what: str,
-             log=print) -> C.WalkConfig:
+def trot_for(args, cfg: C.WalkConfig, recorded: C.ControllerConfig | dict | None, what: str, log=print,
+             walked: str = "every trajectory walks under it here") -> C.WalkConfig:
     """The walk config to walk `what` (a learned set, a policy) under: `cfg` with the `recorded` trot, unless the
     command line chose the trot or nothing was recorded. Logs the change, or the note where the user's trot
-    differs from the recorded one."""
+    differs from the recorded one (`walked`: what walks under it, in the log's words)."""
     if recorded is None:
         return cfg
     record = recorded if isinstance(recorded, dict) else dataclasses.asdict(recorded)
@@ -94,8 +94,8 @@ def trot_for(args, cfg: C.WalkConfig, recorded: C.ControllerConfig | dict | None
     if user_sets_trot(args):
         log(f"note: {what}: recorded under another trot controller: {controller_note(record, cfg.controller)}")
         return cfg
-    log(f"{what}: recorded under the trot controller {_assignments(diff)}, and every trajectory walks under it "
-        f"here (--no-recorded-trot walks the config's own)")
+    log(f"{what}: recorded under the trot controller {_assignments(diff)}, and {walked} (--no-recorded-trot walks "
+        f"the config's own)")
     return with_trot(cfg, record)
 
 
