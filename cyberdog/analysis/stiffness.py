@@ -113,6 +113,9 @@ def seed_table(rows: list[dict], robot: str = "hardware") -> list[dict]:
         names = [n for n in dict.fromkeys(r["trajectory"] for r in at) if n not in COMMON and n != REFERENCE]
         searched = any(r["trajectory"] == REFERENCE for r in at)
         for name in names:
+            saving = {v: battery_savings_by_seed(at, robot, v, of=name) for v in speeds}  # seed -> %, per speed
+            versus_searched = {v: battery_savings_by_seed(at, robot, v, against=(REFERENCE,), of=name)
+                               for v in speeds} if searched else {}
             for seed in dict.fromkeys(r.get("seed", "") for r in at if r["trajectory"] == name):
                 row = {"PD stiffness": f"{scale:g}x", "trajectory": name, "seed": seed}
                 versus = {"PD stiffness": f"{scale:g}x", "trajectory": f"{name} against the searched shape",
@@ -122,12 +125,10 @@ def seed_table(rows: list[dict], robot: str = "hardware") -> list[dict]:
                              and r["speed_mps"] == v]
                     missed = [_what_became(w) for w in walks if not walk_counts(w)]
                     note = f" ({'; '.join(missed)})" if missed else ""
-                    saving = battery_savings_by_seed(at, robot, v, of=name).get(seed, math.nan)
-                    row[f"{v:g} m/s"] = _percent(saving) + note if walks else ""
+                    row[f"{v:g} m/s"] = _percent(saving[v].get(seed, math.nan)) + note if walks else ""
                     if searched:
-                        saving = battery_savings_by_seed(at, robot, v, against=(REFERENCE,), of=name).get(seed,
-                                                                                                        math.nan)
-                        versus[f"{v:g} m/s"] = _percent(saving, sign=True) if walks else ""
+                        versus[f"{v:g} m/s"] = _percent(versus_searched[v].get(seed, math.nan), sign=True) \
+                            if walks else ""
                 out += [row, versus] if searched else [row]
     return out
 
