@@ -4,12 +4,13 @@ sagittal foot placement need not save without it."""
 import dataclasses
 from types import SimpleNamespace
 
-from conftest import commanded, learned_set
+from conftest import ROOT, commanded, learned_set
 from cyberdog import config as C
 from cyberdog.analysis.extract import rollout_provenance
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
-from cyberdog.evaluation.trot import (controller_note, note_controllers, recorded_trot, walk_under_recorded_trot,
-                                      with_trot)
+from cyberdog.core.trajectories import SampledTrajectory
+from cyberdog.evaluation.trot import (controller_note, note_controllers, note_searched_trot, recorded_trot,
+                                      searched_trot, walk_under_recorded_trot, with_trot)
 
 PLACED = dataclasses.replace(C.ControllerConfig(), sagittal_placement_gain=0.1)
 
@@ -133,3 +134,41 @@ def test_the_prototype_run_walks_every_trajectory_under_the_learned_trot(tmp_pat
     assert "recorded under the trot controller controller.sagittal_placement_gain=0.1" in capsys.readouterr().out
     assert len(built) >= 3 and all(c == PLACED for c in built)  # learned, cycloid, straight line
     assert C.load(C.WalkConfig, out / "config.yaml").controller == PLACED
+
+
+def _shape(**provenance) -> SampledTrajectory:
+    phase = [i / 8 for i in range(8)]
+    return SampledTrajectory(phase, [0.0] * 8, [0.0] * 8, 0.2, 0.085, provenance)
+
+
+def test_a_searched_shape_is_noted_where_it_walks_under_another_trot_than_it_was_searched_under():
+    placed = _shape(walk_overrides=["controller.sagittal_placement_gain=0.1", "gait.lift_height=0.085"])
+    assert searched_trot(placed) == dataclasses.asdict(PLACED)
+    logged = []
+    note = note_searched_trot(placed, C.WalkConfig(), logged.append)
+    assert logged == [note] and "sagittal_placement_gain 0.1 searched, 0.0 here" in note
+    assert "--set controller.sagittal_placement_gain=0.0" in note  # the search that would match this trot
+    assert note_searched_trot(placed, dataclasses.replace(C.WalkConfig(), controller=PLACED), logged.append) == ""
+    # a search from before the overrides were recorded: its command line had no --set, so the default trot
+    old = _shape(command="python tools/optimize_trajectory.py --lift-height 0.085")
+    assert searched_trot(old) == dataclasses.asdict(C.ControllerConfig())
+    assert "0.0 searched, 0.1 here" in note_searched_trot(old, dataclasses.replace(C.WalkConfig(), controller=PLACED))
+    # nothing recorded, or a --config the record does not hold: no claim either way
+    for unknown in (_shape(), _shape(command="python tools/optimize_trajectory.py --config walk.yaml")):
+        assert searched_trot(unknown) is None
+        assert note_searched_trot(unknown, C.WalkConfig(), logged.append) == ""
+    assert len(logged) == 1
+
+
+def test_the_prototype_run_notes_a_searched_shape_of_another_trot(tmp_path, capsys):
+    import evaluate
+
+    _placed_set(0).save(tmp_path / "learned")
+    reference = tmp_path / "searched.json"
+    SampledTrajectory.load(ROOT / "results" / "optimized_trajectory_H0.10.json").save(reference)  # default trot
+    assert evaluate.main(["prototype", "--learned", str(tmp_path / "learned"), "--speeds", "1.0",
+                          "--prototype-distance", "0.2", "--prototype-run-up", "0", "--prototype-modes", "ideal",
+                          "--prototype-reference", str(reference), "--workers", "1",
+                          "--out", str(tmp_path / "proto")]) == 0
+    assert "the searched shape was searched under another trot controller (sagittal_placement_gain 0.0 searched, " \
+           "0.1 here)" in capsys.readouterr().out

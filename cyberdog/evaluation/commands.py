@@ -11,7 +11,7 @@ from cyberdog import config as C
 from cyberdog.core.learned_set import LearnedSetError
 from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
-from cyberdog.evaluation.trot import walk_under_recorded_trot
+from cyberdog.evaluation.trot import note_searched_trot, walk_under_recorded_trot
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",
@@ -87,12 +87,14 @@ def open_run(args, cfg: C.WalkConfig) -> Run:
     return run
 
 
-def trot_of(args, run: Run, cfg: C.WalkConfig, learned, name: str = "config.yaml") -> C.WalkConfig:
+def trot_of(args, run: Run, cfg: C.WalkConfig, learned, name: str = "config.yaml",
+            reference=None) -> C.WalkConfig:
     """`cfg` under the trot the learned paths were recorded under (`walk_under_recorded_trot`), saved as the
-    run's `name` where that changed it."""
+    run's `name` where that changed it; a note where the searched shape `reference` was searched under another."""
     walked = walk_under_recorded_trot(args, cfg, learned)
     if walked != cfg:
         C.save(walked, run.out / name)
+    note_searched_trot(reference, walked)
     return walked
 
 
@@ -128,7 +130,7 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     reference = L.reference_shape(args)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
-    cfg = trot_of(args, run, cfg, learned)
+    cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference)
     run_figures(args.draw_figures, run.out, only=("figure10", "figure13"))  # drawn from the files just written
@@ -142,7 +144,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
-    cfg = trot_of(args, run, cfg, learned)
+    cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
                        policies=L.closed_loop_policies(args, learned))
@@ -160,7 +162,7 @@ def cmd_stiffness(args, cfg: C.WalkConfig) -> int:
     reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
-    cfg = trot_of(args, run, cfg, learned)
+    cfg = trot_of(args, run, cfg, learned, reference=reference)
     trajectories = {"cycloid": None, "straight": None, **({"searched": reference} if reference is not None else {})}
     rows = run_stiffness(scales, trajectories=trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
                          modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, learned=learned,
@@ -181,7 +183,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
-    table5_cfg = trot_of(args, run, cfg, learned)
+    table5_cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_compare(table5_cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference, brief=True)
     if not args.no_prototype:  # by default the battery preset's paths where shipped (learned.default_learned)
@@ -191,6 +193,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
         proto_cfg = table5_cfg if given else walk_under_recorded_trot(args, cfg, proto_learned)
         if proto_cfg != table5_cfg:  # the prototype's paths were recorded under another trot than Table 5's
             C.save(proto_cfg, run.out / "prototype_config.yaml")
+        note_searched_trot(proto_reference, proto_cfg)  # the searched row compares shapes under one trot
         run_prototype_part(proto_cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
                            args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference,
                            run_up_s=args.prototype_run_up, policies=L.closed_loop_policies(args, proto_learned))

@@ -109,6 +109,39 @@ def walk_under_recorded_trot(args, cfg: C.WalkConfig, learned: LearnedSet, log=p
     return trot_for(args, cfg, shared, "the learned paths", log)
 
 
+def searched_trot(reference) -> dict | None:
+    """The trot controller a searched shape (`tools/optimize_trajectory.py`'s `SampledTrajectory`) was searched
+    under: the default `ControllerConfig` with the search's `--set controller.*` (its provenance's
+    `walk_overrides`); None where the provenance does not say (a search run with --config, or no record)."""
+    prov = getattr(reference, "provenance", None) or {}
+    overrides = prov.get("walk_overrides")
+    if overrides is None:  # written before the search recorded its overrides: its command line tells
+        command = prov.get("command")
+        if not isinstance(command, str) or "--set" in command or "--config" in command:
+            return None
+        overrides = []
+    mine = [o for o in overrides if str(o).split("=", 1)[0].strip().startswith("controller.")]
+    try:
+        return dataclasses.asdict(C.override(C.WalkConfig(), mine).controller)
+    except ValueError:  # a field this version no longer has
+        return None
+
+
+def note_searched_trot(reference, cfg: C.WalkConfig, log=print) -> str:
+    """Log, and return, a note where the searched shape `reference` was searched under another trot controller
+    than the one `cfg` walks it under: its row then compares a shape found for another trot ("" otherwise)."""
+    searched = searched_trot(reference) if reference is not None else None
+    diff = _differences(searched, cfg.controller) if searched is not None else {}
+    if not diff:
+        return ""
+    what = ", ".join(f"{k} {r} searched, {w} here" for k, (r, w) in diff.items())
+    note = (f"note: the searched shape was searched under another trot controller ({what}): a shape searched "
+            f"under this one (tools/optimize_trajectory.py --set "
+            f"{' '.join(f'controller.{k}={w}' for k, (_, w) in diff.items())} ...) is the fairer reference")
+    log(note)
+    return note
+
+
 def _differences(recorded: C.ControllerConfig | dict, walked: C.ControllerConfig) -> dict:
     rec = recorded if isinstance(recorded, dict) else dataclasses.asdict(recorded)
     now = dataclasses.asdict(walked)
