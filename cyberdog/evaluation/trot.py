@@ -7,7 +7,9 @@ trot, a path need not save what it saved. So by default an evaluation walks ever
 the learned paths, the common trajectories and the searched shape alike, under the trot the learned paths were
 recorded under, and says so; the comparison stays at matched conditions, because every row walks the same trot.
 A user who sets the trot (`--set controller.FIELD=VALUE`, a `controller:` section in `--config`) or asks for the
-config's own (`--no-recorded-trot`) gets it, and a note for every path recorded under another.
+config's own (`--no-recorded-trot`) gets it, and a note for every path recorded under another. A searched shape
+(the reference row) records the trot it was searched under (`--set controller.*` of tools/optimize_trajectory.py);
+walked under another, a note says so: a shape searched for one trot is a weaker reference under another.
 """
 from __future__ import annotations
 
