@@ -38,6 +38,11 @@ class RewardConfig:
     # what r_E measures: "mechanical" (Eq. 7, the paper's) or "electrical" (what the battery pays: copper loss,
     # friction and driver efficiency of `cyberdog.core.energy.electrical_power`, about 3.5x Eq. 7 at 1 m/s)
     energy_model: str = "mechanical"
+    # s over which r_v compares the speed with the command: both are averaged over the last `speed_window` s
+    # (the steps since the reset while fewer). 0 = each step's own speed, the paper's. A trot's body surges and
+    # slows within each stride (about 0.04 m/s rms at 1.0 m/s), so a per-step r_v with a large A also pays the
+    # gait for a smoother surge; one gait period (0.4 s) leaves only the error of the speed the robot walks
+    speed_window: float = 0.0
 
     @functools.cached_property
     def weights(self) -> dict[str, float]:
@@ -54,6 +59,8 @@ class RewardConfig:
                "in (0, 0.5] m", self.z_nominal)
         _check(self.energy_model in ENERGY_MODELS, "RewardConfig.energy_model", f"one of {ENERGY_MODELS}",
                self.energy_model)
+        _check(0 <= self.speed_window <= 10 and math.isfinite(self.speed_window), "RewardConfig.speed_window",
+               "in [0, 10] s (0 = per step, the paper's)", self.speed_window)
 
 
 STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0

@@ -105,6 +105,9 @@ class StageConfig:
     #                                       reward's optimum is Δv = 0.9 / (2|A|): 0.23 m/s below the command
     #                                       with A = −2, 0.011 m/s with A = −40. With "relabel" both stages
     #                                       must have the same A (TrainConfig checks)
+    speed_window: Optional[float] = None  # s over which the speed term averages speed and command
+    #                                       (RewardConfig.speed_window); None = per step, the paper's. With
+    #                                       "relabel" both stages must have the same window (TrainConfig checks)
     y_offset_weight: Optional[float] = None  # B of Eq. (10) per m² for this stage; None = the preset's (−20).
     #                                          An actor that does not see the lateral offset cannot hold the
     #                                          line (the trot controller's heading correction does), so for it
@@ -142,6 +145,8 @@ class StageConfig:
         _check(self.speed_weight is None or (math.isfinite(self.speed_weight) and self.speed_weight <= 0),
                "StageConfig.speed_weight", "None (the preset's) or a finite number <= 0 (per (m/s)²)",
                self.speed_weight)
+        _check(self.speed_window is None or (math.isfinite(self.speed_window) and 0 <= self.speed_window <= 10),
+               "StageConfig.speed_window", "None (per step) or in [0, 10] s", self.speed_window)
         _check(self.y_offset_weight is None or (math.isfinite(self.y_offset_weight) and self.y_offset_weight <= 0),
                "StageConfig.y_offset_weight", "None (the preset's) or a finite number <= 0 (per m²)",
                self.y_offset_weight)
@@ -163,7 +168,7 @@ class StageConfig:
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
     """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight`,
-    `speed_weight`, `y_offset_weight` and `energy_model` if set."""
+    `speed_weight`, `speed_window`, `y_offset_weight` and `energy_model` if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
     changes = {}
     if stage.energy_weight is not None:
@@ -172,6 +177,8 @@ def stage_reward(stage: StageConfig) -> RewardConfig:
         changes["keep_moving"] = float(stage.keep_moving_weight)
     if stage.speed_weight is not None:
         changes["speed"] = float(stage.speed_weight)
+    if stage.speed_window is not None:
+        changes["speed_window"] = float(stage.speed_window)
     if stage.y_offset_weight is not None:
         changes["y_offset"] = float(stage.y_offset_weight)
     if stage.energy_model is not None:
@@ -229,6 +236,9 @@ class TrainConfig:
             w = [stage_reward(s).weights[term] for s in (self.stage1, self.stage2)]
             _check(self.buffer_between_stages != "relabel" or w[0] == w[1], f"TrainConfig.stage1.{term}_weight",
                    f"the same weight as stage2's ({w[1]}) with buffer_between_stages='relabel'", w[0])
+        windows = [stage_reward(s).speed_window for s in (self.stage1, self.stage2)]
+        _check(self.buffer_between_stages != "relabel" or windows[0] == windows[1], "TrainConfig.stage1.speed_window",
+               f"the same window as stage2's ({windows[1]} s) with buffer_between_stages='relabel'", windows[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",

@@ -147,7 +147,9 @@ class CyberDogEnv(gym.Env):
     `step_energy_J` (Eq. 7), `forward_speed` (true) and `forward_speed_used` (what the reward saw). With
     `reward.energy_model="electrical"` the energy term is the electrical energy drawn over the step (copper
     loss, friction, driver efficiency: `cyberdog.core.energy.electrical_power`), also in
-    `step_electrical_energy_J` (None otherwise).
+    `step_electrical_energy_J` (None otherwise). With `reward.speed_window` > 0, r_v compares the means of the
+    speed and of the command over the last `speed_window` s (the steps since the reset while fewer), so that
+    the within-stride surge of a trot is not paid for; `forward_speed_used` stays the step's own speed.
 
     **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
     penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
@@ -251,6 +253,7 @@ class CyberDogEnv(gym.Env):
         self.last_torque = np.zeros(12)
         self._foot_offset = [(0.0, 0.0, 0.0)] * 4  # m, 4 × (x, y, z): the last action's foot offsets (foot mode)
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
+        self._speed_history = []  # (v_x, v_cmd) m/s of the steps inside the speed term's window
         info = {"target_speed": self.target_speed}
         if draw is not None:
             info["robot_draw"] = dataclasses.asdict(draw)
@@ -346,13 +349,26 @@ class CyberDogEnv(gym.Env):
         info.update(fallen=True, fall_reason=f"unreachable foot target ({why})")
         return obs, reward, True, truncated, info
 
+    def _speed_over_window(self, v_x: float, v_cmd: float) -> tuple[float, float]:
+        """(v_x, v_cmd) m/s that r_v compares: this step's, or with `reward.speed_window` > 0 their means over
+        the window's last steps (one gait period averages out the trot's surge within a stride)."""
+        window = self.cfg.reward.speed_window
+        if window <= 0:
+            return v_x, v_cmd
+        steps = max(1, int(round(window / self.cfg.control_dt)))
+        history = self._speed_history
+        history.append((v_x, v_cmd))
+        del history[:-steps]
+        return (sum(h[0] for h in history) / len(history), sum(h[1] for h in history) / len(history))
+
     def _finish_step(self, s, step_energy: float, step_electrical: float | None = None, prior_weight: float = 0.0):
         cfg = self.cfg
         v_true = float(s.base_linear_velocity_world[0])
         v_used = self._forward_speed_used(s)
         y = float(s.base_position[1] - self.walker.start[1])
         v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
-        terms = rewards.reward_terms(v_x=v_used, v_target=v_cmd, y=y, z=float(s.base_position[2]),
+        v_reward, v_cmd_reward = self._speed_over_window(v_used, v_cmd)
+        terms = rewards.reward_terms(v_x=v_reward, v_target=v_cmd_reward, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
                                      episode_time=cfg.episode_time,
                                      step_energy_J=step_energy if step_electrical is None else step_electrical)

@@ -1,0 +1,63 @@
+"""The speed term over a window (RewardConfig.speed_window): r_v compares the mean speed with the mean command
+over the window's last steps, restarts at each reset, and per step (the paper's) when the window is 0."""
+import numpy as np
+import pytest
+
+from cyberdog import config as C
+from cyberdog.envs.cyberdog_env import CyberDogEnv
+
+
+def _walk(reward: C.RewardConfig, steps: int, seed: int = 0):
+    """The env's speed term and, per step, the speed it used and the command, walking the trot."""
+    env = CyberDogEnv(config=C.EnvConfig(target_speed=1.0), reward=reward)
+    try:
+        env.reset(seed=seed)
+        terms, v, cmd = [], [], []
+        for _ in range(steps):
+            _, _, terminated, _, info = env.step(np.zeros(12))
+            assert not terminated
+            terms.append(info["reward_terms"]["speed"])
+            v.append(info["forward_speed_used"])
+            cmd.append(env.controller.commanded_speed(env.t))
+        return np.array(terms), np.array(v), np.array(cmd), env
+    except BaseException:
+        env.close()
+        raise
+
+
+def test_windowed_speed_term_is_the_error_of_the_means():
+    window_steps = 16  # 0.4 s at the agent step of 25 ms
+    terms, v, cmd, env = _walk(C.RewardConfig(speed_window=0.4), steps=40)
+    env.close()
+    for k in range(40):
+        lo = max(0, k + 1 - window_steps)
+        expected = (cmd[lo:k + 1].mean() - v[lo:k + 1].mean()) ** 2
+        assert terms[k] == pytest.approx(expected, rel=1e-9, abs=1e-15), k
+    per_step = (cmd - v) ** 2
+    assert not np.allclose(terms[window_steps:], per_step[window_steps:])  # the window changed the term
+
+
+def test_window_restarts_at_reset_and_zero_is_per_step():
+    terms, v, cmd, env = _walk(C.RewardConfig(speed_window=0.4), steps=20)
+    try:
+        env.reset(seed=1)
+        _, _, _, _, info = env.step(np.zeros(12))
+        first = (env.controller.commanded_speed(env.t) - info["forward_speed_used"]) ** 2
+        assert info["reward_terms"]["speed"] == pytest.approx(first, rel=1e-12)  # no step of the last episode
+    finally:
+        env.close()
+    terms0, v0, cmd0, env0 = _walk(C.RewardConfig(), steps=20)
+    env0.close()
+    np.testing.assert_allclose(terms0, (cmd0 - v0) ** 2, rtol=1e-12)
+
+
+def test_speed_window_is_checked_and_reaches_the_stage_reward():
+    with pytest.raises(ValueError, match="speed_window"):
+        C.RewardConfig(speed_window=-0.1)
+    with pytest.raises(ValueError, match="speed_window"):
+        C.StageConfig(speed_window=float("nan"))
+    assert C.stage_reward(C.StageConfig(reward="stage2", speed_window=0.4)).speed_window == 0.4
+    assert C.stage_reward(C.StageConfig(reward="stage2")).speed_window == 0.0
+    with pytest.raises(ValueError, match="speed_window"):  # a relabel keeps each stored speed term as it was
+        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_window=0.4))
+    C.TrainConfig(buffer_between_stages="clear", stage2=C.StageConfig(reward="stage2", speed_window=0.4))
