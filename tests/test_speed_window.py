@@ -61,3 +61,16 @@ def test_speed_window_is_checked_and_reaches_the_stage_reward():
     with pytest.raises(ValueError, match="speed_window"):  # a relabel keeps each stored speed term as it was
         C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_window=0.4))
     C.TrainConfig(buffer_between_stages="clear", stage2=C.StageConfig(reward="stage2", speed_window=0.4))
+
+
+def test_speed_window_class_keeps_the_last_steps():
+    from cyberdog.core.rewards import SpeedWindow
+    w = SpeedWindow(3)
+    assert w.add(1.0, 2.0) == (1.0, 2.0)
+    w.add(2.0, 2.0)
+    w.add(3.0, 2.0)
+    assert w.add(7.0, 5.0) == pytest.approx((4.0, 3.0))  # (2 + 3 + 7) / 3, (2 + 2 + 5) / 3
+    w.reset()
+    assert w.add(0.5, 1.0) == (0.5, 1.0)
+    with pytest.raises(ValueError, match="steps"):
+        SpeedWindow(0)

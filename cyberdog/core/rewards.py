@@ -26,6 +26,29 @@ def speed_term(v_x: float, v_target: float) -> float:
     return (v_target - v_x) ** 2
 
 
+class SpeedWindow:
+    """The speeds r_v compares when it is taken over a window (`RewardConfig.speed_window`): the means of the
+    measured speed and of the command over the last `steps` agent steps (fewer since a `reset`). A trot's body
+    surges and slows within each stride; over one gait period the mean is the speed the robot walks."""
+
+    def __init__(self, steps: int):
+        if not (isinstance(steps, int) and steps >= 1):
+            raise ValueError(f"steps must be an integer >= 1, got {steps!r}")
+        self.steps = steps
+        self._history: list[tuple[float, float]] = []
+
+    def reset(self) -> None:
+        self._history.clear()
+
+    def add(self, v_x: float, v_target: float) -> tuple[float, float]:
+        """Take one step's (v_x, v_target), m/s; return their means over the window, (v̄_x, v̄_target)."""
+        history = self._history
+        history.append((float(v_x), float(v_target)))
+        del history[:-self.steps]
+        n = len(history)
+        return sum(h[0] for h in history) / n, sum(h[1] for h in history) / n
+
+
 def y_offset_term(y: float) -> float:
     """r_yoffset = y², m²: sideways drift of the body from the straight line it should walk along."""
     return y ** 2

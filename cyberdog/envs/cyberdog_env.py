@@ -223,6 +223,9 @@ class CyberDogEnv(gym.Env):
         z_scale = cfg.foot_offset_scale if cfg.foot_offset_scale_z is None else cfg.foot_offset_scale_z
         self._foot_offset_scale = np.array([cfg.foot_offset_scale, cfg.foot_offset_scale, z_scale])  # m, x y z
         self._state = None
+        # r_v over the last reward.speed_window s (None: each step's own speed, the paper's)
+        self._speed_window = (rewards.SpeedWindow(max(1, round(cfg.reward.speed_window / cfg.control_dt)))
+                              if cfg.reward.speed_window > 0 else None)
         self._steps_taken = 0  # env steps since construction (all episodes): the trot prior's decay counts them
 
     # ----------------------------------------------------------------------------------------------------
@@ -253,7 +256,8 @@ class CyberDogEnv(gym.Env):
         self.last_torque = np.zeros(12)
         self._foot_offset = [(0.0, 0.0, 0.0)] * 4  # m, 4 × (x, y, z): the last action's foot offsets (foot mode)
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
-        self._speed_history = []  # (v_x, v_cmd) m/s of the steps inside the speed term's window
+        if self._speed_window is not None:
+            self._speed_window.reset()
         info = {"target_speed": self.target_speed}
         if draw is not None:
             info["robot_draw"] = dataclasses.asdict(draw)
@@ -349,25 +353,14 @@ class CyberDogEnv(gym.Env):
         info.update(fallen=True, fall_reason=f"unreachable foot target ({why})")
         return obs, reward, True, truncated, info
 
-    def _speed_over_window(self, v_x: float, v_cmd: float) -> tuple[float, float]:
-        """(v_x, v_cmd) m/s that r_v compares: this step's, or with `reward.speed_window` > 0 their means over
-        the window's last steps (one gait period averages out the trot's surge within a stride)."""
-        window = self.cfg.reward.speed_window
-        if window <= 0:
-            return v_x, v_cmd
-        steps = max(1, int(round(window / self.cfg.control_dt)))
-        history = self._speed_history
-        history.append((v_x, v_cmd))
-        del history[:-steps]
-        return (sum(h[0] for h in history) / len(history), sum(h[1] for h in history) / len(history))
-
     def _finish_step(self, s, step_energy: float, step_electrical: float | None = None, prior_weight: float = 0.0):
         cfg = self.cfg
         v_true = float(s.base_linear_velocity_world[0])
         v_used = self._forward_speed_used(s)
         y = float(s.base_position[1] - self.walker.start[1])
         v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
-        v_reward, v_cmd_reward = self._speed_over_window(v_used, v_cmd)
+        window = self._speed_window
+        v_reward, v_cmd_reward = (v_used, v_cmd) if window is None else window.add(v_used, v_cmd)
         terms = rewards.reward_terms(v_x=v_reward, v_target=v_cmd_reward, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
                                      episode_time=cfg.episode_time,
