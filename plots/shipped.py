@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cyberdog.analysis.prototype_summary import REFERENCE
 from plots.figure10 import chosen_walks, last_cycles_window
 from plots.results import load_results
 
@@ -52,7 +53,8 @@ def export_inputs(results_dir: str | Path, dst: str | Path, cycles: int = 2) -> 
         shutil.copyfile(src / "config.yaml", paths[0])
     else:
         paths = []
-    rows = [r for r in results.rows if r["trajectory"] in ("learned", "cycloid", "straight")]  # Figure 13's
+    # Figure 13's rows, and the searched shape's: Table 5's row "learned against the direct search's shape"
+    rows = [r for r in results.rows if r["trajectory"] in ("learned", "cycloid", "straight", REFERENCE)]
     shown = [w for by_key in chosen_walks(results.walks, results.gait.lift_height).values()
              for w in by_key.values()]
     power = {}

@@ -247,3 +247,16 @@ def test_command_line_refuses_bad_input(tmp_path, capsys):
     assert "m.csv does not exist" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["--from", str(tmp_path), "--out", str(tmp_path / "o"), "--only", "5"])
+
+
+def test_exported_inputs_keep_the_searched_shapes_rows(tmp_path):
+    """Table 5's row against the direct search's shape is made from the shipped comparison.json: the export keeps
+    the reference rows beside Figure 13's."""
+    full = fake_results(tmp_path / "full")
+    rows = json.loads((full / "comparison.json").read_text())
+    searched = {**rows[0], "trajectory": "searched", "label": "searched", "walk_id": 10_000}
+    (full / "comparison.json").write_text(json.dumps(rows + [searched]))
+    export_inputs(full, tmp_path / "small")
+    exported = json.loads((tmp_path / "small" / "comparison.json").read_text())
+    assert sum(r["trajectory"] == "searched" for r in exported) == 1
+    assert len(exported) == len(rows) + 1

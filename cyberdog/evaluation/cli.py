@@ -44,8 +44,9 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
     "all": ("compare + prototype + figures (+ --video) on the learned trajectories (the default)",
             "compare, prototype and figures (+ a video with --video) on the learned trajectories (default: "
             "Table 5 on results/learned/, the paper preset's commanded paths, one per seed and speed; the "
-            "prototype on results/learned_battery/, the battery preset's; --learned FILE|DIR... (both), or --policies/"
-            "--sweep to extract them first). Writes table5.md, table5_summary.*, table5.*, comparison.*, "
+            "prototype on results/learned_battery_stride/, the stride battery preset's; --learned "
+            "FILE|DIR... (both), or --policies/--sweep to extract them first). Writes table5.md, "
+            "table5_summary.*, table5.*, comparison.*, "
             "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.*, "
             "figure{4,6,7,10,13}_*.{png,pdf} and learned/<label>.json (the trajectories used)."),
     "baselines": ("walk the composite cycloid and the straight line at each speed",
@@ -66,8 +67,9 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                 "electrical energy, positive work and foot slip, and as a reference row the direct search's shape at "
                 "the same lift (--reference); Figures 10 and 13."),
     "prototype": ("Section 4.2 in simulation: battery use and range",
-                  "every learned seed's paths (default results/learned_battery/, the battery preset's, where "
-                  "shipped) and the common trajectories at their lift, walks of --prototype-distance m (default "
+                  "every learned seed's paths (default results/learned_battery_stride/, the stride battery "
+                  "preset's, where shipped) and the common trajectories at their lift, walks of "
+                  "--prototype-distance m (default "
                   "20; the paper's 100) on the ideal robot and on --prototype-draws hardware-like robots: battery "
                   "use (Eq. 13), range, energy per 100 m, cost of transport, mean ± 95 % CI across seeds, the "
                   "learned path's battery saving. Writes prototype.*, prototype_summary.* and prototype_gaps.*."),
@@ -169,7 +171,7 @@ def _learned_option() -> argparse.ArgumentParser:
                    help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
                         "per seed and speed) or sampled x-z paths (one per seed, rescaled to every speed); "
                         "default results/learned/ (the paper's Eq. 7 preset), and for the prototype run "
-                        "results/learned_battery/ (the battery preset) where it is shipped")
+                        "results/learned_battery_stride/ (the stride battery preset) where it is shipped")
     return p
 
 
@@ -235,8 +237,8 @@ def _prototype_options() -> argparse.ArgumentParser:
     g.add_argument("--prototype-reference", type=Path, default=None, metavar="FILE",
                    help="a shape saved by tools/optimize_trajectory.py walked beside the common trajectories at each "
                         "learned path's lift as the reference row \"searched\" (default "
-                        "results/optimized_trajectory_H0.085_electrical_hardware.json: searched for the battery on the "
-                        "hardware-like robot)")
+                        "results/optimized_trajectory_H0.085_electrical_hardware_placed_loop.json: searched for the "
+                        "battery on the hardware-like robot under the trot of the default battery paths)")
     g.add_argument("--no-prototype-reference", action="store_true", help="no reference row in the prototype run")
     g.add_argument("--closed-loop", type=Path, nargs="+", default=None, metavar="ACTOR",
                    help="stage-2 actor files whose policies walk the same protocol themselves, closed loop, as the "

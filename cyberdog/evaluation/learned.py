@@ -22,15 +22,18 @@ from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
-# the prototype run's default: the battery preset's paths (configs/quick_speeds_battery.yaml), where shipped;
+# the prototype run's default: the battery paths of the stride preset (configs/quick_speeds_battery_stride.yaml,
+# recorded under the trot with foot placement and a speed loop bounded at +-10 %), where shipped; the battery
+# preset's earlier paths (configs/quick_speeds_battery.yaml, default trot) stay in results/learned_battery/.
 # Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
-DEFAULT_LEARNED_BATTERY = ROOT / "results" / "learned_battery"
+DEFAULT_LEARNED_BATTERY = ROOT / "results" / "learned_battery_stride"
 DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
 # the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
 # (tools/optimize_trajectory.py --lift-height 0.095, the same budget at every speed)
 DEFAULT_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.095.json"
-# the prototype run's reference row: the direct search's shape for the battery on the hardware-like robot
-DEFAULT_PROTOTYPE_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.085_electrical_hardware.json"
+# the prototype run's reference row: the direct search's shape for the battery on the hardware-like robot, searched
+# under the trot the default battery paths were recorded under (..._hardware.json: under the default trot)
+DEFAULT_PROTOTYPE_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.085_electrical_hardware_placed_loop.json"
 # preference order: the shipped name, then the actor at the end of stage 2 (fixed in advance), then the one of
 # its best-scoring episode (chosen on a noisy score)
 STAGE2_ACTORS = ("stage2_actor.pt", "stage2_final_actor.pt", "stage2_best_actor.pt")
@@ -300,7 +303,7 @@ def default_learned(args, for_prototype: bool = False) -> list[Path]:
 def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None,
                          for_prototype: bool = False) -> LearnedSet:
     """Extract from --policies/--sweep when given, else load `default_learned`; the paths used are copied
-    beside the results, into out/learned/ (out/learned_battery/ for the battery preset's default)."""
+    beside the results, into out/learned/ (out/<DEFAULT_LEARNED_BATTERY's name>/ for the battery default)."""
     paths = policy_paths(args.policies, args.sweep)
     folder = out / "learned"
     if paths:
