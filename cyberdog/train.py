@@ -7,7 +7,7 @@ Examples:
   python train.py --config configs/paper.yaml --stage 1 --seed 3 --run-dir runs/paper_s3
   python train.py --config configs/quick.yaml --set agent.algorithm=ddpg --set train.batch_size=128
   python train.py --resume runs/quick                                         # continue a killed run
-  python train.py --resume runs/quick --set train.stage2.max_env_steps=160000 # train its last stage longer
+  python train.py --resume runs/quick --set train.stage2.max_env_steps=160000 # train its last stage longer (or end it sooner)
   python train.py --config configs/quick.yaml --stage 2 --init-from runs/quick/stage1_final.pt --run-dir runs/q2
 
 Seeds at scale (one run per seed in RUN_DIR/seed<N>/, retried from its checkpoint if it fails, then aggregated):
@@ -58,9 +58,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--seed", type=int, help="random seed; overrides train.seed")
     p.add_argument("--run-dir", type=Path, help="output folder (default runs/<config name>_seed<seed>)")
     C.add_override_option(p, "train.stage1.max_env_steps=5000",
-                          "; with --resume only the current stage's budget may be raised (train.stage<N>.max_env_steps, "
-                          "max_episodes): the stage, finished or not, continues; the stage-final files of a finished "
-                          "one are kept as stage<N>_final*_<steps>steps.pt")
+                          "; with --resume only the current stage's budget may change (train.stage<N>.max_env_steps, "
+                          "max_episodes): raised, the stage, finished or not, continues (the stage-final files of a "
+                          "finished one are kept as stage<N>_final*_<steps>steps.pt); lowered to a point an "
+                          "unfinished stage has not reached, it ends there")
     p.add_argument("--resume", type=Path, metavar="RUN_DIR",
                    help="continue the run in RUN_DIR from its checkpoint.pt with its saved config.yaml; if RUN_DIR is "
                         "a sweep folder (sweep.json), continue every seed of the sweep that is not done")
@@ -224,11 +225,11 @@ def _resumed_run(args) -> tuple:
     """(config, run folder, Trainer keywords) of --resume RUN_DIR."""
     if args.config or args.seed is not None or args.init_from:
         sys.exit("--resume uses the run folder's config.yaml; do not combine it with --config, --seed or "
-                 "--init-from (--set may raise the current stage's budget)")
+                 "--init-from (--set may change the current stage's budget)")
     if args.device:
         sys.exit("--device cannot be combined with --resume: the run continues with its saved train.device")
     cfg = _resumable_config(args.resume)
-    if args.overrides:  # the trainer refuses anything but a raised budget of the current stage
+    if args.overrides:  # the trainer refuses anything but a changed budget of the current stage
         try:
             cfg = C.override(cfg, args.overrides)
         except (ValueError, TypeError) as e:

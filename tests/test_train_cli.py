@@ -176,7 +176,7 @@ def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earl
                                *[a for s in sets for a in ("--set", s)]],
                               cwd=ROOT, capture_output=True, text=True, timeout=120)
 
-    for refused, words in ((["train.stage1.max_env_steps=200"], "not lower it"),
+    for refused, words in ((["train.stage1.max_env_steps=200"], "not lower it"),  # finished: raise only
                            (["train.stage1.max_env_steps=500", "agent.actor_lr=0.01"], "agent.actor_lr"),
                            (["train.stage2.max_env_steps=500"], "current stage's budget")):
         proc = resume(*refused)
@@ -201,6 +201,28 @@ def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earl
     after_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) > 300]
     # the resumed process's rate counts its own steps, not the 300 the earlier process made
     assert after_rates and max(after_rates) < 3 * max(before_rates), (before_rates, after_rates)
+
+
+def test_a_resume_may_end_an_unfinished_stage_sooner_but_not_before_where_it_is(tmp_path):
+    """A budget lowered on resume, to a point the stage has not reached, ends the stage there with its final
+    files and the config recording the new budget; lowered to or below the steps made, it is refused and
+    nothing changes."""
+    from cyberdog.rl.checkpoint import CheckpointError
+    stop_after(Trainer(tiny(["train.stage1.max_env_steps=600", "train.checkpoint_every=100"]), tmp_path,
+                       stages=(1,), progress=False), 200)
+    made = load_checkpoint(tmp_path / "checkpoint.pt")["counters"]["stage_env_steps"]
+    assert 200 <= made < 300
+    config_before = (tmp_path / "config.yaml").read_text()
+    with pytest.raises(CheckpointError, match="not lower it"):
+        Trainer(tiny(["train.stage1.max_env_steps=" + str(made), "train.checkpoint_every=100"]), tmp_path,
+                resume=True, progress=False)
+    assert (tmp_path / "config.yaml").read_text() == config_before
+    summary = Trainer(tiny(STAGE1), tmp_path, resume=True, progress=False).run()
+    state = load_checkpoint(tmp_path / "checkpoint.pt")["counters"]
+    assert state["finished"] and 300 <= state["stage_env_steps"] < 600, state
+    assert summary["env_steps"] == state["env_steps"]
+    assert C.load(C.ExperimentConfig, tmp_path / "config.yaml").train.stage1.max_env_steps == 300
+    assert (tmp_path / "stage1_final_actor.pt").is_file()
 
 
 def test_a_resume_says_from_which_step_and_the_progress_line_shows_length_and_falls(tmp_path, capsys):

@@ -137,13 +137,18 @@ def set_rng_state(state: dict) -> None:
     random.setstate((py_version, tuple(py_state), py_gauss))
 
 
-BUDGET_FIELDS = ("max_env_steps", "max_episodes")  # what a resume may raise: "train this stage longer"
+BUDGET_FIELDS = ("max_env_steps", "max_episodes")  # what a resume may change: "train this stage longer/shorter"
 
 
-def budget_extension(saved: dict, current: dict, stage: int, path: str | Path = "checkpoint") -> dict:
-    """The budget fields of `stage` that `current` (config dict) raises over `saved` (the checkpoint's), as
-    {dotted name: (saved, current)}. Any other difference, a budget of another stage, or a lowered budget
-    raises `CheckpointError`: a resumed run continues the same experiment, only for longer."""
+def budget_extension(saved: dict, current: dict, stage: int, path: str | Path = "checkpoint",
+                     done: dict | None = None) -> dict:
+    """The budget fields of `stage` that `current` (config dict) changes from `saved` (the checkpoint's), as
+    {dotted name: (saved, current)}. Any other difference or a budget of another stage raises `CheckpointError`:
+    a resumed run continues the same experiment. Nothing in training depends on the budget but where the stage
+    ends, so a raised budget trains it longer, and a lowered one that the stage has not yet reached (`done`: the
+    stage's counters so far, {"max_env_steps": env steps, "max_episodes": episodes}, and "finished") ends it
+    there: the same run as one planned that short from the start. Lowered to or below what the stage has
+    already made, it is refused."""
     def flat(d, prefix=""):
         out = {}
         for k, v in (d or {}).items():
@@ -155,12 +160,15 @@ def budget_extension(saved: dict, current: dict, stage: int, path: str | Path = 
     other = [f"{k}: checkpoint {a.get(k)!r} vs config {b.get(k)!r}" for k in differ if k not in budget]
     if other:
         raise CheckpointError(f"{path} was written with another configuration than the run's config: "
-                              + "; ".join(other[:5]) + f" (a resume may only raise the current stage's budget, "
+                              + "; ".join(other[:5]) + f" (a resume may only change the current stage's budget, "
                               f"train.stage{stage}.max_env_steps or train.stage{stage}.max_episodes)")
     changes = {k: (a.get(k), b.get(k)) for k in differ}
+    done = done or {}
     for k, (old, new) in changes.items():
         # max_env_steps 0 means "no step budget" (the episode budget decides): going to 0 is not lowering
         lowered = new != 0 and (old == 0 or new < old) if k.endswith("max_env_steps") else new < old
-        if lowered:
-            raise CheckpointError(f"{k}: a resume may raise a stage's budget, not lower it ({old} -> {new})")
+        made = done.get(k.rsplit(".", 1)[1], 0)
+        if lowered and (done.get("finished", True) or new <= made):
+            raise CheckpointError(f"{k}: a resume may lower a stage's budget only above what the stage has made "
+                                  f"({made}), not lower it to {new} (was {old})")
     return changes

@@ -1,6 +1,6 @@
 """What a training run saves and restores (`cyberdog.rl.trainer.Trainer`'s files): `checkpoint.pt` (the agent,
 optimizers, counters, RNG states and the replay buffer), the stage-final files (`stage<N>_final.pt`, without
-the buffer and the Adam moments), the actor files, and the resume of a stage under a raised budget."""
+the buffer and the Adam moments), the actor files, and the resume of a stage under a changed budget."""
 from __future__ import annotations
 
 import sys
@@ -62,7 +62,11 @@ class RunState:
             saved = C.to_dict(C.from_dict(C.ExperimentConfig, state.get("config")))
         except (ValueError, TypeError) as e:
             raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
-        extension = budget_extension(saved, C.to_dict(self.cfg), int(state["counters"]["stage"]), path)
+        counters = state["counters"]
+        extension = budget_extension(saved, C.to_dict(self.cfg), int(counters["stage"]), path,
+                                     done={"max_env_steps": int(counters["stage_env_steps"]),
+                                           "max_episodes": int(counters["stage_episodes"]),
+                                           "finished": bool(counters["finished"])})
         self._load_agent(state, path)
         try:
             load_buffer_state(self.rb, state["replay"], self.extra_transition_keys)
@@ -82,7 +86,8 @@ class RunState:
               file=sys.stderr, flush=True)
 
     def _extend(self, changes: dict) -> None:
-        """Continue the current stage under a raised budget. If the run had finished, its stage-final files
+        """Continue the current stage under a changed budget (raised, or lowered to a point it has not
+        reached). If the run had finished (the budget can then only be raised), its stage-final files
         are kept under the stage's step count (`stage2_final_actor_40000steps.pt`): a longer run never
         overwrites the result of the shorter one. config.yaml records the new budget."""
         stage, c = self.c["stage"], self.c
@@ -94,8 +99,12 @@ class RunState:
             c["finished"] = False
         C.save(self.cfg, self.run_dir / "config.yaml")
         print(f"stage {stage} continues past {c['stage_env_steps']} env steps / {c['stage_episodes']} episodes "
-              f"under a raised budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
+              f"under a {'raised' if self._raised(changes) else 'lowered'} budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
               file=sys.stderr, flush=True)
+
+    @staticmethod
+    def _raised(changes: dict) -> bool:
+        return any(new == 0 or (old != 0 and new > old) for old, new in changes.values())
 
     def _save_actor(self, name: str, score: float) -> None:
         save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
