@@ -74,3 +74,40 @@ def test_speed_window_class_keeps_the_last_steps():
     assert w.add(0.5, 1.0) == (0.5, 1.0)
     with pytest.raises(ValueError, match="steps"):
         SpeedWindow(0)
+
+
+def test_speed_deadband_counts_only_the_error_beyond_its_share_of_the_command():
+    from cyberdog.core.rewards import speed_term
+    assert speed_term(1.36, 1.4, deadband=0.03) == 0.0  # 0.04 m/s off, inside 3 % of 1.4 m/s (0.042)
+    assert speed_term(1.30, 1.4, deadband=0.03) == pytest.approx((0.1 - 0.042) ** 2)
+    assert speed_term(1.50, 1.4, deadband=0.03) == pytest.approx((0.1 - 0.042) ** 2)  # too fast counts too
+    assert speed_term(1.30, 1.4) == pytest.approx(0.01)  # 0: the paper's term
+    with pytest.raises(ValueError, match="deadband"):
+        speed_term(1.0, 1.0, deadband=1.0)
+
+
+def test_env_applies_the_deadband_to_the_windows_means():
+    band, window_steps = 0.03, 16
+    terms, v, cmd, env = _walk(C.RewardConfig(speed_window=0.4, speed_deadband=band), steps=40)
+    env.close()
+    plain = []
+    for k in range(40):
+        lo = max(0, k + 1 - window_steps)
+        error = abs(cmd[lo:k + 1].mean() - v[lo:k + 1].mean())
+        plain.append(error ** 2)
+        assert terms[k] == pytest.approx(max(0.0, error - band * abs(cmd[lo:k + 1].mean())) ** 2,
+                                         rel=1e-9, abs=1e-15), k
+    assert (terms > 0).any() and (terms < np.array(plain)).all()  # the start lags off the band: less, not 0
+
+
+def test_speed_deadband_is_checked_and_reaches_the_stage_reward():
+    for bad in (-0.01, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="speed_deadband"):
+            C.RewardConfig(speed_deadband=bad)
+        with pytest.raises(ValueError, match="speed_deadband"):
+            C.StageConfig(speed_deadband=bad)
+    assert C.stage_reward(C.StageConfig(reward="stage2", speed_deadband=0.03)).speed_deadband == 0.03
+    assert C.stage_reward(C.StageConfig(reward="stage2")).speed_deadband == 0.0
+    with pytest.raises(ValueError, match="speed_deadband"):  # a relabel keeps each stored speed term as it was
+        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_deadband=0.03))
+    C.TrainConfig(buffer_between_stages="clear", stage2=C.StageConfig(reward="stage2", speed_deadband=0.03))

@@ -43,6 +43,10 @@ class RewardConfig:
     # slows within each stride (about 0.04 m/s rms at 1.0 m/s), so a per-step r_v with a large A also pays the
     # gait for a smoother surge; one gait period (0.4 s) leaves only the error of the speed the robot walks
     speed_window: float = 0.0
+    # share of the command within which r_v is 0: r_v = max(0, |v_cmd − v_x| − speed_deadband·v_cmd)² (on the
+    # window's means with speed_window > 0). 0 = the paper's term. A share inside the evaluation's ±5 % band
+    # leaves the gait free to walk anywhere near the command and pays it only for walking off it
+    speed_deadband: float = 0.0
 
     @functools.cached_property
     def weights(self) -> dict[str, float]:
@@ -61,6 +65,8 @@ class RewardConfig:
                self.energy_model)
         _check(0 <= self.speed_window <= 10 and math.isfinite(self.speed_window), "RewardConfig.speed_window",
                "in [0, 10] s (0 = per step, the paper's)", self.speed_window)
+        _check(0 <= self.speed_deadband < 1 and math.isfinite(self.speed_deadband), "RewardConfig.speed_deadband",
+               "in [0, 1) (a share of the command; 0 = the paper's)", self.speed_deadband)
 
 
 STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0

@@ -108,6 +108,9 @@ class StageConfig:
     speed_window: Optional[float] = None  # s over which the speed term averages speed and command
     #                                       (RewardConfig.speed_window); None = per step, the paper's. With
     #                                       "relabel" both stages must have the same window (TrainConfig checks)
+    speed_deadband: Optional[float] = None  # share of the command within which the speed term is 0
+    #                                         (RewardConfig.speed_deadband); None = the paper's term. With
+    #                                         "relabel" both stages must have the same (TrainConfig checks)
     y_offset_weight: Optional[float] = None  # B of Eq. (10) per m² for this stage; None = the preset's (−20).
     #                                          An actor that does not see the lateral offset cannot hold the
     #                                          line (the trot controller's heading correction does), so for it
@@ -147,6 +150,8 @@ class StageConfig:
                self.speed_weight)
         _check(self.speed_window is None or (math.isfinite(self.speed_window) and 0 <= self.speed_window <= 10),
                "StageConfig.speed_window", "None (per step) or in [0, 10] s", self.speed_window)
+        _check(self.speed_deadband is None or (math.isfinite(self.speed_deadband) and 0 <= self.speed_deadband < 1),
+               "StageConfig.speed_deadband", "None (the paper's term) or in [0, 1)", self.speed_deadband)
         _check(self.y_offset_weight is None or (math.isfinite(self.y_offset_weight) and self.y_offset_weight <= 0),
                "StageConfig.y_offset_weight", "None (the preset's) or a finite number <= 0 (per m²)",
                self.y_offset_weight)
@@ -168,7 +173,7 @@ class StageConfig:
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
     """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight`,
-    `speed_weight`, `speed_window`, `y_offset_weight` and `energy_model` if set."""
+    `speed_weight`, `speed_window`, `speed_deadband`, `y_offset_weight` and `energy_model` if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
     changes = {}
     if stage.energy_weight is not None:
@@ -179,6 +184,8 @@ def stage_reward(stage: StageConfig) -> RewardConfig:
         changes["speed"] = float(stage.speed_weight)
     if stage.speed_window is not None:
         changes["speed_window"] = float(stage.speed_window)
+    if stage.speed_deadband is not None:
+        changes["speed_deadband"] = float(stage.speed_deadband)
     if stage.y_offset_weight is not None:
         changes["y_offset"] = float(stage.y_offset_weight)
     if stage.energy_model is not None:
@@ -239,6 +246,9 @@ class TrainConfig:
         windows = [stage_reward(s).speed_window for s in (self.stage1, self.stage2)]
         _check(self.buffer_between_stages != "relabel" or windows[0] == windows[1], "TrainConfig.stage1.speed_window",
                f"the same window as stage2's ({windows[1]} s) with buffer_between_stages='relabel'", windows[0])
+        bands = [stage_reward(s).speed_deadband for s in (self.stage1, self.stage2)]
+        _check(self.buffer_between_stages != "relabel" or bands[0] == bands[1], "TrainConfig.stage1.speed_deadband",
+               f"the same deadband as stage2's ({bands[1]}) with buffer_between_stages='relabel'", bands[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",

@@ -149,7 +149,8 @@ class CyberDogEnv(gym.Env):
     loss, friction, driver efficiency: `cyberdog.core.energy.electrical_power`), also in
     `step_electrical_energy_J` (None otherwise). With `reward.speed_window` > 0, r_v compares the means of the
     speed and of the command over the last `speed_window` s (the steps since the reset while fewer), so that
-    the within-stride surge of a trot is not paid for; `forward_speed_used` stays the step's own speed.
+    the within-stride surge of a trot is not paid for; `forward_speed_used` stays the step's own speed. With
+    `reward.speed_deadband` > 0 only the error beyond that share of the command counts.
 
     **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
     penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
@@ -364,7 +365,8 @@ class CyberDogEnv(gym.Env):
         terms = rewards.reward_terms(v_x=v_reward, v_target=v_cmd_reward, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
                                      episode_time=cfg.episode_time,
-                                     step_energy_J=step_energy if step_electrical is None else step_electrical)
+                                     step_energy_J=step_energy if step_electrical is None else step_electrical,
+                                     speed_deadband=cfg.reward.speed_deadband)
         weighted = rewards.weighted_terms(terms, cfg.reward)
         reward = float(sum(weighted.values()))
         finite = math.isfinite(sum(s.q.tolist()) + sum(s.base_position.tolist()))  # a NaN or inf anywhere
