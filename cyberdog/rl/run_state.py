@@ -98,12 +98,14 @@ class RunState:
                     src.rename(src.with_name(f"{src.stem}_{c['stage_env_steps']}steps.pt"))
             c["finished"] = False
         C.save(self.cfg, self.run_dir / "config.yaml")
+        how = "raised" if self._raised(changes) else "lowered"
         print(f"stage {stage} continues past {c['stage_env_steps']} env steps / {c['stage_episodes']} episodes "
-              f"under a {'raised' if self._raised(changes) else 'lowered'} budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
+              f"under a {how} budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
               file=sys.stderr, flush=True)
 
     @staticmethod
     def _raised(changes: dict) -> bool:
+        """Whether a budget change lets the stage run longer (0 steps: no step budget)."""
         return any(new == 0 or (old != 0 and new > old) for old, new in changes.values())
 
     def _save_actor(self, name: str, score: float) -> None:
