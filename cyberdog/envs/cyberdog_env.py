@@ -149,8 +149,8 @@ class CyberDogEnv(gym.Env):
     loss, friction, driver efficiency: `cyberdog.core.energy.electrical_power`), also in
     `step_electrical_energy_J` (None otherwise). With `reward.speed_window` > 0, r_v compares the means of the
     speed and of the command over the last `speed_window` s (the steps since the reset while fewer), so that
-    the within-stride surge of a trot is not paid for; `forward_speed_used` stays the step's own speed. With
-    `reward.speed_deadband` > 0 only the error beyond that share of the command counts.
+    the within-stride surge of a trot is not paid for (`forward_speed_used` stays the step's own speed); with
+    `reward.speed_deadband`, only the error beyond that share of the command.
 
     **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
     penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an

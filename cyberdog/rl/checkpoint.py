@@ -140,7 +140,7 @@ def set_rng_state(state: dict) -> None:
 BUDGET_FIELDS = ("max_env_steps", "max_episodes")  # what a resume may change: "train this stage longer/shorter"
 
 
-def budget_extension(saved: dict, current: dict, stage: int, path: str | Path = "checkpoint",
+def budget_change(saved: dict, current: dict, stage: int, path: str | Path = "checkpoint",
                      done: dict | None = None) -> dict:
     """The budget fields of `stage` that `current` (config dict) changes from `saved` (the checkpoint's), as
     {dotted name: (saved, current)}. Any other difference or a budget of another stage raises `CheckpointError`:

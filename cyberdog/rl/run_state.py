@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from cyberdog import config as C
-from cyberdog.rl.checkpoint import (CheckpointError, budget_extension, check_shapes, rng_state, save_atomic,
+from cyberdog.rl.checkpoint import (CheckpointError, budget_change, check_shapes, rng_state, save_atomic,
                                     save_checkpoint, set_rng_state)
 from cyberdog.rl.replay import buffer_state, load_buffer_state
 
@@ -63,10 +63,10 @@ class RunState:
         except (ValueError, TypeError) as e:
             raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
         counters = state["counters"]
-        extension = budget_extension(saved, C.to_dict(self.cfg), int(counters["stage"]), path,
-                                     done={"max_env_steps": int(counters["stage_env_steps"]),
-                                           "max_episodes": int(counters["stage_episodes"]),
-                                           "finished": bool(counters["finished"])})
+        changes = budget_change(saved, C.to_dict(self.cfg), int(counters["stage"]), path,
+                                done={"max_env_steps": int(counters["stage_env_steps"]),
+                                      "max_episodes": int(counters["stage_episodes"]),
+                                      "finished": bool(counters["finished"])})
         self._load_agent(state, path)
         try:
             load_buffer_state(self.rb, state["replay"], self.extra_transition_keys)
@@ -77,8 +77,8 @@ class RunState:
         self.scores.extend(state["scores"])
         self.best_score = float(state["best_score"])
         set_rng_state(state["rng"])
-        if extension:
-            self._extend(extension)
+        if changes:
+            self._extend(changes)
         c = self.c
         prior = f", trot prior's weight {self.prior_weight:.4f}" if self.cfg.env.prior_weight > 0 else ""
         print(f"resuming {path}: stage {c['stage']} at env step {c['stage_env_steps']} of the stage "
