@@ -22,11 +22,11 @@ from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
-# the prototype run's default: the battery paths of the stride preset (configs/quick_speeds_battery_stride.yaml,
-# recorded under the trot with foot placement and a speed loop bounded at +-10 %), where shipped; the battery
-# preset's earlier paths (configs/quick_speeds_battery.yaml, default trot) stay in results/learned_battery/.
-# Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
-DEFAULT_LEARNED_BATTERY = ROOT / "results" / "learned_battery_stride"
+# the prototype run's default: the battery paths of the deadband preset (configs/quick_speeds_battery_band.yaml,
+# recorded under the trot with foot placement and a speed loop bounded at +-10 %), where shipped; the stride preset's
+# (results/learned_battery_stride/) and the battery preset's earlier paths (configs/quick_speeds_battery.yaml,
+# default trot: results/learned_battery/) stay beside them. Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
+DEFAULT_LEARNED_BATTERY = ROOT / "results" / "learned_battery_band"
 DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
 # the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
 # (tools/optimize_trajectory.py --lift-height 0.095, the same budget at every speed)
