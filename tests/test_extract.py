@@ -353,3 +353,38 @@ def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the
     monkeypatch.setattr(replay_check, "replay_walk",
                         lambda *a, **k: SimpleNamespace(fell=False, speed_ok=False, mean_speed=0.9, dropped_shifts=0))
     assert replay_check.replay_verdict(path, 1.2) == "ideal robot, 10 s: speed miss (0.900 m/s)"
+
+
+def test_extraction_over_worker_processes_saves_what_extraction_in_turn_saves(tmp_path, capsys):
+    """`extract --workers 2` runs one job per policy and speed in worker processes: the same paths, byte for
+    byte, as in turn; a job that fails hands back its error instead of stopping the others."""
+    import evaluate
+    from cyberdog.evaluation import learned as learned_module
+
+    import torch
+
+    for seed in (0, 1):
+        (tmp_path / f"s{seed}").mkdir()
+        actor = _zero_actor_file(tmp_path / f"s{seed}" / "stage2_actor.pt", action_mode="foot",
+                                 target_speed_range=(1.0, 1.4))
+        state = torch.load(actor, weights_only=False)
+        state["config"]["train"]["seed"] = seed
+        torch.save(state, actor)
+    common = ["extract", "--policies", str(tmp_path / "s0"), str(tmp_path / "s1"), "--speeds", "1.0", "1.2",
+              "--rollout-duration", "3.0", "--speed-tolerance", "0.3", "--no-replay-check"]
+    assert evaluate.main(common + ["--out", str(tmp_path / "serial")]) == 0
+    assert evaluate.main(common + ["--workers", "2", "--out", str(tmp_path / "parallel")]) == 0
+    assert "4 jobs (policy and speed) over 2 worker processes" in capsys.readouterr().out
+    names = sorted(f.name for f in (tmp_path / "serial" / "learned").glob("*mps.json"))
+    assert names == ["seed0_1.2mps.json", "seed0_1mps.json", "seed1_1.2mps.json", "seed1_1mps.json"]
+    for name in names:
+        assert ((tmp_path / "parallel" / "learned" / name).read_text()
+                == (tmp_path / "serial" / "learned" / name).read_text())
+    # a job whose extraction fails returns its error: the worker pool goes on with the others
+    from cyberdog.evaluation.cli import build_parser
+    args = build_parser().parse_args(["extract", "--policy", str(tmp_path / "s0"), "--rollout-duration", "3.0",
+                                      "--speed-tolerance", "0.0001", "--no-replay-check"])
+    result = learned_module._extraction_job((tmp_path / "s0" / "stage2_actor.pt", "commanded", "seed0", 1.0), args,
+                                            tmp_path / "failing", None)
+    assert isinstance(result, str) and "1 m/s" in result
+    assert not list((tmp_path / "failing").glob("learned/*.json"))

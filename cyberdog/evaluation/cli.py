@@ -159,6 +159,15 @@ def _duration_option() -> argparse.ArgumentParser:
     return p
 
 
+def _extract_workers_option() -> argparse.ArgumentParser:
+    p = _parent()
+    p.add_argument("--workers", dest="extract_workers", type=at_least_one, default=1, metavar="N",
+                   help="extraction jobs (one per policy and speed) run at once in worker processes (default 1: "
+                        "in turn, stopping at the first that fails; with more, every job runs, each path is saved "
+                        "as its job ends, and the failures are reported together)")
+    return p
+
+
 def _workers_option() -> argparse.ArgumentParser:
     p = _parent()
     p.add_argument("--workers", type=at_least_one, default=None, help="parallel walk processes (default: CPU count)")
@@ -290,7 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
     parents = {
         "all": [output, speeds, duration, workers, learned, extraction, prototype, metrics, video],
         "baselines": [output, _speed_options(non_negative), duration],
-        "extract": [output, speeds, extraction],
+        "extract": [output, speeds, extraction, _extract_workers_option()],
         "compare": [output, speeds, duration, workers, learned, extraction],
         "prototype": [output, speeds, workers, learned, extraction, prototype],
         "stiffness": [output, speeds, workers, learned, extraction, prototype],

@@ -4,6 +4,7 @@ first. Labels are the provenance's seed ("seed3"), else the file or run folder n
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import time
 from pathlib import Path
@@ -105,8 +106,11 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
                      cfg: C.WalkConfig | None = None) -> LearnedSet:
     """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
     --path) and save it under out/learned/ with every cycle in <label>_cycles.csv, each as soon as it is
-    extracted (a failure at a later speed or policy keeps what was done). A commanded path must replay
-    (`_extract_commanded`); `cfg`: the walk config of that replay (default WalkConfig())."""
+    extracted. A commanded path must replay (`_extract_commanded`); `cfg`: the walk config of that replay
+    (default WalkConfig()). One job per policy and speed (a measured path: one per policy, rescaled to every
+    speed). In turn (`args.extract_workers` 1, the default) a failure stops there and keeps what was done; over
+    several worker processes every job runs, each saves its path as it ends, and the failures are reported
+    together at the end."""
     from cyberdog.rl.rollout import load_actor  # torch: only here, only when asked
 
     actors, kinds = [load_actor(path) for path in paths], []
@@ -121,28 +125,65 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
     labels = [f"seed{actor.config.train.seed}" for actor in actors]
     if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
         labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
-    learned = LearnedSet()
+    jobs, job_actors = [], []  # (policy file, path kind, label, speed), and its loaded actor
     for path, actor, kind, label in zip(paths, actors, kinds, unique_labels(labels)):
-        seed = actor.config.train.seed
-        for speed in extraction_speeds(actor.config.env, speeds, args.policy_speed, log):
-            prov = {"policy": portable_path(path), "seed": seed, "policy_meta": actor.meta}
-            extract = _extract_commanded if kind == "commanded" else _extract_measured
-            ex = extract(actor, path, speed, args, prov, cfg, log)
-            p = LearnedPath(label, ex.path if kind == "commanded" else ex.trajectory)
-            if kind != "commanded" and label in learned.labels:
-                continue  # a measured path is rescaled to every speed: the first one
-            learned.add(p)
-            file = p.save(out / "learned")
-            write_rows(cycle_rows(ex), out / "learned", f"{file.stem}_cycles")
-            if kind == "commanded":
-                log(f"{file.stem}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles "
-                    f"({ex.path.provenance.get('cycle', args.cycle)}), "
-                    f"{ex.energy:.1f} J per cycle, own H = {p.lift_height:.4f} m -> {file}")
-            else:
-                c = ex.chosen
-                log(f"{file.stem}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
-                    f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
-    return learned
+        job_speeds = extraction_speeds(actor.config.env, speeds, args.policy_speed, log)
+        for v in job_speeds if kind == "commanded" else job_speeds[:1]:
+            jobs.append((path, kind, label, v))
+            job_actors.append(actor)
+    workers = min(getattr(args, "extract_workers", 1) or 1, len(jobs))
+    if workers == 1:
+        learned = LearnedSet()
+        for (path, kind, label, speed), actor in zip(jobs, job_actors):
+            learned.add(_extract_and_save(actor, path, kind, label, speed, args, out, cfg, log)[0])
+        return learned
+    from cyberdog.analysis.parallel import map_in_processes
+
+    log(f"extraction: {len(jobs)} jobs (policy and speed) over {workers} worker processes")
+    done = map_in_processes(functools.partial(_extraction_job, args=args, out=out, cfg=cfg), jobs, workers,
+                            on_result=lambda i, r, n: log(f"extraction job {n} of {len(jobs)} ended: "
+                                                          f"{jobs[i][2]} at {jobs[i][3]:g} m/s"
+                                                          f"{'' if isinstance(r, Path) else ' (failed)'}"))
+    failed = [f"{label} at {speed:g} m/s: {r}" for (_, _, label, speed), r in zip(jobs, done)
+              if not isinstance(r, Path)]
+    if failed:
+        raise UsageError(f"{len(failed)} of {len(jobs)} extraction jobs failed (the others' paths are saved in "
+                         f"{out / 'learned'}): " + "; ".join(failed))
+    return load_learned(done)
+
+
+def _extraction_job(job: tuple, args, out: Path, cfg: C.WalkConfig | None):
+    """One (policy, kind, label, speed) job in a worker process: the saved path's file, or the error's text
+    (a job that fails must not stop the others). Its log lines carry the job's label and speed."""
+    from cyberdog.rl.rollout import load_actor
+
+    path, kind, label, speed = job
+    tag = f"[{label} {speed:g} m/s] "
+    try:
+        return _extract_and_save(load_actor(path), path, kind, label, speed, args, out, cfg,
+                                 lambda m: print(tag + m, flush=True))[1]
+    except UsageError as err:
+        return str(err)
+
+
+def _extract_and_save(actor, path: Path, kind: str, label: str, speed: float, args, out: Path, cfg, log):
+    """Extract `actor`'s path at `speed` and save it and its cycles under out/learned/: (the `LearnedPath`,
+    its file)."""
+    prov = {"policy": portable_path(path), "seed": actor.config.train.seed, "policy_meta": actor.meta}
+    extract = _extract_commanded if kind == "commanded" else _extract_measured
+    ex = extract(actor, path, speed, args, prov, cfg, log)
+    p = LearnedPath(label, ex.path if kind == "commanded" else ex.trajectory)
+    file = p.save(out / "learned")
+    write_rows(cycle_rows(ex), out / "learned", f"{file.stem}_cycles")
+    if kind == "commanded":
+        log(f"{file.stem}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles "
+            f"({ex.path.provenance.get('cycle', args.cycle)}), "
+            f"{ex.energy:.1f} J per cycle, own H = {p.lift_height:.4f} m -> {file}")
+    else:
+        c = ex.chosen
+        log(f"{file.stem}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
+            f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
+    return p, file
 
 
 def _rollout(actor, path: Path, speed: float, args, rollout_seed: int, log):
