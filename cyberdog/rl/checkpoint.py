@@ -141,7 +141,7 @@ BUDGET_FIELDS = ("max_env_steps", "max_episodes")  # what a resume may change: "
 
 
 def budget_change(saved: dict, current: dict, stage: int, path: str | Path = "checkpoint",
-                     done: dict | None = None) -> dict:
+                  done: dict | None = None) -> dict:
     """The budget fields of `stage` that `current` (config dict) changes from `saved` (the checkpoint's), as
     {dotted name: (saved, current)}. Any other difference or a budget of another stage raises `CheckpointError`:
     a resumed run continues the same experiment. Nothing in training depends on the budget but where the stage

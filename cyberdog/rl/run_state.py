@@ -78,14 +78,14 @@ class RunState:
         self.best_score = float(state["best_score"])
         set_rng_state(state["rng"])
         if changes:
-            self._extend(changes)
+            self._change_budget(changes)
         c = self.c
         prior = f", trot prior's weight {self.prior_weight:.4f}" if self.cfg.env.prior_weight > 0 else ""
         print(f"resuming {path}: stage {c['stage']} at env step {c['stage_env_steps']} of the stage "
               f"({c['env_steps']} in all), episode {c['episodes']}, {self.agent.updates} updates{prior}",
               file=sys.stderr, flush=True)
 
-    def _extend(self, changes: dict) -> None:
+    def _change_budget(self, changes: dict) -> None:
         """Continue the current stage under a changed budget (raised, or lowered to a point it has not
         reached). If the run had finished (the budget can then only be raised), its stage-final files
         are kept under the stage's step count (`stage2_final_actor_40000steps.pt`): a longer run never

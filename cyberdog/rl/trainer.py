@@ -21,9 +21,10 @@ resume), the batch in hand is stored and logged, a checkpoint is written and `ru
 starts a fresh episode: the interrupted episode's transitions stay in the buffer but it is not logged as an
 episode. A resume may raise the current stage's budget (`max_env_steps`, `max_episodes`; nothing else may
 differ), or lower it to a point the stage has not reached: the stage goes on to the new end, and a finished
-one (raised only) keeps its earlier stage-final files as `stage<N>_final*_<steps>steps.pt`. Only `checkpoint.pt` carries the replay buffer and the Adam
-moments: the stage-final files (`stage<N>_final.pt`: networks, targets, counters; `stage<N>_final_actor.pt`:
-the actor) hold what `--init-from` and the evaluation need: about 1 MB with 128-unit layers.
+one (raised only) keeps its earlier stage-final files as `stage<N>_final*_<steps>steps.pt`. Only
+`checkpoint.pt` carries the replay buffer and the Adam moments: the stage-final files (`stage<N>_final.pt`:
+networks, targets, counters; `stage<N>_final_actor.pt`: the actor) hold what `--init-from` and the evaluation
+need: about 1 MB with 128-unit layers.
 
 One process per run folder: the trainer holds `cyberdog.runlock.RunLock` on `run_dir` from its construction
 to the end of `run()` (or `close()`), and refuses, before any work, a stage that would end without a single
