@@ -1,14 +1,19 @@
 """The one process pool (`cyberdog.analysis.parallel`): order, in-process shortcut, errors naming the job,
-worker reuse, and a failure that does not wait for the other jobs."""
+worker reuse, a failure that does not wait for the other jobs, and workers that end with their parent."""
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from cyberdog.analysis.parallel import ProcessMap, available_cores, map_in_processes, resolve_workers
+from cyberdog.analysis.parallel import (PARENT_CHECK_S, ProcessMap, available_cores, map_in_processes,
+                                        resolve_workers)
 
 
 def pid_after(delay_s: float) -> tuple[float, int]:
@@ -28,6 +33,49 @@ def fail_fast_or_sleep(delay_s: float) -> float:
         raise RuntimeError("the quick job failed")
     time.sleep(delay_s)
     return delay_s
+
+
+def write_pid_and_sleep(job: tuple[str, float]) -> None:
+    """Leaves its process id in a file of the folder, then sleeps (a long walk that nobody will collect)."""
+    folder, delay_s = job
+    (Path(folder) / f"{os.getpid()}.pid").write_text(str(os.getpid()))
+    time.sleep(delay_s)
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (a container's init may never reap an orphan)."""
+    try:
+        return "\nState:\tZ" not in Path(f"/proc/{pid}/status").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads process states from /proc")
+def test_workers_end_when_their_parent_is_killed(tmp_path):
+    """SIGKILL leaves the parent no time to stop its pool: the workers must notice and end by themselves."""
+    script = ("import sys; sys.path.insert(0, sys.argv[1]); import test_parallel as t; "
+              "from cyberdog.analysis.parallel import map_in_processes; "
+              "map_in_processes(t.write_pid_and_sleep, [(sys.argv[2], 300.0)] * 2, workers=2)")
+    parent = subprocess.Popen([sys.executable, "-c", script, str(Path(__file__).parent), str(tmp_path)],
+                              cwd=Path(__file__).resolve().parents[1])
+    workers: list[int] = []
+    try:
+        deadline = time.monotonic() + 120.0
+        while len(list(tmp_path.glob("*.pid"))) < 2:
+            assert time.monotonic() < deadline and parent.poll() is None, "the two workers never started their jobs"
+            time.sleep(0.2)
+        workers = [int(f.read_text()) for f in tmp_path.glob("*.pid")]
+        assert all(_running(pid) for pid in workers)
+    finally:
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+    deadline = time.monotonic() + 10 * PARENT_CHECK_S + 5.0
+    while any(_running(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = [pid for pid in workers if _running(pid)]
+    for pid in left:  # leave no orphan behind, whatever the verdict
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"workers {left} outlived their killed parent"
 
 
 def test_results_in_job_order_while_workers_finish_out_of_order():

@@ -9,7 +9,9 @@ and debuggers simple.
 `fn` and the jobs must be picklable (a module-level function, `functools.partial` of one, dataclasses).
 Results come back in job order whatever order the workers finish in. A job that raises stops the map; the
 exception keeps its type and gains a note naming the job (index and description), and jobs not yet started
-are cancelled and running ones stopped.
+are cancelled and running ones stopped. A worker whose parent is gone (killed by a signal it could not catch,
+SIGTERM or SIGKILL, which leaves no time to stop the pool) ends itself within `PARENT_CHECK_S`: otherwise it
+would run its job, minutes of walks or an extraction's replay checks, to the end for nobody.
 
 `ProcessMap` keeps its workers between calls, for callers that map many small batches (an optimiser's
 evaluations); `map_in_processes` is the one-shot form.
@@ -19,11 +21,13 @@ from __future__ import annotations
 import multiprocessing
 import operator
 import os
+import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Sequence
 
 DESCRIPTION_CHARS = 200  # a job's repr is cut to this many characters in an error note
+PARENT_CHECK_S = 1.0  # s: how often a worker looks whether the process that started it still runs
 
 
 def available_cores() -> int:
@@ -56,6 +60,19 @@ def _describe(job: Any, describe: Callable[[Any], str] | None) -> str:
     return text if len(text) <= DESCRIPTION_CHARS else text[:DESCRIPTION_CHARS - 1] + "…"
 
 
+def _exit_with_parent(parent_pid: int, every_s: float = PARENT_CHECK_S) -> None:
+    """Worker initializer: a daemon thread ends this worker as soon as its parent process is gone (the worker
+    is then re-parented, so its parent's pid changes). Polling works on every OS, unlike Linux's
+    PR_SET_PDEATHSIG, and costs nothing measurable once a second."""
+    def watch() -> None:
+        while True:
+            time.sleep(every_s)
+            if os.getppid() != parent_pid:
+                os._exit(1)  # no cleanup to wait for: the results have nowhere to go
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
 def _note_failing_job(error: BaseException, index: int, n_jobs: int, job: Any, describe) -> BaseException:
     error.add_note(f"while running job {index} of {n_jobs} (0-based): {_describe(job, describe)}")
     return error
@@ -73,7 +90,8 @@ class ProcessMap:
 
     def _executor(self) -> ProcessPoolExecutor:
         if self._pool is None:  # started on first use: a map of one job never pays for a worker
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"))
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
+                                             initializer=_exit_with_parent, initargs=(os.getpid(),))
         return self._pool
 
     def __call__(self, fn: Callable[[Any], Any], jobs: Sequence, on_result: Callable[[int, Any, int], None] | None
@@ -183,4 +201,5 @@ def map_in_processes(fn: Callable[[Any], Any], jobs: Sequence, workers: int | No
         return run(fn, jobs, on_result=on_result, describe=describe)
 
 
-__all__ = ["QUIET_LIMIT_S", "ProcessMap", "available_cores", "map_in_processes", "milestone", "progress_log", "resolve_workers"]
+__all__ = ["PARENT_CHECK_S", "QUIET_LIMIT_S", "ProcessMap", "available_cores", "map_in_processes", "milestone",
+           "progress_log", "resolve_workers"]
