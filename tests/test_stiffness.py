@@ -102,11 +102,29 @@ def test_each_stiffness_is_its_own_comparison_and_a_fall_is_reported_in_its_row(
     stiff = table["learned", 1.4]
     assert (stiff["walks"], stiff["counted"], stiff["fell"]) == (2, 1, 1)
     assert (table["learned", 1.0]["counted"], table["learned", 1.0]["fell"]) == (2, 0)
+    assert math.isnan(stiff["battery_saving_stood_pct_mean"]), "the walk that did not count fell: nothing to add"
     md = st.write_stiffness(rows, tmp_path)
     line = next(x for x in md.splitlines() if x.startswith("| learned | 1.4x"))
-    assert "1 of 2 did not count, 1 fell" in line and "25.0 %" in line
+    assert "1 of 2 did not count, 1 fell" in line and "25.0 %" in line and "did not fall" not in line
     assert "did not count" not in next(x for x in md.splitlines() if x.startswith("| learned | 1x"))
     assert (tmp_path / "stiffness.json").is_file() and (tmp_path / "stiffness_walks.json").is_file()
+
+
+def test_a_slow_walk_left_out_of_the_saving_is_also_counted_beside_it(tmp_path):
+    """A walk off the band does not count, but the row also gives the saving over every walk that did not fall
+    (its battery per metre as walked), so that a slow, costly walk cannot vanish from the table."""
+    rows = []
+    for seed, learned_slow in (("s0", 0.8), ("s1", 1.4)):  # s1's second walk is slow and costs 40 % more
+        rows += [row("cycloid", seed, 1.4, 1.0), row("straight", seed, 1.4, 1.2), row("learned", seed, 1.4, 0.8)]
+        slow = row("learned", seed, 1.4, learned_slow, mean_speed_mps=0.9 if seed == "s1" else 1.0)
+        rows += [{**r, "draw": 1} for r in (row("cycloid", seed, 1.4, 1.0), row("straight", seed, 1.4, 1.2), slow)]
+    learned = next(r for r in st.stiffness_table(rows) if r["trajectory"] == "learned")
+    assert (learned["walks"], learned["counted"], learned["fell"]) == (4, 3, 0)
+    assert learned["battery_saving_pct_mean"] == pytest.approx(20.0)  # every counted walk saves 20 %
+    # counted too: s0 20 %, s1 (20 % − 40 %) / 2 = −10 %, so the mean over the two seeds is 5 %
+    assert learned["battery_saving_stood_pct_mean"] == pytest.approx(5.0)
+    line = next(x for x in st.write_stiffness(rows, tmp_path).splitlines() if x.startswith("| learned"))
+    assert "20.0 % ± 0.0 (1 of 4 did not count, 0 fell; counting every walk that did not fall: 5.0 % ± " in line
 
 
 def test_each_seed_has_its_own_saving_and_says_why_a_walk_did_not_count(tmp_path):
@@ -171,6 +189,7 @@ def test_the_readme_robustness_table_gives_each_stiffness_its_saving_its_falls_a
     soft = next(x for x in lines if x.startswith("| **replayed learned path, PD 0.7×**"))
     stiff = next(x for x in lines if x.startswith("| **replayed learned path, PD 1.4×**"))
     assert "**15.0 % ± " in soft and "fell" not in soft and "band" not in soft  # 10 % and 20 %
-    # s0 alone counts (its 90 % saving left out for s2, which walked slow); s1's fall and s2's slow walk reported
-    assert "**10.0 % (1 fell, 1 off the ±5 % band, of 3)**" in stiff
+    # s0 alone counts (its 90 % saving left out for s2, which walked slow); s1's fall and s2's slow walk reported,
+    # and the saving with the slow walk counted: s0's 10 % and s2's 90 % (s1 fell: never counted)
+    assert "**10.0 % (1 fell, 1 off the ±5 % band, of 3; with it: 50.0 % ± " in stiff
     assert any(x.startswith("| the policy, closed loop, PD 1.4× | 30.0 %") for x in lines)

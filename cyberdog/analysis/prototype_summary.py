@@ -6,7 +6,10 @@ each as a mean and a 95 % Student-t interval across seeds (`cyberdog.analysis.st
 per 100 m (Eq. 13), Eq. (7) and electrical energy per 100 m, the electrical cost of transport and the range on
 a full charge (the paper's 3,600 → 3,924 m at 1 m/s). A seed's value is the mean over its draws; only walks
 that reached the distance without falling and held the ±5 % speed band count (`walk_counts`), and the rows
-say how many did and how many fell, so a replay that falls is reported, never dropped silently.
+say how many did and how many fell, so a replay that falls is reported, never dropped silently. Where a walk
+stood but did not count (it left the band, or ran out of time before the distance), the row also gives the
+saving counting every walk that did not fall (`walk_stood`: battery per metre of the distance it walked), so a
+slow and costly walk left out of the mean shows what it would have cost the mean.
 
 The learned rows also carry the saving the paper measured on the battery: per seed and draw, Eq. (12)'s
 D = 100·(1 − B_learned / B_min) on the battery used per metre, against the cheaper of the common trajectories
@@ -41,6 +44,12 @@ def walk_counts(row: dict) -> bool:
             and speed_within_band(row["mean_speed_mps"], row["speed_mps"]))
 
 
+def walk_stood(row: dict) -> bool:
+    """A walk that did not fall, whatever its speed and distance: the wider set a row's saving is also given
+    over when some of its walks stood without counting."""
+    return not row["fell"]
+
+
 def _seed_means(walks: list[dict], value) -> list[float]:
     """Per seed, the mean of `value` over its counting walks (seeds without one left out)."""
     out = []
@@ -52,15 +61,16 @@ def _seed_means(walks: list[dict], value) -> list[float]:
 
 
 def battery_savings(rows: list[dict], robot: str, speed: float, against: tuple[str, ...] = COMMON,
-                    of: str = "learned") -> list[float]:
+                    of: str = "learned", counts=walk_counts) -> list[float]:
     """Per seed, the battery saving (%) of the walks named `of` (the learned path; also the policy or the
     searched shape) against the cheaper counting trajectory of `against` (default: the common ones) on the same
-    robot draw at the same lift, averaged over the draws where both counted."""
-    return list(battery_savings_by_seed(rows, robot, speed, against, of).values())
+    robot draw at the same lift, averaged over the draws where both counted (`counts`: which walks count, by
+    default `walk_counts`; `walk_stood` counts every walk that did not fall)."""
+    return list(battery_savings_by_seed(rows, robot, speed, against, of, counts).values())
 
 
 def battery_savings_by_seed(rows: list[dict], robot: str, speed: float, against: tuple[str, ...] = COMMON,
-                            of: str = "learned") -> dict:
+                            of: str = "learned", counts=walk_counts) -> dict:
     """`battery_savings` by seed label: {seed: saving %}, seeds without a draw where both counted left out."""
     here = [r for r in rows if r["robot"] == robot and r["speed_mps"] == speed]
     out = {}
@@ -69,8 +79,8 @@ def battery_savings_by_seed(rows: list[dict], robot: str, speed: float, against:
         for learned in (r for r in here if r["trajectory"] == of and r.get("seed", "") == seed):
             others = [METRICS["battery_pct_per_100m"](r) for r in here
                       if r["trajectory"] in against and r.get("seed", "") == seed
-                      and r.get("draw", 0) == learned.get("draw", 0) and walk_counts(r)]
-            if others and walk_counts(learned):
+                      and r.get("draw", 0) == learned.get("draw", 0) and counts(r)]
+            if others and counts(learned):
                 per_draw.append(100.0 * (1.0 - METRICS["battery_pct_per_100m"](learned) / min(others)))
         if per_draw:
             out[seed] = sum(per_draw) / len(per_draw)
@@ -80,7 +90,8 @@ def battery_savings_by_seed(rows: list[dict], robot: str, speed: float, against:
 def summary_rows(rows: list[dict]) -> list[dict]:
     """Per joint-PD stiffness (`pd_scale`, 1 where a row has none), robot, speed and trajectory: walks, counting
     walks, falls, seeds, and every metric's mean and 95 % CI across seeds; every row but the common trajectories'
-    adds the battery saving against the cheaper common trajectory, and the learned path's and the policy's the
+    adds the battery saving against the cheaper common trajectory (and, where some walks stood without counting,
+    `battery_saving_stood_pct` over every walk that did not fall), and the learned path's and the policy's the
     saving against the searched shape where it was walked; the trot's speed loop (`speed_loop_pct`,
     `speed_loop_at_limit_pct`) is the mean over all the walks, where the rows carry it."""
     out = []
@@ -109,6 +120,9 @@ def _summary_at(rows: list[dict]) -> list[dict]:
                     savings = battery_savings(rows, robot, v, of=name)
                     row["battery_saving_pct_mean"], row["battery_saving_pct_ci95"] = mean_ci(savings)
                     row["battery_saving_seeds"] = len(savings)
+                    if row["walks"] - row["fell"] > row["counted"]:  # some stood without counting: with them too
+                        row["battery_saving_stood_pct_mean"], row["battery_saving_stood_pct_ci95"] = mean_ci(
+                            battery_savings(rows, robot, v, of=name, counts=walk_stood))
                     if name != REFERENCE and any(r["trajectory"] == REFERENCE for r in rows):
                         row["battery_vs_searched_pct_mean"], row["battery_vs_searched_pct_ci95"] = mean_ci(
                             battery_savings(rows, robot, v, against=(REFERENCE,), of=name))
@@ -154,4 +168,4 @@ def summary_markdown(summary: list[dict], robot: str) -> str:
 
 
 __all__ = ["COMMON", "METRICS", "REFERENCE", "battery_savings", "battery_savings_by_seed", "summary_markdown",
-           "summary_rows", "walk_counts"]
+           "summary_rows", "walk_counts", "walk_stood"]

@@ -135,10 +135,14 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
 
 
 def _missed(row: dict) -> str:
-    """" (k fell, m off the ±5 % band, of n)" for a summary row whose walks did not all count; "" if they did."""
+    """" (k fell, m off the ±5 % band, of n)" for a summary row whose walks did not all count, "" if they did;
+    with walks off the band, also the saving counting them ("; with them: s % ± h"): a slow walk left out of the
+    mean must not hide what it cost."""
     off = row["walks"] - row["counted"] - row["fell"]
     parts = [f"{row['fell']} fell"] * bool(row["fell"]) + [f"{off} off the ±5 % band"] * bool(off)
-    return f" ({', '.join(parts)}, of {row['walks']})" if parts else ""
+    stood = mean_ci(row, "battery_saving_stood_pct", ".1f", " %") if off else "–"
+    with_them = f"; with {'it' if off == 1 else 'them'}: {stood}" if stood != "–" else ""
+    return f" ({', '.join(parts)}, of {row['walks']}{with_them})" if parts else ""
 
 
 def stiffness_markdown(walks: list[dict], robot: str = "hardware") -> str:

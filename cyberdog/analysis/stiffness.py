@@ -45,9 +45,10 @@ def run_stiffness(scales=DEFAULT_SCALES, log=print, **prototype) -> list[dict]:
 
 def stiffness_table(rows: list[dict], robot: str = "hardware") -> list[dict]:
     """Per stiffness, speed and trajectory on `robot`: walks, how many counted and fell, battery % per 100 m and
-    the battery saving against the cheaper common trajectory (and against the searched shape), mean and 95 % CI
-    across seeds (`cyberdog.analysis.prototype_summary.summary_rows` at each stiffness)."""
-    keys = ("battery_pct_per_100m", "battery_saving_pct", "battery_vs_searched_pct")
+    the battery saving against the cheaper common trajectory (and against the searched shape, and where some walks
+    stood without counting, over every walk that did not fall), mean and 95 % CI across seeds
+    (`cyberdog.analysis.prototype_summary.summary_rows` at each stiffness)."""
+    keys = ("battery_pct_per_100m", "battery_saving_pct", "battery_vs_searched_pct", "battery_saving_stood_pct")
     out = []
     for r in summary_rows(rows):
         if r["robot"] != robot:
@@ -93,6 +94,8 @@ def stiffness_markdown(table: list[dict]) -> str:
                     saving = "–"
                 missed = r["walks"] - r["counted"]
                 notes = [f"{missed} of {r['walks']} did not count, {r['fell']} fell"] if missed else []
+                if math.isfinite(r["battery_saving_stood_pct_mean"]):  # the walks that stood without counting too
+                    notes.append("counting every walk that did not fall: " + _cell(r, "battery_saving_stood_pct"))
                 if r.get("speed_loop_at_limit_pct", math.nan) >= LOOP_NOTE_PCT:
                     notes.append(f"speed loop at its bound {r['speed_loop_at_limit_pct']:.0f} % of the time")
                 cells[f"{v:g} m/s"] = saving + (f" ({'; '.join(notes)})" if notes else "")
