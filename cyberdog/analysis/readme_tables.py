@@ -140,8 +140,8 @@ def _missed(row: dict) -> str:
     mean must not hide what it cost."""
     off = row["walks"] - row["counted"] - row["fell"]
     parts = [f"{row['fell']} fell"] * bool(row["fell"]) + [f"{off} off the ±5 % band"] * bool(off)
-    stood = mean_ci(row, "battery_saving_stood_pct", ".1f", " %") if off else "–"
-    with_them = f"; with {'it' if off == 1 else 'them'}: {stood}" if stood != "–" else ""
+    stood = mean_ci(row, "battery_saving_stood_pct", ".1f", " %")  # "–" where no walk stood without counting
+    with_them = f"; with {'it' if off == 1 else 'them'}: {stood}" if off and stood != "–" else ""
     return f" ({', '.join(parts)}, of {row['walks']}{with_them})" if parts else ""
 
 
