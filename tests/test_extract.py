@@ -215,7 +215,7 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: ReplayCheck("fell at 2.50 s"))
     assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "none")]) == 2
     err = capsys.readouterr().err
-    assert "no candidate path replays" in err and "cheapest of env seed 1: fell at 2.50 s" in err
+    assert "no candidate path passes the replay check" in err and "cheapest of env seed 1: fell at 2.50 s" in err
     assert not (tmp_path / "none" / "learned" / "seed0_1mps.json").exists()
 
 
@@ -234,7 +234,7 @@ def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys
     assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.0", "1.2", "--rollout-duration",
                           "3.0", "--speed-tolerance", "0.3", "--replay-attempts", "1", "--candidates", "1",
                           "--out", str(tmp_path / "ex")]) == 2
-    assert "no candidate path replays" in capsys.readouterr().err
+    assert "no candidate path passes the replay check" in capsys.readouterr().err
     kept = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json")
     assert kept.provenance["controller"] == dataclasses.asdict(C.EnvConfig().walk.controller)
     assert not (tmp_path / "ex" / "learned" / "seed0_1.2mps.json").exists()
@@ -309,47 +309,58 @@ def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles()
 
 
 def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the_walk_that_fails(monkeypatch):
-    """The check walks the ideal robot (Table 5's 10 s, then the paper's 100 m), then hardware-like robots that
-    the prototype never draws, each over the paper's 100 m, and names the first walk that fails; one of those
-    walks, shortened to 20 m, passes for the plain trot."""
+    """The check walks the ideal robot (Table 5's 10 s), many hardware-like robots over the prototype's walk at
+    both ends of the PD's stiffness, the ideal robot over the paper's 100 m, then hardware-like robots over 100 m,
+    none of them a prototype draw, and names the first walk that fails; one of those walks, shortened to 20 m,
+    passes for the plain trot. The energy per metre is the 100 m hardware-like walks'."""
     from conftest import commanded
     from cyberdog.analysis import replay_check
     from cyberdog.config import HARDWARE_LIKE
-    from cyberdog.config.paper import PAPER_DISTANCE_M
+    from cyberdog.config.paper import PAPER_DISTANCE_M, PROTOTYPE_DISTANCE_M, PROTOTYPE_RUN_UP_S
     from cyberdog.core.learned_set import LearnedPath
     from cyberdog.evaluation.cli import DEFAULT_PROTOTYPE_DRAWS
 
     path = LearnedPath("seed0", commanded(1.2, 0.0, 0))
-    seeds = replay_check.HARDWARE_CHECK_SEEDS
+    seeds, spread = replay_check.HARDWARE_CHECK_SEEDS, replay_check.SPREAD_CHECK_SEEDS
     assert replay_check.CHECK_DISTANCE_M == PAPER_DISTANCE_M == 100.0
-    assert len(seeds) >= 2 and min(seeds) >= 100 * DEFAULT_PROTOTYPE_DRAWS  # far from the prototype's draws
+    assert replay_check.SPREAD_CHECK_DISTANCE_M == PROTOTYPE_DISTANCE_M
+    assert len(seeds) >= 2 and len(spread) >= 8  # two robots at an end cannot tell a path that fails on half
+    assert min(seeds + spread) >= 100 * DEFAULT_PROTOTYPE_DRAWS and not set(seeds) & set(spread)
     hardware = dataclasses.replace(HARDWARE_LIKE, seed=seeds[0])
     assert replay_check.replay_status(path, 1.2, None, 30.0, hardware, 20.0) == "ok"
     calls = []
 
-    def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None, progress=None):
-        calls.append((None if hardware is None else hardware.seed, distance, (cfg or C.WalkConfig()).pid.kp[0]))
+    def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None, progress=None, run_up=0.0):
+        calls.append((None if hardware is None else hardware.seed, distance, (cfg or C.WalkConfig()).pid.kp[0],
+                      run_up))
         fell = hardware is not None and hardware.seed == seeds[-1]
-        return SimpleNamespace(fell=fell, duration=14.0, speed_ok=True, mean_speed=1.2, distance=100.0,
-                               electrical_energy=2000.0 + (0.0 if hardware is None else hardware.seed),
-                               dropped_shifts=1 if distance else 0)
+        return SimpleNamespace(fell=fell, duration=14.0, speed_ok=True, mean_speed=1.2, distance=distance or 12.0,
+                               electrical_energy=(2000.0 + (0.0 if hardware is None else hardware.seed)) * (
+                                   (distance or 12.0) / 100.0), dropped_shifts=1 if distance else 0)
 
     monkeypatch.setattr(replay_check, "replay_walk", stand_in)
     verdict = replay_check.replay_verdict(path, 1.2)
-    pd = replay_check.HARDWARE_CHECK_PD_SCALES
-    assert verdict == f"hardware-like robot (seed {seeds[-1]}, PD {pd[-1]:g}x), 100 m: fell at 14.00 s"
-    # each hardware-like robot with its own PD stiffness (kp 60 N·m/rad × the scale): 1.0, 0.7 and 1.4 among them
-    assert calls == [(None, None, 60.0), (None, 100.0, 60.0)] + [(seed, 100.0, pytest.approx(60.0 * s))
-                                                                  for seed, s in zip(seeds, pd)]
-    assert {1.0, 0.7, 1.4} <= set(pd)
-    # all walk: the energy per metre is the mean over the hardware-like walks only
+    pd, spread_pd = replay_check.HARDWARE_CHECK_PD_SCALES, replay_check.SPREAD_CHECK_PD_SCALES
+    stiffness = f", PD {pd[-1]:g}x" if pd[-1] != 1 else ""  # the PD named where it is not as configured
+    assert verdict == f"hardware-like robot (seed {seeds[-1]}{stiffness}), 100 m: fell at 14.00 s"
+    # each hardware-like robot with its own PD stiffness (kp 60 N·m/rad × the scale): 1.0, 0.7 and 1.4 among them;
+    # the spread walks after the prototype's run-up, the stiff end first
+    assert calls == ([(None, None, 60.0, 0.0)]
+                     + [(seed, PROTOTYPE_DISTANCE_M, pytest.approx(60.0 * s), PROTOTYPE_RUN_UP_S)
+                        for s in spread_pd for seed in spread]
+                     + [(None, 100.0, 60.0, 0.0)]
+                     + [(seed, 100.0, pytest.approx(60.0 * s), 0.0) for seed, s in zip(seeds, pd)])
+    assert {1.0, 0.7, 1.4} <= set(pd) and set(spread_pd) == {0.7, 1.4} and spread_pd[0] == 1.4
+    # all walk: the energy per metre is the mean over the 100 m hardware-like walks only
     monkeypatch.setattr(replay_check, "HARDWARE_CHECK_SEEDS", seeds[:-1])
     lines = []
     check = replay_check.replay_check(path, 1.2, log=lines.append)
     assert check.status == "ok"
-    assert len(lines) == 2 + len(seeds) - 1 and lines[0] == "replay check, ideal robot, 10 s: ok"  # a line a walk
+    assert len(lines) == 2 + 2 * len(spread) + len(seeds) - 1  # a line a walk
+    assert lines[0] == "replay check, ideal robot, 10 s: ok"
+    assert lines[1] == f"replay check, hardware-like robot (seed {spread[0]}, PD 1.4x), 20 m: ok"
     assert check.electrical_J_per_m == pytest.approx((2000.0 + sum(seeds[:-1]) / len(seeds[:-1])) / 100.0)
-    assert check.dropped_shifts == len(seeds)  # the walks' dropped foot shifts, summed (one per 100 m walk here)
+    assert check.dropped_shifts == 2 * len(spread) + len(seeds)  # the walks' dropped shifts (one per distance walk)
     monkeypatch.setattr(replay_check, "replay_walk",
                         lambda *a, **k: SimpleNamespace(fell=False, speed_ok=False, mean_speed=0.9, dropped_shifts=0))
     assert replay_check.replay_verdict(path, 1.2) == "ideal robot, 10 s: speed miss (0.900 m/s)"

@@ -153,6 +153,9 @@ def test_2m_prototype_gives_ideal_and_hardware_rows(rows):
     assert hw["electrical_gap_pct"] == pytest.approx(expected_gap)
     text = proto.prototype_table(rows)
     assert "ASSUMPTION" in text and "3600" in text and "electrical_gap_pct" in text
+    # how much the body rocked, in every row: a steady trot from a stand rocks by a few degrees, not by none
+    for r in rows:
+        assert 0.0 < r["max_roll_rad"] < 0.15 and 0.0 < r["max_pitch_rad"] < 0.15, r
 
 
 def test_battery_percent_is_eq13_and_range_is_consistent(rows):

@@ -205,9 +205,10 @@ def _extraction_options() -> argparse.ArgumentParser:
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--no-replay-check", dest="replay_check", action="store_false",
                    help="keep a commanded path without replaying it first (by default a path that falls or misses "
-                        "the speed in a 10 s and a 100 m replay on the ideal robot, or in 100 m walks on six "
-                        "hardware-like robots that the prototype does not draw, is rejected for the next "
-                        "candidate: the other --cycle choice, then the rollout of the next env seed)")
+                        "the speed in a 10 s and a 100 m replay on the ideal robot, in 100 m walks on six "
+                        "hardware-like robots with the PD at 1, 0.7 and 1.4x, or in the prototype's 20 m walk on "
+                        "eight more at each of 0.7 and 1.4x, none of them a prototype robot, is rejected for the "
+                        "next candidate: the other --cycle choice, then the rollout of the next env seed)")
     g.add_argument("--replay-attempts", type=positive_int, default=3, metavar="N",
                    help="extraction rollouts (env seeds --rollout-seed, +1, ...) tried per speed before giving up "
                         "(default 3)")
@@ -215,7 +216,7 @@ def _extraction_options() -> argparse.ArgumentParser:
                    help="commanded path: keep the first N candidates that replay (one per rollout) and extract "
                         "the one with the least electrical energy per metre on the replay check's hardware-like "
                         f"robots, which the prototype never walks (default {DEFAULT_CANDIDATES}: the first that "
-                        "replays; the battery preset's shipped paths: 3, about 3x the check walks)")
+                        "replays; the battery preset's shipped paths: 2, of up to 16 rollouts)")
     g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
                    help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
     g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the reference foot")

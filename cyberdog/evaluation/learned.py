@@ -13,8 +13,10 @@ from cyberdog import config as C
 from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
                                       extract_from_rollout)
 from cyberdog.analysis.replay_check import (CHECK_DISTANCE_M, HARDWARE_CHECK_PD_SCALES, HARDWARE_CHECK_SEEDS,
-                                           REPLAY_CHECK_S, ReplayCheck, replay_check)
+                                           REPLAY_CHECK_S, SPREAD_CHECK_DISTANCE_M, SPREAD_CHECK_PD_SCALES,
+                                           SPREAD_CHECK_SEEDS, ReplayCheck, replay_check)
 from cyberdog.analysis.report import write_rows
+from cyberdog.config.paper import PROTOTYPE_RUN_UP_S
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
@@ -209,11 +211,11 @@ def _extract_measured(actor, path: Path, speed: float, args, prov: dict, cfg, lo
 
 def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, log):
     """The commanded path kept for `speed`: rollouts with env seeds --rollout-seed, +1, ... (--replay-attempts
-    of them) each give a candidate, the --cycle path, or the other cycle choice if that one does not replay on
-    both robots (`replay_check`). The first --candidates paths that replay are kept as candidates, and the one
-    with the least electrical energy per metre on the check's hardware-like robots (validation robots, never
-    the prototype's) is the path. The candidates and the rejected paths are in its provenance; none replaying
-    is an error."""
+    of them) each give a candidate, the --cycle path, or the other cycle choice if that one does not pass the
+    replay check (`replay_check`: the ideal robot, and hardware-like validation robots at three stiffnesses).
+    The first --candidates paths that pass are kept as candidates, and the one with the least electrical energy
+    per metre on the check's 100 m hardware-like walks (validation robots, never the prototype's) is the path.
+    The candidates and the rejected paths are in its provenance; none passing is an error."""
     rejected, passed = [], []
     # the replay check walks the policy's trot, unless the command line chose one (then a note says so)
     cfg = trot_for(args, cfg or C.WalkConfig(), actor.config.env.walk.controller if args.replay_check else None,
@@ -244,7 +246,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
             break
     if not passed:
         tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
-        raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path replays on both robots "
+        raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path passes the replay check "
                          f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
     # the cheapest on the validation robots; with one candidate (or unchecked) the first
     ex, check, _ = min(passed, key=lambda c: c[1].electrical_J_per_m if c[1].electrical_J_per_m is not None else 0.0)
@@ -254,6 +256,8 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
         "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
         "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS), "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES),
+        "spread_seeds": list(SPREAD_CHECK_SEEDS), "spread_pd_scales": list(SPREAD_CHECK_PD_SCALES),
+        "spread_distance_m": SPREAD_CHECK_DISTANCE_M, "spread_run_up_s": PROTOTYPE_RUN_UP_S,
         "controller": dataclasses.asdict(check_controller)}
     in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
     if check.dropped_shifts or in_rollout:

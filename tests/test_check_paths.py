@@ -1,0 +1,68 @@
+"""tools/check_paths.py: every walk of the replay check, not only up to the first that fails, and a verdict per path."""
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("check_paths", ROOT / "tools/check_paths.py")
+tool = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(tool)
+
+
+@pytest.fixture
+def two_paths(tmp_path):
+    from conftest import commanded
+    from cyberdog.core.learned_set import LearnedPath
+
+    files = [LearnedPath(f"seed{seed}", commanded(1.2, 0.0, seed)).save(tmp_path / "learned") for seed in (0, 1)]
+    return files
+
+
+def test_every_spread_walk_is_walked_and_a_path_that_fails_one_is_named_with_it(two_paths, tmp_path, monkeypatch,
+                                                                                capsys):
+    from cyberdog.analysis import replay_check
+
+    walked = []
+
+    def stand_in(path, speed, cfg=None, duration=10.0, hardware=None, distance=None, progress=None, run_up=0.0):
+        walked.append((path.label, hardware.seed, cfg.pid.kp[0]))
+        slow = path.label == "seed1" and hardware.seed == replay_check.SPREAD_CHECK_SEEDS[0] and cfg.pid.kp[0] > 60
+        return SimpleNamespace(fell=False, speed_ok=not slow, mean_speed=1.1 if slow else 1.2, distance=20.0,
+                               electrical_energy=4000.0, dropped_shifts=0)
+
+    monkeypatch.setattr(replay_check, "replay_walk", stand_in)
+    out = tmp_path / "spread.json"
+    code = tool.main([str(f) for f in two_paths] + ["--parts", "spread", "--workers", "1", "--out", str(out)])
+    n = len(replay_check.SPREAD_CHECK_SEEDS) * len(replay_check.SPREAD_CHECK_PD_SCALES)
+    assert code == 1  # one path failed
+    assert len(walked) == 2 * n  # seed1's failing first walk did not stop its other walks
+    assert sorted({round(kp, 6) for _, _, kp in walked}) == sorted(round(60.0 * s, 6)
+                                                                 for s in replay_check.SPREAD_CHECK_PD_SCALES)
+    result = json.loads(out.read_text())
+    verdicts = {Path(f).name: v for f, v in result["verdicts"].items()}
+    first = replay_check.SPREAD_CHECK_SEEDS[0]
+    assert verdicts[two_paths[0].name] == "ok"
+    assert verdicts[two_paths[1].name] == f"hardware-like robot (seed {first}, PD 1.4x), 20 m: speed miss (1.100 m/s)"
+    slow = [r for r in result["rows"] if r["status"] != "ok"]
+    assert len(slow) == 1 and slow[0]["speed_share"] == pytest.approx(1.1 / 1.2)
+    assert all(r["electrical_J_per_m"] == pytest.approx(200.0) for r in result["rows"])
+    # the output is never overwritten
+    with pytest.raises(SystemExit):
+        tool.main([str(two_paths[0]), "--out", str(out)])
+    assert "exists" in capsys.readouterr().err
+
+
+def test_a_sampled_path_is_refused_before_any_walk(tmp_path, capsys):
+    from test_fast_paths import sampled_trajectory
+
+    from cyberdog.core.learned_set import LearnedPath
+
+    file = LearnedPath("seed0", sampled_trajectory()).save(tmp_path)
+    with pytest.raises(SystemExit):
+        tool.main([str(file)])
+    assert "not commanded paths" in capsys.readouterr().err
