@@ -21,7 +21,7 @@ Each part was needed (measured on the battery preset's 15 paths): checked for 10
 robots, one that fell after 14 s on both prototype robots (and on four of six robots drawn with seeds 0–5);
 with 20 m walks on six, one that walks 20 m and falls within 100 m on both prototype robots; with parts 1 and 2
 alone, a 1.4 m/s path that walks at 98 % of the command on both check robots with the PD 1.4× stiff and at
-90–93 % (twice the battery per metre on some) on 6 of 13 other robots, one of them a prototype robot.
+91–93 % (twice the battery per metre on two) on 3 of 10 test robots, one of them a prototype robot.
 
 The quickest walks first, so that a failing candidate costs little: the ideal robot's 10 s, the spread walks
 (stiffest first), then the 100 m walks. It says "ok" or which robot failed and why; extraction then tries the
