@@ -211,6 +211,9 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     prov = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json").provenance
     assert prov["cycle"] == "cheapest" and prov["rollout_seed"] == 0  # the other cycle choice of the same rollout
     assert prov["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle": "mean", "status": "speed miss (0.911 m/s)"}]
+    from cyberdog.analysis import replay_check as rc
+    assert prov["replay_check"]["spread_seeds"] == list(rc.SPREAD_CHECK_SEEDS)  # what the check walked, recorded
+    assert prov["replay_check"]["hardware_like_pd_scales"] == list(rc.HARDWARE_CHECK_PD_SCALES)
     assert "rejected: the mean path of env seed 0 does not replay" in capsys.readouterr().out
     monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: ReplayCheck("fell at 2.50 s"))
     assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "none")]) == 2

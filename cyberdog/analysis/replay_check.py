@@ -145,6 +145,15 @@ def check_walks(speed: float, cfg: WalkConfig | None = None) -> list[CheckWalk]:
     return walks
 
 
+def check_settings() -> dict:
+    """What the check walks, for a kept path's provenance: distances, robots' seeds and PD scales of each part."""
+    return {"ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
+            "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS),
+            "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES),
+            "spread_seeds": list(SPREAD_CHECK_SEEDS), "spread_pd_scales": list(SPREAD_CHECK_PD_SCALES),
+            "spread_distance_m": SPREAD_CHECK_DISTANCE_M, "spread_run_up_s": PROTOTYPE_RUN_UP_S}
+
+
 def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None, log=None) -> ReplayCheck:
     """Every walk of `check_walks`, stopping at the first that fails: status "ok" and the mean electrical energy
     per metre of the 100 m hardware-like walks, or the first failure, prefixed with its walk ("ideal robot,
@@ -172,5 +181,5 @@ def replay_verdict(path: LearnedPath, speed: float, cfg: WalkConfig | None = Non
 
 __all__ = ["CHECK_DISTANCE_M", "HARDWARE_CHECK_PD_SCALES", "HARDWARE_CHECK_SEEDS", "HEARTBEAT_S", "REPLAY_CHECK_S",
            "SPREAD_CHECK_DISTANCE_M", "SPREAD_CHECK_PD_SCALES", "SPREAD_CHECK_SEEDS", "CheckWalk", "ReplayCheck",
-           "check_walks", "heartbeat", "replay_check", "replay_status", "replay_verdict", "replay_walk",
-           "walk_status"]
+           "check_settings", "check_walks", "heartbeat", "replay_check", "replay_status", "replay_verdict",
+           "replay_walk", "walk_status"]

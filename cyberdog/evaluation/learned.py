@@ -12,11 +12,8 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
                                       extract_from_rollout)
-from cyberdog.analysis.replay_check import (CHECK_DISTANCE_M, HARDWARE_CHECK_PD_SCALES, HARDWARE_CHECK_SEEDS,
-                                           REPLAY_CHECK_S, SPREAD_CHECK_DISTANCE_M, SPREAD_CHECK_PD_SCALES,
-                                           SPREAD_CHECK_SEEDS, ReplayCheck, replay_check)
+from cyberdog.analysis.replay_check import ReplayCheck, check_settings, replay_check
 from cyberdog.analysis.report import write_rows
-from cyberdog.config.paper import PROTOTYPE_RUN_UP_S
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
@@ -254,10 +251,7 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         "status": check.status, "rejected": rejected, "candidates": [c for _, _, c in passed],
         "selected_by": "least electrical energy per metre on the hardware-like check robots",
         "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
-        "ideal_duration_s": REPLAY_CHECK_S, "distance_m": CHECK_DISTANCE_M,
-        "hardware_like_seeds": list(HARDWARE_CHECK_SEEDS), "hardware_like_pd_scales": list(HARDWARE_CHECK_PD_SCALES),
-        "spread_seeds": list(SPREAD_CHECK_SEEDS), "spread_pd_scales": list(SPREAD_CHECK_PD_SCALES),
-        "spread_distance_m": SPREAD_CHECK_DISTANCE_M, "spread_run_up_s": PROTOTYPE_RUN_UP_S,
+        **check_settings(),
         "controller": dataclasses.asdict(check_controller)}
     in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
     if check.dropped_shifts or in_rollout:
