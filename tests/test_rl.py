@@ -105,6 +105,16 @@ def test_mismatched_checkpoint_raises_clear_error(tmp_path):
     trainer.close()  # releases the run folder
     with pytest.raises(CheckpointError, match="does not match the configured networks"):
         Trainer(tiny_config((16,)), tmp_path / "big", init_from=path, progress=False)
+    actor_file = tmp_path / "small_actor.pt"  # an actor file of other networks: one line naming the tensor
+    torch.save({"actor": {k: v for k, v in load_checkpoint(path)["agent"]["loss"].items()
+                          if k.startswith("actor_network_params.")}}, actor_file)
+    with pytest.raises(CheckpointError, match="small_actor.pt: the actor's parameters do not match"):
+        Trainer(tiny_config((16,)), tmp_path / "big2", init_from=actor_file, progress=False)
+    small = {k[len("actor_network_params."):]: v for k, v in load_checkpoint(path)["agent"]["loss"].items()
+             if k.startswith("actor_network_params.")}
+    torch.save({"actor": small}, actor_file)
+    with pytest.raises(CheckpointError, match="small_actor.pt: the actor's .* has shape"):
+        Trainer(tiny_config((16,)), tmp_path / "big3", init_from=actor_file, progress=False)
     # resuming with an edited config.yaml is refused too
     C.save(tiny_config((16,)), tmp_path / "small" / "config.yaml")
     with pytest.raises(CheckpointError, match="another configuration"):

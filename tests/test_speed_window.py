@@ -111,3 +111,43 @@ def test_speed_deadband_is_checked_and_reaches_the_stage_reward():
     with pytest.raises(ValueError, match="speed_deadband"):  # a relabel keeps each stored speed term as it was
         C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_deadband=0.03))
     C.TrainConfig(buffer_between_stages="clear", stage2=C.StageConfig(reward="stage2", speed_deadband=0.03))
+
+
+def test_speed_at_nominal_stride_pays_the_speed_loops_lengthening():
+    """r_v on v · v_cmd / (v_cmd + c), c the trot's speed-loop correction: the speed the gait would walk at the
+    stride its command asks for; off, the speed itself."""
+    def walk(on: bool):
+        env = CyberDogEnv(config=C.EnvConfig(target_speed=1.0, action_mode="foot"),
+                          reward=C.RewardConfig(speed_at_nominal_stride=on))
+        try:
+            env.reset(seed=0)
+            out = []
+            for _ in range(60):
+                _, _, terminated, _, info = env.step(np.zeros(12))
+                assert not terminated
+                out.append((info["forward_speed_used"], info["forward_speed_paid"], info["speed_loop_correction"],
+                            env.controller.commanded_speed(env.t), info["reward_terms"]["speed"]))
+            return np.array(out)
+        finally:
+            env.close()
+
+    on = walk(True)
+    used, paid, c, cmd, term = on.T
+    assert np.abs(c).max() > 0.01  # the loop did lengthen or shorten the stride (m/s)
+    np.testing.assert_allclose(paid, used * cmd / (cmd + c), rtol=1e-12)
+    np.testing.assert_allclose(term, (cmd - paid) ** 2, rtol=1e-9, atol=1e-15)
+    off = walk(False)
+    np.testing.assert_allclose(off[:, 1], off[:, 0], rtol=0)  # paid = used
+    np.testing.assert_allclose(off[:, 4], (off[:, 3] - off[:, 0]) ** 2, rtol=1e-9, atol=1e-15)
+
+
+def test_speed_at_nominal_stride_is_checked_and_reaches_the_stage_reward():
+    with pytest.raises(ValueError, match="speed_at_nominal_stride"):
+        C.RewardConfig(speed_at_nominal_stride=1)
+    with pytest.raises(ValueError, match="speed_at_nominal_stride"):
+        C.StageConfig(speed_at_nominal_stride="yes")
+    assert C.stage_reward(C.StageConfig(reward="stage2", speed_at_nominal_stride=True)).speed_at_nominal_stride
+    assert not C.stage_reward(C.StageConfig(reward="stage2")).speed_at_nominal_stride
+    with pytest.raises(ValueError, match="speed_at_nominal_stride"):
+        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", energy_weight=0.0,
+                                                                            speed_at_nominal_stride=True))

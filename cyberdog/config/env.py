@@ -47,6 +47,12 @@ class RewardConfig:
     # window's means with speed_window > 0). 0 = the paper's term. A share inside the evaluation's ±5 % band
     # leaves the gait free to walk anywhere near the command and pays it only for walking off it
     speed_deadband: float = 0.0
+    # r_v on the speed the gait walks at the stride its command asks for: v_x · v_cmd / (v_cmd + c), with c (m/s)
+    # the trot's speed-loop correction (ControllerConfig.max_speed_correction bounds it), which lengthens the
+    # stride when the body falls behind. False = v_x, the paper's. A foot-mode gait that leans on the loop walks
+    # the command where training drew its robots and leaves the loop no margin for a robot that needs more (a
+    # stiffer joint PD); paid for that lean, it carries the speed in its own foot path
+    speed_at_nominal_stride: bool = False
 
     @functools.cached_property
     def weights(self) -> dict[str, float]:
@@ -67,6 +73,8 @@ class RewardConfig:
                "in [0, 10] s (0 = per step, the paper's)", self.speed_window)
         _check(0 <= self.speed_deadband < 1 and math.isfinite(self.speed_deadband), "RewardConfig.speed_deadband",
                "in [0, 1) (a share of the command; 0 = the paper's)", self.speed_deadband)
+        _check(isinstance(self.speed_at_nominal_stride, bool), "RewardConfig.speed_at_nominal_stride",
+               "True or False", self.speed_at_nominal_stride)
 
 
 STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0

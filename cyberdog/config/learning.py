@@ -111,6 +111,9 @@ class StageConfig:
     speed_deadband: Optional[float] = None  # share of the command within which the speed term is 0
     #                                         (RewardConfig.speed_deadband); None = the paper's term. With
     #                                         "relabel" both stages must have the same (TrainConfig checks)
+    speed_at_nominal_stride: Optional[bool] = None  # the speed term on the speed at the commanded stride
+    #                                                 (RewardConfig.speed_at_nominal_stride); None = the
+    #                                                 preset's (False). With "relabel" both stages must agree
     y_offset_weight: Optional[float] = None  # B of Eq. (10) per m² for this stage; None = the preset's (−20).
     #                                          An actor that does not see the lateral offset cannot hold the
     #                                          line (the trot controller's heading correction does), so for it
@@ -121,6 +124,10 @@ class StageConfig:
     #                                     stages must name the same model: the stored step energy is the model's
     action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
     trot_imitation: Optional[float] = None  # the pull toward the trot's torque in this stage; None = the agent's
+    actor_anchor: float = 0.0  # actor loss += actor_anchor · mean((μ(s) − μ₀(s))²), μ₀ the actor this stage
+    #                            started from (frozen): a continuation of a trained actor under critics that
+    #                            have not yet learned its returns stays near it instead of following their
+    #                            early action gradients (0 = none)
     actor_lr: Optional[float] = None  # the actor's learning rate in this stage; None = agent.actor_lr
     fresh_actor_optimizer: bool = False  # start the stage with a new Adam for the actor: the moments it kept
     #                                      were scaled to the previous stage's loss, and a larger gradient now
@@ -152,6 +159,9 @@ class StageConfig:
                "StageConfig.speed_window", "None (per step) or in [0, 10] s", self.speed_window)
         _check(self.speed_deadband is None or (math.isfinite(self.speed_deadband) and 0 <= self.speed_deadband < 1),
                "StageConfig.speed_deadband", "None (the paper's term) or in [0, 1)", self.speed_deadband)
+        _check(self.speed_at_nominal_stride is None or isinstance(self.speed_at_nominal_stride, bool),
+               "StageConfig.speed_at_nominal_stride", "None (the preset's), True or False",
+               self.speed_at_nominal_stride)
         _check(self.y_offset_weight is None or (math.isfinite(self.y_offset_weight) and self.y_offset_weight <= 0),
                "StageConfig.y_offset_weight", "None (the preset's) or a finite number <= 0 (per m²)",
                self.y_offset_weight)
@@ -166,6 +176,8 @@ class StageConfig:
         _check(self.trot_imitation is None or (math.isfinite(self.trot_imitation) and self.trot_imitation >= 0),
                "StageConfig.trot_imitation", "None (agent.trot_imitation) or a finite number >= 0",
                self.trot_imitation)
+        _check(math.isfinite(self.actor_anchor) and self.actor_anchor >= 0, "StageConfig.actor_anchor",
+               "a finite number >= 0", self.actor_anchor)
         for n in ("stop_score", "save_score"):
             _check(not math.isnan(getattr(self, n)), f"StageConfig.{n}", "a number (.inf allowed)",
                    getattr(self, n))
@@ -173,7 +185,8 @@ class StageConfig:
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
     """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight`,
-    `speed_weight`, `speed_window`, `speed_deadband`, `y_offset_weight` and `energy_model` if set."""
+    `speed_weight`, `speed_window`, `speed_deadband`, `speed_at_nominal_stride`, `y_offset_weight` and
+    `energy_model` if set."""
     preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
     changes = {}
     if stage.energy_weight is not None:
@@ -186,6 +199,8 @@ def stage_reward(stage: StageConfig) -> RewardConfig:
         changes["speed_window"] = float(stage.speed_window)
     if stage.speed_deadband is not None:
         changes["speed_deadband"] = float(stage.speed_deadband)
+    if stage.speed_at_nominal_stride is not None:
+        changes["speed_at_nominal_stride"] = stage.speed_at_nominal_stride
     if stage.y_offset_weight is not None:
         changes["y_offset"] = float(stage.y_offset_weight)
     if stage.energy_model is not None:
@@ -249,6 +264,10 @@ class TrainConfig:
         bands = [stage_reward(s).speed_deadband for s in (self.stage1, self.stage2)]
         _check(self.buffer_between_stages != "relabel" or bands[0] == bands[1], "TrainConfig.stage1.speed_deadband",
                f"the same deadband as stage2's ({bands[1]}) with buffer_between_stages='relabel'", bands[0])
+        strides = [stage_reward(s).speed_at_nominal_stride for s in (self.stage1, self.stage2)]
+        _check(self.buffer_between_stages != "relabel" or strides[0] == strides[1],
+               "TrainConfig.stage1.speed_at_nominal_stride",
+               f"the same as stage2's ({strides[1]}) with buffer_between_stages='relabel'", strides[0])
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",

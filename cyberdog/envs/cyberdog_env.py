@@ -150,7 +150,9 @@ class CyberDogEnv(gym.Env):
     `step_electrical_energy_J` (None otherwise). With `reward.speed_window` > 0, r_v compares the means of the
     speed and of the command over the last `speed_window` s (the steps since the reset while fewer), so that
     the within-stride surge of a trot is not paid for (`forward_speed_used` stays the step's own speed); with
-    `reward.speed_deadband`, only the error beyond that share of the command.
+    `reward.speed_deadband`, only the error beyond that share of the command; with
+    `reward.speed_at_nominal_stride`, on the speed the gait would walk at the stride its command asks for
+    (`forward_speed_paid`: v · v_cmd / (v_cmd + the trot's speed-loop correction, `speed_loop_correction`)).
 
     **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
     penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
@@ -360,8 +362,12 @@ class CyberDogEnv(gym.Env):
         v_used = self._forward_speed_used(s)
         y = float(s.base_position[1] - self.walker.start[1])
         v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
+        v_paid = v_used
+        stride = v_cmd + self.controller.speed_correction  # m/s: the speed the trot's stride is set for
+        if cfg.reward.speed_at_nominal_stride and stride > 0:  # the speed at the command's own stride
+            v_paid = v_used * v_cmd / stride
         window = self._speed_window
-        v_reward, v_cmd_reward = (v_used, v_cmd) if window is None else window.add(v_used, v_cmd)
+        v_reward, v_cmd_reward = (v_paid, v_cmd) if window is None else window.add(v_paid, v_cmd)
         terms = rewards.reward_terms(v_x=v_reward, v_target=v_cmd_reward, y=y, z=float(s.base_position[2]),
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
                                      episode_time=cfg.episode_time,
@@ -374,7 +380,8 @@ class CyberDogEnv(gym.Env):
         terminated = bool(fallen or not finite)
         info = {"reward_terms": terms, "reward_weighted": weighted, "step_energy_J": step_energy,
                 "step_electrical_energy_J": step_electrical,
-                "forward_speed": v_true, "forward_speed_used": v_used, "target_speed": self.target_speed,
+                "forward_speed": v_true, "forward_speed_used": v_used, "forward_speed_paid": v_paid,
+                "speed_loop_correction": self.controller.speed_correction, "target_speed": self.target_speed,
                 "velocity_estimate": self.walker.velocity_estimate_world, "fallen": bool(fallen),
                 "time": self.t, "prior_weight": prior_weight}
         if terminated:

@@ -176,6 +176,9 @@ class Agent:
         self._fast = FastTD3Losses(self.loss) if td3 and cfg.fast_update else None
         self.updates = 0  # critic updates done
         self.actor_updates = 0  # actor (and target) updates done
+        self.actor_from_file = False  # the actor came from an actor file (`load_actor`): it needs no random start
+        self.actor_anchor = 0.0  # the pull toward `anchor` (the trainer sets a stage's own: StageConfig.actor_anchor)
+        self.anchor = None  # frozen copy of the actor's parameters the pull is toward (`set_anchor`)
         self._last_actor_loss = torch.tensor(math.nan, device=self.device)
 
     @property
@@ -269,13 +272,20 @@ class Agent:
         - `trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²)` over the transitions with a reference: pulls a
           torque policy toward the share of the trot controller's torque a_trot (stored per transition,
           `EnvConfig.trot_reference`) that the prior of weight w (`imitation_scale` = 1 − w) no longer gives;
-          TD3+BC's regulariser (Fujimoto & Gu 2021) with the trot as the behaviour."""
+          TD3+BC's regulariser (Fujimoto & Gu 2021) with the trot as the behaviour;
+        - `actor_anchor · mean((μ(s) − μ₀(s))²)`: the pull toward the frozen actor `anchor` (`set_anchor`), the
+          same regulariser with the actor a stage started from as the behaviour."""
         if self.action_l2 > 0:
             loss = loss + self.action_l2 * now.pow(2).mean()
         if nxt is not None:
             loss = loss + self.cfg.action_smoothness * (nxt - now).pow(2).mean()
         if near is not None:
             loss = loss + self.cfg.action_spatial_smoothness * (near - now).pow(2).mean()
+        if self.actor_anchor > 0 and self.anchor is not None:
+            with torch.no_grad(), self.anchor.to_module(self.loss.actor_network):
+                start = self.loss.actor_network(TensorDict({"observation": batch["observation"]},
+                                                           batch_size=batch.batch_size[:1]))["action"]
+            loss = loss + self.actor_anchor * (now - start).pow(2).mean()
         if self.trot_imitation > 0:
             reference = batch[TROT_ACTION_KEY]
             known = torch.isfinite(reference).all(-1)
@@ -284,6 +294,10 @@ class Agent:
                 error = (now - target).pow(2).mean(-1)
                 loss = loss + self.trot_imitation * (error * known).sum() / known.sum()
         return loss
+
+    def set_anchor(self) -> None:
+        """Freeze a copy of the actor's parameters as it is now: what `actor_anchor` pulls toward."""
+        self.anchor = self.loss.actor_network_params.detach().clone()
 
     def set_actor_lr(self, lr: float, fresh: bool = False) -> None:
         """The actor's learning rate from now on; `fresh=True` also drops Adam's moments (a new optimizer)."""
@@ -296,7 +310,29 @@ class Agent:
     def state_dict(self) -> dict:
         return {"loss": self.loss.state_dict(), "actor_optimizer": self.actor_optimizer.state_dict(),
                 "critic_optimizer": self.critic_optimizer.state_dict(), "exploration": self.policy.state_dict(),
-                "updates": self.updates, "actor_updates": self.actor_updates}
+                "updates": self.updates, "actor_updates": self.actor_updates,
+                **({"anchor": self.anchor.flatten_keys().to_dict()} if self.anchor is not None else {})}
+
+    def load_actor(self, actor_state: dict) -> None:
+        """Start from an actor alone (an actor file's `actor`, e.g. a shipped policy): the actor and its target
+        take its weights; the critics, their targets, the optimizers, the exploration noise and the counters
+        stay as built (new). The critics then know nothing of this actor's returns: a stage started so wants
+        `critic_warmup_updates` before the actor follows them."""
+        mine = self.loss.state_dict()
+        expected = {k[len("actor_network_params."):] for k in mine if k.startswith("actor_network_params.")}
+        if set(actor_state) != expected:
+            raise ValueError(f"the actor's parameters do not match this agent's: missing "
+                             f"{sorted(expected - set(actor_state))}, unknown {sorted(set(actor_state) - expected)}")
+        for prefix in ("actor_network_params.", "target_actor_network_params."):
+            for k, v in actor_state.items():
+                if mine[prefix + k].shape != v.shape:
+                    raise ValueError(f"the actor's {k} has shape {tuple(v.shape)}, this agent's "
+                                     f"{tuple(mine[prefix + k].shape)}")
+                mine[prefix + k] = v
+        self.loss.load_state_dict(mine)
+        if self._fast is not None:
+            self._fast.refresh()
+        self.actor_from_file = True
 
     def load_state_dict(self, state: dict, optimizers: bool = True) -> None:
         self.loss.load_state_dict(state["loss"])
@@ -311,3 +347,7 @@ class Agent:
                     group["fused"], group["foreach"] = fused, opt.defaults.get("foreach")
             self.policy.load_state_dict(state["exploration"])
             self.updates, self.actor_updates = int(state["updates"]), int(state["actor_updates"])
+            if "anchor" in state:  # a stage pulled toward the actor it started from: the same actor after a resume
+                self.anchor = self.loss.actor_network_params.detach().clone()
+                for key, value in state["anchor"].items():
+                    self.anchor.set(tuple(key.split(".")), value.to(self.device))

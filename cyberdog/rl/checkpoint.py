@@ -94,8 +94,12 @@ def load_torch_file(path: str | Path, what: str):
                               f"(torch.load failed: {type(e).__name__})") from e
 
 
-def load_checkpoint(path: str | Path) -> dict:
+def load_checkpoint(path: str | Path, actor_file: bool = False) -> dict:
+    """A checkpoint the trainer wrote (checkpoint.pt, stage<N>_final.pt); with `actor_file`, an actor file
+    (`stage<N>_actor.pt`, what `--init-from` may start an actor from) is returned as it is."""
     state = load_torch_file(path, "checkpoint")
+    if actor_file and isinstance(state, dict) and "actor" in state and "format" not in state:
+        return state
     if isinstance(state, dict) and "actor" in state and "format" not in state:
         raise CheckpointError(f"{path} is an actor file (for evaluate.py), not a checkpoint: use a run's "
                               f"checkpoint.pt or stage<N>_final.pt")

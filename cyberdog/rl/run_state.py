@@ -28,9 +28,19 @@ class RunState:
         return save_checkpoint(self._state(), self.run_dir / name)
 
     def _load_agent(self, state: dict, path) -> None:
+        if "agent" not in state and "actor" in state:  # an actor file: the actor only, new critics
+            try:
+                self.agent.load_actor(state["actor"])
+            except ValueError as e:
+                raise CheckpointError(f"{path}: {e}") from e
+            stage = self.cfg.train.stage2 if self.stages[0] == 2 else self.cfg.train.stage1
+            print(f"{path}: an actor file; the actor starts from it, the critics anew"
+                  + ("" if stage.critic_warmup_updates else " (with no critic_warmup_updates in this stage the "
+                     "actor follows critics that have not yet learned its returns)"), file=sys.stderr)
+            return
         if "agent" not in state:
-            raise CheckpointError(f"{path} holds no agent (an actor file?); --init-from needs checkpoint.pt or "
-                                  f"stage<N>_final.pt of a run")
+            raise CheckpointError(f"{path} holds no agent; --init-from needs checkpoint.pt, stage<N>_final.pt of a "
+                                  f"run or an actor file")
         agent = state["agent"]
         check_shapes(agent["loss"], self.agent.loss.state_dict(), "the agent", path)
         if "actor_optimizer" in agent:  # checkpoint.pt: the whole agent

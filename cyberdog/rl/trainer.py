@@ -82,7 +82,7 @@ class Trainer(RunState):
         init_state = None
         if not resume:  # bad settings fail here, before the folder is touched
             if init_from is not None:
-                init_state = load_checkpoint(init_from)
+                init_state = load_checkpoint(init_from, actor_file=True)
             trained = init_state is not None and int((init_state.get("agent") or {}).get("updates", 0)) > 0
             C.check_planned_updates(cfg, tuple(stages), trained=trained)
         self.lock = RunLock(self.run_dir).acquire()
@@ -229,6 +229,9 @@ class Trainer(RunState):
         seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
         self.agent.action_l2 = self.cfg.agent.action_l2 if sc.action_l2 is None else sc.action_l2
         self.agent.trot_imitation = self.cfg.agent.trot_imitation if sc.trot_imitation is None else sc.trot_imitation
+        self.agent.actor_anchor = sc.actor_anchor
+        if sc.actor_anchor > 0 and c["stage_env_steps"] == 0:  # the actor this stage starts from (a resume keeps it)
+            self.agent.set_anchor()
         self.agent.set_actor_lr(self.cfg.agent.actor_lr if sc.actor_lr is None else sc.actor_lr,
                                 fresh=sc.fresh_actor_optimizer and c["stage_env_steps"] == 0)
         threads = torch.get_num_threads()  # closing a ParallelEnv raises them by its worker count: restored below
@@ -319,8 +322,9 @@ class Trainer(RunState):
         return (env := self._collection_env()).prior_weight_at(env.prior_steps_done)
 
     def _random_frames_left(self, stage: int) -> int:
-        """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent)."""
-        if stage != self.stages[0] or self.agent.updates > 0:
+        """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent or
+        an actor file's actor)."""
+        if stage != self.stages[0] or self.agent.updates > 0 or self.agent.actor_from_file:
             return 0
         return max(0, self.cfg.train.init_random_frames - self.c["stage_env_steps"])
 

@@ -1,0 +1,90 @@
+"""A continuation from an actor alone: `--init-from` an actor file (new critics) and the pull toward the actor a
+stage started from (StageConfig.actor_anchor), which survives a checkpoint and a resume."""
+import pytest
+import torch
+from tensordict import TensorDict
+
+from conftest import tiny
+from cyberdog import config as C
+from cyberdog.rl.agent import Agent
+from cyberdog.rl.checkpoint import load_torch_file
+from cyberdog.rl.trainer import Trainer
+
+
+def _batch(n: int = 32) -> TensorDict:
+    g = torch.Generator().manual_seed(5)
+    return TensorDict({"observation": torch.randn(n, 50, generator=g),
+                       "action": torch.rand(n, 12, generator=g) * 2 - 1,
+                       "next": {"observation": torch.randn(n, 50, generator=g),
+                                "reward": torch.randn(n, 1, generator=g),
+                                "done": torch.zeros(n, 1, dtype=torch.bool),
+                                "terminated": torch.zeros(n, 1, dtype=torch.bool)}}, [n])
+
+
+def _actions(agent: Agent, obs: torch.Tensor) -> torch.Tensor:
+    with torch.no_grad():
+        return agent.actor(TensorDict({"observation": obs}, [obs.shape[0]]))["action"]
+
+
+def test_the_anchor_term_is_the_distance_to_the_frozen_actor():
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(16,), action_l2=0.0), 50, 12)
+    b = _batch(8)
+    start = _actions(agent, b["observation"])
+    agent.set_anchor()
+    with torch.no_grad():  # the actor moves on; the anchor does not
+        for p in agent.actor_params:
+            p.add_(0.05 * torch.randn_like(p))
+    now = _actions(agent, b["observation"])
+    assert not torch.allclose(now, start)
+    agent.actor_anchor = 3.0
+    got = agent._with_penalties(torch.tensor(1.5), now, None, b)
+    assert float(got) == pytest.approx(1.5 + 3.0 * float(((now - start) ** 2).mean()), rel=1e-6)
+    agent.actor_anchor = 0.0
+    assert float(agent._with_penalties(torch.tensor(1.5), now, None, b)) == pytest.approx(1.5)
+
+
+@pytest.mark.parametrize("anchor", [0.0, 1000.0])
+def test_a_strong_anchor_holds_the_actor_where_it_started(anchor):
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(32, 32), policy_delay=1, actor_lr=3e-3, action_l2=0.0), 50, 12)
+    b = _batch()
+    start = _actions(agent, b["observation"])
+    agent.set_anchor()
+    agent.actor_anchor = anchor
+    for _ in range(200):
+        agent.update(b)
+    moved = float((_actions(agent, b["observation"]) - start).abs().mean())
+    assert (moved < 0.02) if anchor else (moved > 0.1)
+
+
+def test_the_anchor_is_saved_with_the_agent_and_restored():
+    torch.manual_seed(0)
+    agent = Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
+    agent.set_anchor()
+    frozen = agent.anchor.clone()
+    with torch.no_grad():
+        for p in agent.actor_params:
+            p.add_(1.0)
+    other = Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
+    other.load_state_dict(agent.state_dict())
+    assert other.anchor is not None
+    assert all(torch.equal(a, b) for a, b in zip(other.anchor.flatten_keys().values(), frozen.flatten_keys().values()))
+    assert Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12).anchor is None  # none until a stage asks for one
+
+
+def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
+    cfg = tiny("train.learning_starts=0", "train.stage1.max_env_steps=200", "train.batch_size=32")
+    Trainer(cfg, tmp_path / "a", stages=(1,), progress=False).run()
+    actor_file = tmp_path / "a" / "stage1_final_actor.pt"
+    start = load_torch_file(actor_file, "actor")["actor"]
+    cont = C.override(cfg, ["train.stage2.max_env_steps=200", "train.stage2.actor_anchor=5.0"])
+    t = Trainer(cont, tmp_path / "b", stages=(2,), init_from=actor_file, progress=False)
+    t.run()
+    anchor = t.agent.anchor.flatten_keys()
+    assert t.agent.actor_anchor == 5.0 and t.agent.actor_updates > 0
+    assert all(torch.equal(anchor[k], v) for k, v in start.items())  # the actor the stage started from
+    moved = t.agent.loss.actor_network_params.flatten_keys()
+    assert any(not torch.equal(moved[k], v) for k, v in start.items())  # while the actor itself learned
+    with pytest.raises(ValueError, match="actor_anchor"):
+        C.StageConfig(actor_anchor=-1.0)
