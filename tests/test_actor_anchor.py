@@ -88,3 +88,36 @@ def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
     assert any(not torch.equal(moved[k], v) for k, v in start.items())  # while the actor itself learned
     with pytest.raises(ValueError, match="actor_anchor"):
         C.StageConfig(actor_anchor=-1.0)
+
+
+def test_an_observed_stiffness_is_the_drivers_kp_over_the_default():
+    from cyberdog.envs.cyberdog_env import CyberDogEnv, observation_size
+
+    base = C.EnvConfig(action_mode="foot", observe_last_action=True)
+    stiff = C.EnvConfig(action_mode="foot", observe_last_action=True, observe_pd_stiffness=True)
+    assert observation_size(base) == 62 and observation_size(stiff) == 63
+    for scale in (1.0, 1.4):
+        walk = C.WalkConfig()
+        cfg = C.EnvConfig(action_mode="foot", observe_last_action=True, observe_pd_stiffness=True,
+                          walk=C.WalkConfig(**{**walk.__dict__, "pid": walk.pid.stiffness_scaled(scale)}))
+        env = CyberDogEnv(config=cfg)
+        try:
+            obs, _ = env.reset(seed=0)
+            assert obs.shape == (63,) and obs[-1] == pytest.approx(scale, rel=1e-6)
+            obs, *_ = env.step(torch.zeros(12).numpy())
+            assert obs[-1] == pytest.approx(scale, rel=1e-6)
+        finally:
+            env.close()
+
+
+def test_an_actor_of_fewer_inputs_is_widened_and_acts_as_before():
+    torch.manual_seed(0)
+    narrow = Agent(C.AgentConfig(hidden_sizes=(16,)), 62, 12)
+    wide = Agent(C.AgentConfig(hidden_sizes=(16,)), 63, 12)
+    wide.load_actor(narrow.actor.state_dict())
+    obs = torch.randn(6, 62)
+    for extra in (0.0, 1.4, 3.0):  # the new input does not change the action until training uses it
+        widened = torch.cat([obs, torch.full((6, 1), extra)], 1)
+        assert torch.allclose(_actions(wide, widened), _actions(narrow, obs), atol=1e-6)
+    with pytest.raises(ValueError, match="has shape"):  # another hidden size is not widened
+        Agent(C.AgentConfig(hidden_sizes=(32,)), 63, 12).load_actor(narrow.actor.state_dict())

@@ -6,7 +6,7 @@
 state and may command another path under a stiffer PD; this script asks whether the path it commands *there*
 replays better there. For one actor: a deterministic rollout at each speed in the actor's env with the joint
 PD scaled by `--pd-scale` (kp × s, kd × √s: `PIDConfig.stiffness_scaled`; the env's own gain draws on top, as
-in training), the mean commanded path of its settled cycles (`commanded_from_rollout`: the first rollout,
+in training, unless `--fixed-gains`), the mean commanded path of its settled cycles (`commanded_from_rollout`: the first rollout,
 env seed 0, 1, ..., that gives one), then the prototype run at the same stiffness on the hardware-like robots
 (`run_prototype`: the path beside the common trajectories at its lift, the battery saving against the cheaper
 one). No candidate selection and no replay check: a measurement, not an extraction for shipping.
@@ -37,6 +37,9 @@ def main(argv=None) -> int:
     p.add_argument("--pd-scale", type=float, required=True, help="the joint PD's stiffness factor s")
     p.add_argument("--speeds", type=float, nargs="+", default=[1.0, 1.2, 1.4], help="m/s (default 1.0 1.2 1.4)")
     p.add_argument("--attempts", type=int, default=3, help="rollouts (env seeds 0, 1, ...) tried per speed")
+    p.add_argument("--fixed-gains", action="store_true",
+                   help="the env's kp and kd draws off: the rollout's PD is exactly s times the configured one (for "
+                        "a policy that observes the stiffness, env.observe_pd_stiffness, the path at s itself)")
     p.add_argument("--out", type=Path, required=True, help="folder for learned/, walks.json and saving.json")
     args = p.parse_args(argv)
     if not (math.isfinite(args.pd_scale) and args.pd_scale > 0):
@@ -50,6 +53,9 @@ def main(argv=None) -> int:
     if env.action_mode != "foot":
         p.error(f"{args.actor} acts on {env.action_mode}, not on foot targets: it commands no path")
     env = dataclasses.replace(env, walk=dataclasses.replace(env.walk, pid=env.walk.pid.stiffness_scaled(args.pd_scale)))
+    if args.fixed_gains:
+        env = dataclasses.replace(env, randomization=dataclasses.replace(env.randomization, kp_factor=(1.0, 1.0),
+                                                                         kd_factor=(1.0, 1.0)))
     paths = []
     for v in args.speeds:
         for seed in range(args.attempts):

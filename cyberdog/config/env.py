@@ -107,6 +107,9 @@ class EnvConfig:
     observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
     #                                    in foot mode it is the offset the next action ramps from, which sets
     #                                    the step's jerk and energy; without it the critics cannot see that cost
+    observe_pd_stiffness: bool = False  # append the joint PD's stiffness (1 entry, after the previous action):
+    #                                     the hip kp the drivers run now over the robot's default 60 N·m/rad,
+    #                                     so that a policy may command a path per stiffness a user sets
     # torque mode only: the motor drivers' damping, τ = τ_action − joint_damping·q̇ at every controller period
     # (the drivers' kd with kp = 0). 0 = the paper's pure torque. A documented departure (docs/torque_agent.md): a
     # torque held over Ts = 25 ms cannot damp a light leg, and MathWorks' example, whose settings Table 4 copies,

@@ -44,9 +44,15 @@ OBSERVATION_LAYOUT = (
 LAST_ACTION_LAYOUT = (("last_action", 12, -1.0, 1.0, 1.0),)
 
 
+# appended when `EnvConfig.observe_pd_stiffness` is set: the joint PD's kp over the default (PIDConfig.kp)
+PD_STIFFNESS_LAYOUT = (("pd_stiffness", 1, 0.0, 5.0, 1.0),)
+DEFAULT_KP = C.PIDConfig().kp[1]  # N·m/rad, the hip's: what a stiffness of 1 means
+
+
 def observation_layout(cfg: C.EnvConfig | None = None) -> tuple:
     """The observation's (name, size, low, high, typical magnitude) groups for an env config."""
-    return OBSERVATION_LAYOUT + (LAST_ACTION_LAYOUT if cfg is not None and cfg.observe_last_action else ())
+    return (OBSERVATION_LAYOUT + (LAST_ACTION_LAYOUT if cfg is not None and cfg.observe_last_action else ())
+            + (PD_STIFFNESS_LAYOUT if cfg is not None and cfg.observe_pd_stiffness else ()))
 
 
 def observation_size(cfg: C.EnvConfig | None = None) -> int:
@@ -129,6 +135,7 @@ class CyberDogEnv(gym.Env):
     | 47 | commanded speed (ramped up over the first `speed_ramp_time`, then the set speed) | m/s |
     | 48:50 | sin, cos of the gait phase | – |
     | 50:62 | the previous action, only with `observe_last_action` | action units |
+    | next | the joint PD's stiffness (hip kp / 60 N·m/rad), only with `observe_pd_stiffness` | – |
 
     The paper's model has 111 observations in these groups (torso position, orientation, joint angles,
     3-D velocities, angular velocities, joint velocities, joint torques, Section 2); its full list is not
@@ -402,7 +409,8 @@ class CyberDogEnv(gym.Env):
             [s.base_position[2], s.base_position[1] - self.walker.start[1]], s.base_rpy, v_body,
             s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(t)],
             [np.sin(phase), np.cos(phase)]]
-            + ([self._last_action] if self.cfg.observe_last_action else [])).astype(np.float32)
+            + ([self._last_action] if self.cfg.observe_last_action else [])
+            + ([[self.controller.pid.kp[1] / DEFAULT_KP]] if self.cfg.observe_pd_stiffness else [])).astype(np.float32)
         if not np.isfinite(obs).all():  # rare (a blown-up state): NaN → 0, ±inf → the extremes, then clipped
             obs = np.nan_to_num(obs, nan=0.0)
         return np.minimum(np.maximum(obs, self.observation_space.low, out=obs), self.observation_space.high, out=obs)

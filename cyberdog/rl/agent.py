@@ -153,6 +153,23 @@ def metrics_to_float(metrics: list[dict[str, torch.Tensor]]) -> dict[str, float]
     return dict(zip(keys, means))
 
 
+def _widened(actor_state: dict, mine: dict) -> dict:
+    """An actor whose observation had fewer entries at the end than this agent's (an input appended since, e.g.
+    `EnvConfig.observe_pd_stiffness`): its first layer gains zero-weight columns and its input scale this
+    agent's scale for the new entries, so that it acts exactly as before and may learn to use them."""
+    first = next((k for k in actor_state if k.endswith("net.0.weight")), None)
+    scale = next((k for k in actor_state if k.endswith("observation_scale")), None)
+    if first is None or scale is None or first not in mine or scale not in mine:
+        return actor_state
+    extra = mine[first].shape[1] - actor_state[first].shape[1]
+    if extra <= 0 or mine[first].shape[0] != actor_state[first].shape[0]:
+        return actor_state
+    out = dict(actor_state)
+    out[first] = torch.cat([actor_state[first], actor_state[first].new_zeros(actor_state[first].shape[0], extra)], 1)
+    out[scale] = torch.cat([actor_state[scale], mine[scale][-extra:].to(actor_state[scale])])
+    return out
+
+
 class Agent:
     """Loss, optimizers and the update schedule of one TD3 or DDPG agent."""
 
@@ -314,11 +331,13 @@ class Agent:
                 **({"anchor": self.anchor.flatten_keys().to_dict()} if self.anchor is not None else {})}
 
     def load_actor(self, actor_state: dict) -> None:
-        """Start from an actor alone (an actor file's `actor`, e.g. a shipped policy): the actor and its target
-        take its weights; the critics, their targets, the optimizers, the exploration noise and the counters
+        """Start from an actor alone (an actor file's `actor`, e.g. a shipped policy; one that observed fewer
+        entries at the end is widened, `_widened`): the actor and its target take its weights; the critics, their targets, the optimizers, the exploration noise and the counters
         stay as built (new). The critics then know nothing of this actor's returns: a stage started so wants
         `critic_warmup_updates` before the actor follows them."""
         mine = self.loss.state_dict()
+        actor_state = _widened(actor_state, {k[len("actor_network_params."):]: v for k, v in mine.items()
+                                             if k.startswith("actor_network_params.")})
         expected = {k[len("actor_network_params."):] for k in mine if k.startswith("actor_network_params.")}
         if set(actor_state) != expected:
             raise ValueError(f"the actor's parameters do not match this agent's: missing "
