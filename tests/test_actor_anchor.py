@@ -80,6 +80,7 @@ def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
     start = load_torch_file(actor_file, "actor")["actor"]
     cont = C.override(cfg, ["train.stage2.max_env_steps=200", "train.stage2.actor_anchor=5.0"])
     t = Trainer(cont, tmp_path / "b", stages=(2,), init_from=actor_file, progress=False)
+    assert not t.agent.load_actor(start) and t.agent.actor_from_file  # the same inputs: nothing widened
     t.run()
     anchor = t.agent.anchor.flatten_keys()
     assert t.agent.actor_anchor == 5.0 and t.agent.actor_updates > 0
@@ -114,7 +115,7 @@ def test_an_actor_of_fewer_inputs_is_widened_and_acts_as_before():
     torch.manual_seed(0)
     narrow = Agent(C.AgentConfig(hidden_sizes=(16,)), 62, 12)
     wide = Agent(C.AgentConfig(hidden_sizes=(16,)), 63, 12)
-    wide.load_actor(narrow.actor.state_dict())
+    assert wide.load_actor(narrow.actor.state_dict()) == 16 + 1  # a column of 16 weights, one input scale
     obs = torch.randn(6, 62)
     for extra in (0.0, 1.4, 3.0):  # the new input does not change the action until training uses it
         widened = torch.cat([obs, torch.full((6, 1), extra)], 1)

@@ -330,14 +330,17 @@ class Agent:
                 "updates": self.updates, "actor_updates": self.actor_updates,
                 **({"anchor": self.anchor.flatten_keys().to_dict()} if self.anchor is not None else {})}
 
-    def load_actor(self, actor_state: dict) -> None:
+    def load_actor(self, actor_state: dict) -> int:
         """Start from an actor alone (an actor file's `actor`, e.g. a shipped policy; one that observed fewer
-        entries at the end is widened, `_widened`): the actor and its target take its weights; the critics, their targets, the optimizers, the exploration noise and the counters
+        entries at the end is widened, `_widened`; returns the parameters that widening added, 0 without): the
+        actor and its target take its weights; the critics, their targets, the optimizers, the exploration noise and the counters
         stay as built (new). The critics then know nothing of this actor's returns: a stage started so wants
         `critic_warmup_updates` before the actor follows them."""
         mine = self.loss.state_dict()
+        given = sum(v.numel() for v in actor_state.values())
         actor_state = _widened(actor_state, {k[len("actor_network_params."):]: v for k, v in mine.items()
                                              if k.startswith("actor_network_params.")})
+        added = sum(v.numel() for v in actor_state.values()) - given
         expected = {k[len("actor_network_params."):] for k in mine if k.startswith("actor_network_params.")}
         if set(actor_state) != expected:
             raise ValueError(f"the actor's parameters do not match this agent's: missing "
@@ -352,6 +355,7 @@ class Agent:
         if self._fast is not None:
             self._fast.refresh()
         self.actor_from_file = True
+        return added
 
     def load_state_dict(self, state: dict, optimizers: bool = True) -> None:
         self.loss.load_state_dict(state["loss"])

@@ -30,11 +30,12 @@ class RunState:
     def _load_agent(self, state: dict, path) -> None:
         if "agent" not in state and "actor" in state:  # an actor file: the actor only, new critics
             try:
-                self.agent.load_actor(state["actor"])
+                added = self.agent.load_actor(state["actor"])
             except ValueError as e:
                 raise CheckpointError(f"{path}: {e}") from e
             stage = self.cfg.train.stage2 if self.stages[0] == 2 else self.cfg.train.stage1
             print(f"{path}: an actor file; the actor starts from it, the critics anew"
+                  + (f"; its first layer widened by {added} zero weights for inputs it did not observe" if added else "")
                   + ("" if stage.critic_warmup_updates else " (with no critic_warmup_updates in this stage the "
                      "actor follows critics that have not yet learned its returns)"), file=sys.stderr)
             return
