@@ -410,7 +410,8 @@ class CyberDogEnv(gym.Env):
             s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(t)],
             [np.sin(phase), np.cos(phase)]]
             + ([self._last_action] if self.cfg.observe_last_action else [])
-            + ([[self.controller.pid.kp[1] / DEFAULT_KP]] if self.cfg.observe_pd_stiffness else [])).astype(np.float32)
+            + ([[self.controller.pid.kp[1] / DEFAULT_KP]] if self.cfg.observe_pd_stiffness else [])
+        ).astype(np.float32)
         if not np.isfinite(obs).all():  # rare (a blown-up state): NaN → 0, ±inf → the extremes, then clipped
             obs = np.nan_to_num(obs, nan=0.0)
         return np.minimum(np.maximum(obs, self.observation_space.low, out=obs), self.observation_space.high, out=obs)

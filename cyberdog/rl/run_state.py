@@ -35,7 +35,8 @@ class RunState:
                 raise CheckpointError(f"{path}: {e}") from e
             stage = self.cfg.train.stage2 if self.stages[0] == 2 else self.cfg.train.stage1
             print(f"{path}: an actor file; the actor starts from it, the critics anew"
-                  + (f"; its first layer widened by {added} zero weights for inputs it did not observe" if added else "")
+                  + (f"; its first layer widened by {added} zero weights for inputs it did not observe"
+                     if added else "")
                   + ("" if stage.critic_warmup_updates else " (with no critic_warmup_updates in this stage the "
                      "actor follows critics that have not yet learned its returns)"), file=sys.stderr)
             return
