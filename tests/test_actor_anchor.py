@@ -1,24 +1,16 @@
-"""A continuation from an actor alone: `--init-from` an actor file (new critics) and the pull toward the actor a
-stage started from (StageConfig.actor_anchor), which survives a checkpoint and a resume."""
+"""A continuation from an actor alone: `--init-from` an actor file (new critics; widened for an input it did not
+observe, `observe_pd_stiffness`) and the pull toward the actor a stage started from (StageConfig.actor_anchor),
+which survives a checkpoint and a resume."""
 import pytest
 import torch
 from tensordict import TensorDict
 
 from conftest import tiny
+from rl_helpers import batch as _batch
 from cyberdog import config as C
 from cyberdog.rl.agent import Agent
-from cyberdog.rl.checkpoint import load_torch_file
+from cyberdog.rl.checkpoint import load_checkpoint, load_torch_file
 from cyberdog.rl.trainer import Trainer
-
-
-def _batch(n: int = 32) -> TensorDict:
-    g = torch.Generator().manual_seed(5)
-    return TensorDict({"observation": torch.randn(n, 50, generator=g),
-                       "action": torch.rand(n, 12, generator=g) * 2 - 1,
-                       "next": {"observation": torch.randn(n, 50, generator=g),
-                                "reward": torch.randn(n, 1, generator=g),
-                                "done": torch.zeros(n, 1, dtype=torch.bool),
-                                "terminated": torch.zeros(n, 1, dtype=torch.bool)}}, [n])
 
 
 def _actions(agent: Agent, obs: torch.Tensor) -> torch.Tensor:
@@ -48,7 +40,7 @@ def test_the_anchor_term_is_the_distance_to_the_frozen_actor():
 def test_a_strong_anchor_holds_the_actor_where_it_started(anchor):
     torch.manual_seed(0)
     agent = Agent(C.AgentConfig(hidden_sizes=(32, 32), policy_delay=1, actor_lr=3e-3, action_l2=0.0), 50, 12)
-    b = _batch()
+    b = _batch(32)
     start = _actions(agent, b["observation"])
     agent.set_anchor()
     agent.actor_anchor = anchor
@@ -78,6 +70,20 @@ def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
     Trainer(cfg, tmp_path / "a", stages=(1,), progress=False).run()
     actor_file = tmp_path / "a" / "stage1_final_actor.pt"
     start = load_torch_file(actor_file, "actor")["actor"]
+    # its actor (and the target actor) start from the file, the critics anew, no uniform random start
+    random_start = C.override(cfg, ["train.stage2.max_env_steps=200", "train.init_random_frames=100"])
+    fresh = Trainer(random_start, tmp_path / "fresh", stages=(2,), init_from=actor_file, progress=False)
+    try:
+        mine = fresh.agent.loss.state_dict()
+        for k, v in start.items():
+            assert torch.equal(mine["actor_network_params." + k], v)
+            assert torch.equal(mine["target_actor_network_params." + k], v)
+        trained = load_checkpoint(tmp_path / "a" / "stage1_final.pt")["agent"]["loss"]
+        critics = [k for k in trained if k.startswith("qvalue_network_params.") and k.endswith("weight")]
+        assert critics and not any(torch.equal(mine[k], trained[k]) for k in critics)  # stage 1 trained its own
+        assert fresh.agent.updates == 0 and fresh._random_frames_left(2) == 0
+    finally:
+        fresh.close()
     cont = C.override(cfg, ["train.stage2.max_env_steps=200", "train.stage2.actor_anchor=5.0"])
     t = Trainer(cont, tmp_path / "b", stages=(2,), init_from=actor_file, progress=False)
     assert not t.agent.load_actor(start) and t.agent.actor_from_file  # the same inputs: nothing widened

@@ -14,6 +14,9 @@ from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import TrotController
 from cyberdog.core import rewards
 from cyberdog.core.kinematics import UnreachableFootTarget
+from cyberdog.envs.observation import (DEFAULT_KP, LAST_ACTION_LAYOUT, OBSERVATION_LAYOUT,  # noqa: F401 (re-exported)
+                                      PD_STIFFNESS_LAYOUT, actor_observation_scale, observation_layout,
+                                      observation_size, observation_typical_magnitude)
 from cyberdog.loop.walker import Walker
 from cyberdog.sim.hardware import draw_mass_scale, draw_robot, resolve_draw
 
@@ -23,67 +26,6 @@ PAPER_REWARD_WARNING = (
     "default) has no fall penalty, and with it falling early scores higher than walking: a policy trained on it "
     "learns to fall. Train with reward='stage1' first, or with a larger keep-moving bonus (RewardConfig("
     "keep_moving=300), as configs/quick*.yaml's stage 2); see docs/environment.md")
-
-# Observation layout: (name, size, low, high, typical magnitude). Bounds are generous physical limits, values
-# are clipped to them; the typical magnitude is what a learner may divide by to bring inputs to order one.
-OBSERVATION_LAYOUT = (
-    ("body_height", 1, 0.0, 1.0, 0.3),  # m, z of the body centre
-    ("lateral_offset", 1, -5.0, 5.0, 0.1),  # m, y from the straight line walked
-    ("body_rpy", 3, -np.pi, np.pi, 0.2),  # rad, roll, pitch, yaw
-    ("body_linear_velocity", 3, -10.0, 10.0, 1.0),  # m/s, body frame (true or estimated)
-    ("body_angular_velocity", 3, -50.0, 50.0, 2.0),  # rad/s, body frame
-    ("joint_angles", 12, -2 * np.pi, 2 * np.pi, 1.5),  # rad
-    ("joint_velocities", 12, -100.0, 100.0, 10.0),  # rad/s
-    ("joint_torques", 12, -100.0, 100.0, 10.0),  # N·m, motor torque applied over the last controller period
-    ("target_speed", 1, 0.0, 10.0, 1.0),  # m/s
-    ("gait_phase", 2, -1.0, 1.0, 1.0),  # sin, cos of the trot phase (LF leg)
-)
-
-
-# appended when `EnvConfig.observe_last_action` is set: the previous action, in action units
-LAST_ACTION_LAYOUT = (("last_action", 12, -1.0, 1.0, 1.0),)
-
-
-# appended when `EnvConfig.observe_pd_stiffness` is set: the joint PD's kp over the default (PIDConfig.kp)
-PD_STIFFNESS_LAYOUT = (("pd_stiffness", 1, 0.0, 5.0, 1.0),)
-DEFAULT_KP = C.PIDConfig().kp[1]  # N·m/rad, the hip's: what a stiffness of 1 means
-
-
-def observation_layout(cfg: C.EnvConfig | None = None) -> tuple:
-    """The observation's (name, size, low, high, typical magnitude) groups for an env config."""
-    return (OBSERVATION_LAYOUT + (LAST_ACTION_LAYOUT if cfg is not None and cfg.observe_last_action else ())
-            + (PD_STIFFNESS_LAYOUT if cfg is not None and cfg.observe_pd_stiffness else ()))
-
-
-def observation_size(cfg: C.EnvConfig | None = None) -> int:
-    """Entries of the observation: 50 (Table 3's groups), 62 with `observe_last_action`."""
-    return sum(n for _, n, _, _, _ in observation_layout(cfg))
-
-
-def observation_typical_magnitude(cfg: C.EnvConfig | None = None) -> np.ndarray:
-    """Typical magnitude of each observation entry (for input scaling in a learner), (50,) or (62,)."""
-    return np.concatenate([np.full(n, m, dtype=np.float32) for _, n, _, _, m in observation_layout(cfg)])
-
-
-def actor_observation_scale(cfg: C.EnvConfig | None = None, groups=()) -> np.ndarray:
-    """The input scale of an actor that sees only the observation `groups` (names of the layout; () = all):
-    the typical magnitude for the entries it sees, +inf for the others, so that s / scale is exactly 0 there
-    (observations are clipped to finite bounds). Hiding inputs this way keeps every network the same shape
-    as the full-observation one (checkpoints, the fast TD3 losses and rollouts need no other change)."""
-    layout = observation_layout(cfg)
-    names = [name for name, *_ in layout]
-    unknown = [g for g in groups if g not in names]
-    if unknown:
-        raise ValueError(f"unknown observation group(s) {unknown} for the actor; this env's groups: {names}")
-    scale = observation_typical_magnitude(cfg)
-    if groups:
-        start = 0
-        for name, n, *_ in layout:
-            if name not in groups:
-                scale[start:start + n] = np.inf
-            start += n
-    return scale
-
 
 class CyberDogEnv(gym.Env):
     """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
@@ -120,7 +62,7 @@ class CyberDogEnv(gym.Env):
     (The default lift height in the env is 0.10 m so that the trot stays inside that range; the paper's
     0.15 m needs about 51° of knee flexion.)
 
-    **Observation** (50,) or (62,), float32, clipped to finite bounds (`OBSERVATION_LAYOUT`):
+    **Observation** (50,), (62,) or (63,), float32, clipped to finite bounds (`OBSERVATION_LAYOUT`):
 
     | slice | content | unit |
     |---|---|---|
@@ -370,9 +312,10 @@ class CyberDogEnv(gym.Env):
         y = float(s.base_position[1] - self.walker.start[1])
         v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
         v_paid = v_used
-        stride = v_cmd + self.controller.speed_correction  # m/s: the speed the trot's stride is set for
-        if cfg.reward.speed_at_nominal_stride and stride > 0:  # the speed at the command's own stride
-            v_paid = v_used * v_cmd / stride
+        if cfg.reward.speed_at_nominal_stride:  # the speed at the command's own stride
+            stride = v_cmd + self.controller.speed_correction  # m/s: the speed the trot's stride is set for
+            if stride > 0:
+                v_paid = v_used * v_cmd / stride
         window = self._speed_window
         v_reward, v_cmd_reward = (v_paid, v_cmd) if window is None else window.add(v_paid, v_cmd)
         terms = rewards.reward_terms(v_x=v_reward, v_target=v_cmd_reward, y=y, z=float(s.base_position[2]),

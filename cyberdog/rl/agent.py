@@ -26,7 +26,7 @@ from torchrl.modules import AdditiveGaussianModule, OrnsteinUhlenbeckProcessModu
 from torchrl.objectives import DDPGLoss, SoftUpdate, TD3Loss
 
 from cyberdog.config import AgentConfig
-from cyberdog.envs.cyberdog_env import observation_typical_magnitude
+from cyberdog.envs.observation import observation_typical_magnitude
 from cyberdog.rl.fast_td3 import FastTD3Losses
 from cyberdog.rl.networks import make_actor, make_critic
 from cyberdog.rl.replay import TROT_ACTION_KEY

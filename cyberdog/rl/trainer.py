@@ -49,7 +49,7 @@ from tqdm import tqdm
 from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
-from cyberdog.envs.cyberdog_env import actor_observation_scale, observation_typical_magnitude
+from cyberdog.envs.observation import actor_observation_scale, observation_typical_magnitude
 from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import load_checkpoint, remove_stale_temporaries, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
