@@ -193,3 +193,24 @@ def test_the_readme_robustness_table_gives_each_stiffness_its_saving_its_falls_a
     # and the saving with the slow walk counted: s0's 10 % and s2's 90 % (s1 fell: never counted)
     assert "**10.0 % (1 fell, 1 off the ±5 % band, of 3; with it: 50.0 % ± " in stiff
     assert any(x.startswith("| the policy, closed loop, PD 1.4× | 30.0 %") for x in lines)
+
+
+def test_the_readme_robustness_table_puts_the_re_commanded_paths_beside_the_plain_ones():
+    """The walks of a --pd-matched run give rows of their own, at every stiffness but 1× (where nothing is
+    re-solved), each against the common trajectories of that same run."""
+    from cyberdog.analysis.readme_tables import stiffness_markdown
+
+    def run(learned_battery):
+        return [r for scale in (0.7, 1.0, 1.4) for r in (
+            row("learned", "s0", scale, learned_battery[scale]), row("cycloid", "s0", scale, 1.0 * scale),
+            row("straight", "s0", scale, 2.0))]
+    plain = run({0.7: 0.8, 1.0: 0.8, 1.4: 1.4})  # at 1.4x the plain path saves nothing against a 1.4 cycloid
+    matched = run({0.7: 0.56, 1.0: 0.8, 1.4: 1.12})  # re-commanded: 20 % at every stiffness
+    lines = stiffness_markdown(plain, matched=matched).splitlines()
+    labels = [x.split(" | ")[0] for x in lines[2:]]
+    assert labels == ["| **replayed learned path, PD 0.7×**", "| **replayed learned path, PD 1×**",
+                      "| **replayed learned path, PD 1.4×**",
+                      "| **replayed learned path re-commanded for the PD, PD 0.7×**",
+                      "| **replayed learned path re-commanded for the PD, PD 1.4×**"]
+    assert "**0.0 %**" in lines[4] and all("**20.0 %**" in x for x in lines[5:7])
+    assert stiffness_markdown(plain) == "\n".join(lines[:5])  # without them, the table as before

@@ -30,10 +30,12 @@ import time
 from pathlib import Path
 
 from cyberdog.analysis.parallel import map_in_processes, progress_log
+from cyberdog.analysis.pd_matched import pd_matched_foot_offsets
 from cyberdog.analysis.prototype_summary import summary_markdown, summary_rows
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
-from cyberdog.config import HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, RandomizationConfig, WalkConfig
+from cyberdog.config import (HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, PIDConfig, RandomizationConfig,
+                             WalkConfig)
 from cyberdog.config.paper import PAPER_SPEEDS, PROTOTYPE_DISTANCE_M, PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S
 from cyberdog.core import energy as en
 from cyberdog.core.foot_offsets import FootOffsetPath
@@ -69,6 +71,7 @@ class _Job:
     lift_height: float | None = None  # m, the path's own lift (a learned path); None: the config's trajectory's
     policy: str | None = None  # an actor file: the policy itself walks (closed loop, `cyberdog.rl.rollout`)
     pd_scale: float = 1.0  # the joint PD's stiffness in `cfg.pid`, × the base config's (PIDConfig.stiffness_scaled)
+    pd_matched_from: PIDConfig | None = None  # the path's own PD: its command re-solved for `cfg.pid` (pd_matched)
 
 
 def time_cap(distance_m: float, speed: float, cfg: WalkConfig, run_up_s: float = 0.0) -> float:
@@ -105,7 +108,11 @@ def _run_job(job: _Job) -> dict:
     if job.policy is not None:
         r = _policy_walk(job, hw, cap)
     else:
-        r = walk(job.cfg, cap, job.trajectory, hardware=hw, distance=job.distance_m, foot_offsets=job.foot_offsets,
+        offsets = job.foot_offsets
+        if job.pd_matched_from is not None:  # the path's executed motion kept, its command solved for this PD
+            offsets = pd_matched_foot_offsets(dataclasses.replace(job.cfg, pid=job.pd_matched_from), job.trajectory,
+                                              offsets, job.pd_scale)
+        r = walk(job.cfg, cap, job.trajectory, hardware=hw, distance=job.distance_m, foot_offsets=offsets,
                  run_up=job.run_up_s)
     e_cfg = job.cfg.energy
     ok = r.distance > 0 and r.electrical_energy > 0
@@ -113,7 +120,7 @@ def _run_job(job: _Job) -> dict:
     start_pct = 100.0 * e_cfg.usable_fraction
     return {
         "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
-        "robot": job.mode, "pd_scale": job.pd_scale, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        "robot": job.mode, "pd_scale": job.pd_scale, "pd_matched": job.pd_matched_from is not None, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
         # one meaning in every row: the lift height of the foot path walked (a learned path's own); the trot a
         # commanded path shifts has its own, under its own name
         "lift_height_m": (math.nan if job.policy is not None  # a policy's own foot lift is not an input
@@ -153,8 +160,8 @@ def run_prototype(trajectories: dict | None = None,
                   hardware: HardwareConfig = HARDWARE_LIKE, workers: int | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
                   every_walk: bool = True, learned: LearnedSet | None = None, draws: int = PROTOTYPE_DRAWS,
-                  run_up_s: float = PROTOTYPE_RUN_UP_S, policies: dict | None = None, pd_scale: float = 1.0
-                  ) -> list[dict]:
+                  run_up_s: float = PROTOTYPE_RUN_UP_S, policies: dict | None = None, pd_scale: float = 1.0,
+                  pd_matched: bool = False) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk. The
     defaults (distance, draws, run-up) are the prototype run's, `cyberdog.config.paper`'s, as `evaluate.py`'s.
 
@@ -175,6 +182,9 @@ def run_prototype(trajectories: dict | None = None,
         (same robots, PD, run-up and distance as its replayed path; its saving is against the same baselines).
     pd_scale: every walk with the joint PD this many times as stiff as `base_cfg.pid` (kp × s, kd × √s:
         `PIDConfig.stiffness_scaled`); rows carry it as `pd_scale`.
+    pd_matched: at a `pd_scale` other than 1, every path and trajectory (not a policy) walks with its command
+        re-solved for the scaled PD so that it executes the motion it executes under `base_cfg.pid`
+        (`cyberdog.analysis.pd_matched`); rows carry `pd_matched` (True only where a command was re-solved).
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them).
     Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
@@ -190,6 +200,7 @@ def run_prototype(trajectories: dict | None = None,
     if unknown:
         raise ValueError(f"policies {unknown} have no learned path of the same label (labels: "
                          f"{list(learned.labels) if learned is not None else []})")
+    own_pid = base_cfg.pid if pd_matched and pd_scale != 1.0 else None  # the PD the paths were made under
     base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = []
@@ -199,8 +210,8 @@ def run_prototype(trajectories: dict | None = None,
         for v, path in paths.items():
             cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
             jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), float(distance_m), offsets,
-                          label, d, float(run_up_s), float(path.lift_height), pd_scale=pd_scale)
-                     for mode, d in robots]
+                          label, d, float(run_up_s), float(path.lift_height), pd_scale=pd_scale,
+                          pd_matched_from=own_pid) for mode, d in robots]
             if label in policies:
                 jobs += [_Job(POLICY, None, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
                               float(run_up_s), policy=str(policies[label]), pd_scale=pd_scale) for mode, d in robots]
@@ -210,7 +221,7 @@ def run_prototype(trajectories: dict | None = None,
                 if v in lifts:
                     cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
                 jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
-                              float(run_up_s), pd_scale=pd_scale) for mode, d in robots]
+                              float(run_up_s), pd_scale=pd_scale, pd_matched_from=own_pid) for mode, d in robots]
     def line(row: dict) -> str:
         return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
                 f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "

@@ -13,7 +13,8 @@ and `tools/ship_result.py` shipped); `--write` puts them into README.md between 
   learned paths against it, the paper's range; mean ± 95 % CI across seeds (`cyberdog.analysis.prototype_summary`).
 - `stiffness` (where `stiffness_walks.json` is shipped): the same run with the joint PD at several stiffnesses
   (`evaluate.py stiffness`): the battery saving of the replayed paths, the policies and the searched shape at
-  each, falls counted.
+  each, falls counted; where `stiffness_matched_walks.json` is shipped too (`evaluate.py stiffness
+  --pd-matched`), the replayed paths with every command re-solved for the PD, beside them.
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ NAMES = ("table5", "prototype", "stiffness")
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
+STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
 MINUS = "\u2212"  # the README's minus sign
 
 
@@ -145,16 +147,21 @@ def _missed(row: dict) -> str:
     return f" ({', '.join(parts)}, of {row['walks']}{with_them})" if parts else ""
 
 
-def stiffness_markdown(walks: list[dict], robot: str = "hardware") -> str:
+def stiffness_markdown(walks: list[dict], robot: str = "hardware", matched: list[dict] | None = None) -> str:
     """The README's robustness table from the walks of `evaluate.py stiffness`: per walk kind (the replayed
     learned path, the policy closed loop, the searched shape) and PD stiffness, the battery saving against the
     cheaper common trajectory at that stiffness (mean ± 95 % CI across seeds of the walks that count), and the
-    walks that fell or left the ±5 % speed band."""
+    walks that fell or left the ±5 % speed band. `matched`: the walks of `evaluate.py stiffness --pd-matched`,
+    whose replayed paths at each stiffness but 1× (there nothing is re-solved) follow the plain ones' rows."""
     summary = [r for r in ps.summary_rows(walks) if r["robot"] == robot]
     speeds = sorted({r["speed_mps"] for r in summary})
     scales = sorted({r["pd_scale"] for r in summary})
     by = {(r["trajectory"], r["pd_scale"], r["speed_mps"]): r for r in summary}
-    names = {"learned": "replayed learned path", "policy": "the policy, closed loop", ps.REFERENCE: "searched shape"}
+    if matched:
+        by.update({("matched", r["pd_scale"], r["speed_mps"]): r for r in ps.summary_rows(matched)
+                   if r["robot"] == robot and r["trajectory"] == "learned" and r["pd_scale"] != 1.0})
+    names = {"learned": "replayed learned path", "matched": "replayed learned path re-commanded for the PD",
+             "policy": "the policy, closed loop", ps.REFERENCE: "searched shape"}
     lines = _header("battery saving against the cheaper common trajectory", speeds)
     for name, title in names.items():
         for scale in scales:
@@ -162,7 +169,7 @@ def stiffness_markdown(walks: list[dict], robot: str = "hardware") -> str:
             if not any(rows):
                 continue
             cells = [("" if r is None else mean_ci(r, "battery_saving_pct", ".1f", " %") + _missed(r)) for r in rows]
-            bold = name == "learned"
+            bold = name in ("learned", "matched")
             label = f"{title}, PD {scale:g}×"
             lines.append(_line(f"**{label}**" if bold else label, [f"**{c}**" if bold and c else c for c in cells]))
     return "\n".join(lines)
@@ -181,7 +188,9 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque),
               "prototype": prototype_markdown(walks["prototype"])}
     if (results / STIFFNESS_SOURCE).is_file():
-        tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()))
+        matched = results / STIFFNESS_MATCHED_SOURCE
+        tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
+                                                 matched=json.loads(matched.read_text()) if matched.is_file() else None)
     return tables
 
 

@@ -35,10 +35,12 @@ def check_scales(scales) -> tuple[float, ...]:
 
 
 def run_stiffness(scales=DEFAULT_SCALES, log=print, **prototype) -> list[dict]:
-    """Every walk of `run_prototype(**prototype)` at each stiffness of `scales` (rows carry `pd_scale`)."""
+    """Every walk of `run_prototype(**prototype)` at each stiffness of `scales` (rows carry `pd_scale`; with
+    `pd_matched=True` the paths' commands are re-solved for each PD, `cyberdog.analysis.pd_matched`)."""
     rows = []
+    matched = ", every path's command re-solved for it" if prototype.get("pd_matched") else ""
     for s in check_scales(scales):
-        log(f"joint PD at {s:g}x its stiffness (kp x {s:g}, kd x {math.sqrt(s):.3f}):")
+        log(f"joint PD at {s:g}x its stiffness (kp x {s:g}, kd x {math.sqrt(s):.3f}){matched if s != 1 else ''}:")
         rows += run_prototype(log=log, pd_scale=s, **prototype)
     return rows
 

@@ -328,6 +328,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub["stiffness"].add_argument("--pd-scales", type=positive, nargs="+", default=[0.7, 1.0, 1.4], metavar="S",
                                   help="joint-PD stiffness factors (default 0.7 1.0 1.4; training draws 0.8-1.2 in "
                                        "the battery preset, 0.6-1.6 in its stiffness variant)")
+    sub["stiffness"].add_argument("--pd-matched", action="store_true",
+                                  help="at each stiffness, walk every path and trajectory (not a policy) with its "
+                                       "command re-solved for that PD, so that it executes the motion it executes "
+                                       "under the configured PD (recorded on the ideal robot; "
+                                       "cyberdog.analysis.pd_matched)")
     sub["stiffness"].set_defaults(prototype_modes=["hardware"])
     sub["baselines"].add_argument("--trajectories", nargs="+", default=list(BASELINE_CHOICES),
                                   choices=BASELINE_CHOICES, help="which common trajectories to walk")

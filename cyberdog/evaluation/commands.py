@@ -167,7 +167,7 @@ def cmd_stiffness(args, cfg: C.WalkConfig) -> int:
     rows = run_stiffness(scales, trajectories=trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
                          modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, learned=learned,
                          draws=args.prototype_draws, run_up_s=args.prototype_run_up,
-                         policies=L.closed_loop_policies(args, learned))
+                         policies=L.closed_loop_policies(args, learned), pd_matched=args.pd_matched)
     print("\n" + write_stiffness(rows, run.out))
     return run.finish()
 
