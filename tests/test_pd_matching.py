@@ -46,7 +46,7 @@ KP, KD = np.array([60.0, 50.0, 40.0]), np.array([2.0, 1.5, 3.0])
 def test_the_scaled_pd_gives_the_old_torque_along_the_same_motion(scale):
     q, dq, c, dc = _signals()
     torque = KP * (c - q) + KD * (dc - dq)
-    matched = pd_matched_command(q, c, PERIOD, KP, KD, scale)
+    matched = pd_matched_command(q, c, PERIOD, KP, KD, scale * KP, math.sqrt(scale) * KD)
     torque_new = scale * KP * (matched - q) + math.sqrt(scale) * KD * (_derivative(matched) - dq)
     np.testing.assert_allclose(torque_new, torque, atol=1e-9)
     plain = scale * KP * (c - q) + math.sqrt(scale) * KD * (dc - dq)  # the command left as it was
@@ -59,18 +59,26 @@ def test_the_scaled_pd_gives_the_old_torque_along_the_same_motion(scale):
 def test_without_velocity_feedforward_the_damping_acts_on_the_joint_speed_alone():
     q, dq, c, _ = _signals()
     scale = 1.4
-    matched = pd_matched_command(q, c, PERIOD, KP, KD, scale, velocity_feedforward=False)
+    matched = pd_matched_command(q, c, PERIOD, KP, KD, scale * KP, math.sqrt(scale) * KD, velocity_feedforward=False)
     torque = KP * (c - q) - KD * dq
     np.testing.assert_allclose(scale * KP * (matched - q) - math.sqrt(scale) * KD * dq, torque, atol=1e-9)
 
 
 def test_at_the_same_pd_the_command_is_unchanged():
     q, _, c, _ = _signals()
-    np.testing.assert_allclose(pd_matched_command(q, c, PERIOD, KP, KD, 1.0), c, atol=1e-12)
-    with pytest.raises(ValueError, match="scale"):
-        pd_matched_command(q, c, PERIOD, KP, KD, 0.0)
+    np.testing.assert_allclose(pd_matched_command(q, c, PERIOD, KP, KD, KP, KD), c, atol=1e-12)
+    with pytest.raises(ValueError, match="new kp"):
+        pd_matched_command(q, c, PERIOD, KP, KD, 0.0, KD)
     with pytest.raises(ValueError, match="same shape"):
-        pd_matched_command(q, c[:, :2], PERIOD, KP, KD, 1.4)
+        pd_matched_command(q, c[:, :2], PERIOD, KP, KD, KP, KD)
+
+
+def test_any_new_gains_give_the_old_torque_not_only_a_scaled_pd():
+    q, dq, c, dc = _signals()
+    new_kp, new_kd = np.array([90.0, 40.0, 70.0]), np.array([1.0, 2.5, 2.0])  # stiffer, softer, less damped
+    matched = pd_matched_command(q, c, PERIOD, KP, KD, new_kp, new_kd)
+    np.testing.assert_allclose(new_kp * (matched - q) + new_kd * (_derivative(matched) - dq),
+                               KP * (c - q) + KD * (dc - dq), atol=1e-9)
 
 
 def test_phase_means_average_each_legs_cycles_and_refuse_an_empty_phase():
@@ -90,7 +98,7 @@ def test_an_integral_term_is_refused():
     offsets = FootOffsetPath(np.zeros((4, 8, 3)), PERIOD)
     with pytest.raises(ValueError, match="ki = 0"):
         pd_matched_offsets(np.zeros((8, 4)), np.zeros((8, 12)), np.zeros((8, 4, 3)), offsets,
-                           C.PIDConfig(ki=(1.0, 0.0, 0.0)), 1.4, C.RobotConfig())
+                           C.PIDConfig(ki=(1.0, 0.0, 0.0)), C.PIDConfig(), C.RobotConfig())
 
 
 def _mean_motion(result, cfg, n=50):
@@ -108,13 +116,13 @@ def test_walked_re_commanded_under_a_stiffer_pd_the_robot_executes_its_old_motio
     cfg = C.replace(cfg, gait=C.replace(cfg.gait, speed=1.0))
     own = _mean_motion(walk(cfg, 6.0, record=True), cfg)
     stiff = C.replace(cfg, pid=cfg.pid.stiffness_scaled(1.4))
-    offsets = pd_matched_foot_offsets(cfg, None, None, 1.4)
+    offsets = pd_matched_foot_offsets(cfg, None, None, stiff.pid)
     assert offsets.n == 100 and np.max(np.abs(offsets.offsets)) > 1e-3  # m: the command moved
     plain = _mean_motion(walk(stiff, 6.0, record=True), cfg)
     matched = _mean_motion(walk(stiff, 6.0, record=True, foot_offsets=offsets), cfg)
     plain_gap, matched_gap = np.sqrt(np.mean((plain - own) ** 2)), np.sqrt(np.mean((matched - own) ** 2))
     assert matched_gap < 0.3 * plain_gap, (matched_gap, plain_gap)
-    assert pd_matched_foot_offsets(cfg, None, None, 1.0) is None  # the path's own PD: nothing to re-solve
+    assert pd_matched_foot_offsets(cfg, None, None, cfg.pid) is None  # the path's own PD: nothing to re-solve
 
 
 def test_a_pd_matched_prototype_run_re_commands_every_trajectory_and_says_so():

@@ -1,9 +1,9 @@
 """Walk a path under another joint PD as it walks under its own: its command re-solved for the new gains.
 
 A foot path (a common trajectory, a searched shape, a learned commanded path) is a command: what the robot does
-with it depends on the joint PD that follows it. A user who sets a stiffer PD than the path was made under
-(`PIDConfig.stiffness_scaled`) and wants the path's gait keeps the *executed* motion and re-solves the command
-for the new gains (`cyberdog.core.pd_matching`). Here that motion is recorded on the ideal robot under the
+with it depends on the joint PD that follows it. A user who sets other gains than the path was made under (a
+stiffer PD, `PIDConfig.stiffness_scaled`) and wants the path's gait keeps the *executed* motion and re-solves
+the command for the new gains (`cyberdog.core.pd_matching`). Here that motion is recorded on the ideal robot under the
 path's own PD (`RECORD_S` s, the first `SETTLE_S` s left out: the speed ramp and the blend into the path) and
 averaged over its gait cycles; the answer is the path's foot shifts plus the change of command, a
 `FootOffsetPath` the trot walks like any learned path's. The recording never uses the robots a comparison
@@ -17,7 +17,7 @@ import pickle
 import numpy as np
 
 from cyberdog.analysis.walk import walk
-from cyberdog.config import WalkConfig
+from cyberdog.config import PIDConfig, WalkConfig
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler
 from cyberdog.core.pd_matching import pd_matched_offsets
@@ -31,14 +31,14 @@ _cache: dict[str, FootOffsetPath | None] = {}  # per process: the draws of one c
 
 
 def pd_matched_foot_offsets(cfg: WalkConfig, trajectory: FootTrajectory | None, offsets: FootOffsetPath | None,
-                            scale: float) -> FootOffsetPath | None:
-    """The foot shifts that make (trajectory, offsets) walk under `cfg.pid` scaled by `scale` (kp × s, kd × √s)
-    as it walks under `cfg.pid`; `offsets` itself at scale 1. `cfg` is the walk's config with the path's own PD
+                            new_pid: PIDConfig) -> FootOffsetPath | None:
+    """The foot shifts that make (trajectory, offsets) walk under the joint PD `new_pid` as it walks under
+    `cfg.pid`; `offsets` itself where the two are the same. `cfg` is the walk's config with the path's own PD
     (its trot, gait and speed). Raises RuntimeError if the recording walk falls."""
-    if scale == 1.0:
+    if new_pid == cfg.pid:
         return offsets
     table = offsets if offsets is not None else FootOffsetPath(np.zeros((4, PHASES, 3)), cfg.gait.period)
-    key = hashlib.sha256(pickle.dumps((cfg, trajectory, table.offsets.tobytes(), table.period, float(scale))))
+    key = hashlib.sha256(pickle.dumps((cfg, trajectory, table.offsets.tobytes(), table.period, new_pid)))
     key = key.hexdigest()
     if key in _cache:
         return _cache[key]
@@ -49,7 +49,7 @@ def pd_matched_foot_offsets(cfg: WalkConfig, trajectory: FootTrajectory | None, 
     traces = result.traces
     keep = traces["t"] >= SETTLE_S
     phases = GaitScheduler.from_config(cfg.gait).leg_phases(traces["t"][keep])
-    matched = pd_matched_offsets(phases, traces["q"][keep], traces["foot_targets"][keep], table, cfg.pid, scale,
+    matched = pd_matched_offsets(phases, traces["q"][keep], traces["foot_targets"][keep], table, cfg.pid, new_pid,
                                  cfg.robot, cfg.controller.velocity_feedforward)
     _cache[key] = matched
     return matched

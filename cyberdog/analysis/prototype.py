@@ -111,7 +111,7 @@ def _run_job(job: _Job) -> dict:
         offsets = job.foot_offsets
         if job.pd_matched_from is not None:  # the path's executed motion kept, its command solved for this PD
             offsets = pd_matched_foot_offsets(dataclasses.replace(job.cfg, pid=job.pd_matched_from), job.trajectory,
-                                              offsets, job.pd_scale)
+                                              offsets, job.cfg.pid)
         r = walk(job.cfg, cap, job.trajectory, hardware=hw, distance=job.distance_m, foot_offsets=offsets,
                  run_up=job.run_up_s)
     e_cfg = job.cfg.energy

@@ -7,14 +7,14 @@ A path is walked by commanding joint targets c(t) (IK of the foot targets) to th
 
 plus the same feedforward torques (gravity compensation) whatever the gains. What the robot *does* is the
 executed motion q(t); the gap d = c − q between command and motion is what a soft PD needs to produce the torque
-the gait takes. With the PD s times as stiff (kp × s, kd × √s: `PIDConfig.stiffness_scaled`), the same command
-is followed more closely, the torques change and the gait is another one: a learned path found under one PD
-can then lose its saving (docs/stiffness.md). Here the command is re-solved so that the scaled PD gives, along
-the same periodic motion q(φ), the torque the original PD gave:
+the gait takes. With other gains (kp', kd'), e.g. the PD s times as stiff (kp × s, kd × √s:
+`PIDConfig.stiffness_scaled`), the same command is followed more or less closely, the torques change and the
+gait is another one: a learned path found under one PD can then lose its saving (docs/stiffness.md). Here the
+command is re-solved so that the new PD gives, along the same periodic motion q(φ), the torque the old one gave:
 
-    s·kp·d' + √s·kd·ḋ' = kp·d + kd·ḋ     (feedforward on; per harmonic k of the gait frequency, ω_k = 2πk / T:
-                                          D'_k = D_k·(kp + iω_k·kd) / (s·kp + iω_k·√s·kd))
-    s·kp·d' − √s·kd·q̇  = kp·d − kd·q̇     (off: d' = (kp·d + (√s − 1)·kd·q̇) / (s·kp))
+    kp'·d' + kd'·ḋ' = kp·d + kd·ḋ        (feedforward on; per harmonic k of the gait frequency, ω_k = 2πk / T:
+                                          D'_k = D_k·(kp + iω_k·kd) / (kp' + iω_k·kd'))
+    kp'·d' − kd'·q̇  = kp·d − kd·q̇        (off: d' = (kp·d + (kd' − kd)·q̇) / kp')
 
 and c' = q + d'. If the new PD gets the same torque on the same motion, that motion is again a solution of the
 robot's dynamics: the gait is the same one, and so is its energy. What is matched is the cycle's mean motion;
@@ -49,14 +49,14 @@ def _spectral_derivative(x: np.ndarray, period: float) -> np.ndarray:
     return np.fft.irfft(spectrum * (1j * omega)[:, None], n=n, axis=0)
 
 
-def pd_matched_command(q: np.ndarray, command: np.ndarray, period: float, kp, kd, scale: float,
+def pd_matched_command(q: np.ndarray, command: np.ndarray, period: float, kp, kd, new_kp, new_kd,
                        velocity_feedforward: bool = True) -> np.ndarray:
-    """Joint targets c' (n, j), rad, that give with the PD (kp × `scale`, kd × √`scale`) the torque the PD (kp,
-    kd) gives with the targets `command` along the periodic motion `q`.
+    """Joint targets c' (n, j), rad, that give with the PD (new_kp, new_kd) the torque the PD (kp, kd) gives with
+    the targets `command` along the periodic motion `q`.
 
     q, command: (n, j) rad, the executed joint angles and the commanded targets at n equal phases of one gait
         cycle of `period` s (n ≥ 4).
-    kp, kd: N·m/rad and N·m·s/rad, a scalar or one per joint (j,).
+    kp, kd, new_kp, new_kd: N·m/rad and N·m·s/rad, each a scalar or one per joint (j,); kp and new_kp > 0.
     velocity_feedforward: the drivers get the target's speed (ċ) as well; False: a zero speed target.
     """
     q = np.asarray(q, dtype=float)
@@ -68,20 +68,18 @@ def pd_matched_command(q: np.ndarray, command: np.ndarray, period: float, kp, kd
         raise ValueError("q and command must be finite")
     if not (math.isfinite(period) and period > 0):
         raise ValueError(f"period must be > 0 s and finite, got {period!r}")
-    if not (math.isfinite(scale) and scale > 0):
-        raise ValueError(f"scale must be > 0 and finite, got {scale!r}")
-    kp = np.broadcast_to(np.asarray(kp, dtype=float), q.shape[1:])
-    kd = np.broadcast_to(np.asarray(kd, dtype=float), q.shape[1:])
-    if np.any(kp <= 0) or np.any(kd < 0):
-        raise ValueError(f"kp must be > 0 and kd >= 0, got {kp.tolist()} and {kd.tolist()}")
-    root = math.sqrt(scale)
+    kp, kd, new_kp, new_kd = (np.broadcast_to(np.asarray(g, dtype=float), q.shape[1:])
+                              for g in (kp, kd, new_kp, new_kd))
+    for name, g, low in (("kp", kp, 0), ("new kp", new_kp, 0), ("kd", kd, None), ("new kd", new_kd, None)):
+        if not np.all(np.isfinite(g)) or (np.any(g <= 0) if low == 0 else np.any(g < 0)):
+            raise ValueError(f"{name} must be finite and {'> 0' if low == 0 else '>= 0'}, got {g.tolist()}")
     error = command - q
     if not velocity_feedforward:
         dq = _spectral_derivative(q, period)
-        return q + (kp * error + (root - 1.0) * kd * dq) / (scale * kp)
+        return q + (kp * error + (new_kd - kd) * dq) / new_kp
     spectrum = np.fft.rfft(error, axis=0)
     omega = (2.0 * np.pi * np.arange(spectrum.shape[0]) / period)[:, None]
-    gain = (kp + 1j * omega * kd) / (scale * kp + 1j * omega * root * kd)
+    gain = (kp + 1j * omega * kd) / (new_kp + 1j * omega * new_kd)
     return q + np.fft.irfft(spectrum * gain, n=q.shape[0], axis=0)
 
 
@@ -106,18 +104,19 @@ def phase_means(phases: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
 
 
 def pd_matched_offsets(phases: np.ndarray, q: np.ndarray, foot_targets: np.ndarray, offsets: FootOffsetPath,
-                       pid: PIDConfig, scale: float, robot: RobotConfig, velocity_feedforward: bool = True
+                       pid: PIDConfig, new_pid: PIDConfig, robot: RobotConfig, velocity_feedforward: bool = True
                        ) -> FootOffsetPath:
-    """`offsets` plus the shift of each foot target that re-commands a recorded walk for the PD `pid` scaled by
-    `scale` (`pd_matched_command` at each of the offset table's phases).
+    """`offsets` plus the shift of each foot target that re-commands a recorded walk under `pid` for `new_pid`
+    (`pd_matched_command` at each of the offset table's phases).
 
     phases: (steps, 4) each leg's gait phase; q: (steps, 12) rad, the joint angles the drivers read;
     foot_targets: (steps, 4, 3) m, the foot targets commanded at those steps (leg frame), from a walk under
     `pid` itself with `offsets` applied. The walk's cycles are averaged (`phase_means`).
     """
-    if any(g != 0 for g in pid.ki):
-        raise ValueError(f"a PD-matched command needs ki = 0 (the integral holds a state that is not a function "
-                         f"of the gait phase), got ki = {pid.ki}")
+    for which, gains in (("", pid), ("new ", new_pid)):
+        if any(g != 0 for g in gains.ki):
+            raise ValueError(f"a PD-matched command needs ki = 0 (the integral holds a state that is not a function "
+                             f"of the gait phase), got the {which}PID's ki = {gains.ki}")
     q = np.asarray(q, dtype=float)
     foot_targets = np.asarray(foot_targets, dtype=float)
     steps = q.shape[0]
@@ -131,8 +130,8 @@ def pd_matched_offsets(phases: np.ndarray, q: np.ndarray, foot_targets: np.ndarr
     c_mean = phase_means(phases, command, n)
     table = offsets.offsets.copy()
     for leg in range(4):  # the gains are per joint type (abad, hip, knee), the same on every leg
-        matched = pd_matched_command(q_mean[leg], c_mean[leg], offsets.period, pid.kp, pid.kd, scale,
-                                     velocity_feedforward)
+        matched = pd_matched_command(q_mean[leg], c_mean[leg], offsets.period, pid.kp, pid.kd, new_pid.kp,
+                                     new_pid.kd, velocity_feedforward)
         side = np.full(n, LEG_SIDES[leg])
         table[leg] += kin.foot_position(matched, robot, side=side) - kin.foot_position(c_mean[leg], robot, side=side)
     return FootOffsetPath(table, offsets.period)
