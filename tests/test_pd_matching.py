@@ -125,10 +125,22 @@ def test_walked_re_commanded_under_a_stiffer_pd_the_robot_executes_its_old_motio
     assert pd_matched_foot_offsets(cfg, None, None, cfg.pid) is None  # the path's own PD: nothing to re-solve
 
 
-def test_a_pd_matched_prototype_run_re_commands_every_trajectory_and_says_so():
+def test_a_pd_matched_prototype_run_re_commands_every_trajectory_and_says_so(monkeypatch):
+    """The motion is recorded under the path's own PD (kp 60) and the walk is made under the scaled one (84)."""
+    from cyberdog.analysis import pd_matched
+    from cyberdog.core import pid as pid_module
+    built = []
+    original = pid_module.JointPID.__init__
+
+    def recording(self, kp, *args, **kwargs):
+        original(self, kp, *args, **kwargs)
+        built.append(float(self.kp[0]))
+    monkeypatch.setattr(pid_module.JointPID, "__init__", recording)
+    monkeypatch.setattr(pd_matched, "_cache", {})
     rows = proto.run_prototype({"cycloid": None}, speeds=(1.0,), distance_m=0.3, modes=("ideal",), run_up_s=0.0,
                                workers=1, log=lambda *_: None, pd_scale=1.4, pd_matched=True)
     assert [r["pd_matched"] for r in rows] == [True] and rows[0]["pd_scale"] == 1.4
+    assert built[0] == pytest.approx(60.0) and built[-1] == pytest.approx(84.0)  # recorded, then walked
     rows = proto.run_prototype({"cycloid": None}, speeds=(1.0,), distance_m=0.3, modes=("ideal",), run_up_s=0.0,
                                workers=1, log=lambda *_: None, pd_scale=1.0, pd_matched=True)
     assert [r["pd_matched"] for r in rows] == [False]  # at its own PD a path walks as it is

@@ -26,6 +26,7 @@ EXPENSIVE = {
     "evaluate.py compare --learned runs/extract/learned": "needs the extraction above; walks for minutes",
     "evaluate.py prototype --prototype-distance 100": "18 walks of 100 m: about 5x command 1's prototype part",
     "evaluate.py stiffness --closed-loop": "the prototype's hardware walks at three PD stiffnesses: about 15 min",
+    "evaluate.py stiffness --pd-matched": "the same, every path re-commanded for each PD: about 7 min",
     "train.py --config configs/torque_prior.yaml --seed 0": "the paper's torque agent: 550,000 env steps, hours",
     "evaluate.py extract --policies results/policy_speeds": "rolls out the shipped policy at 3 speeds: a minute",
     "evaluate.py compare --learned runs/extract_shipped/learned": "needs the extraction above; walks for minutes",
