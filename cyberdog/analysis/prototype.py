@@ -120,7 +120,8 @@ def _run_job(job: _Job) -> dict:
     start_pct = 100.0 * e_cfg.usable_fraction
     return {
         "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
-        "robot": job.mode, "pd_scale": job.pd_scale, "pd_matched": job.pd_matched_from is not None, "fell": r.fell, "reached": r.reached, "mass_scale": r.mass_scale,
+        "robot": job.mode, "pd_scale": job.pd_scale, "pd_matched": job.pd_matched_from is not None, "fell": r.fell,
+        "reached": r.reached, "mass_scale": r.mass_scale,
         # one meaning in every row: the lift height of the foot path walked (a learned path's own); the trot a
         # commanded path shifts has its own, under its own name
         "lift_height_m": (math.nan if job.policy is not None  # a policy's own foot lift is not an input

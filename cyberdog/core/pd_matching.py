@@ -36,8 +36,6 @@ from cyberdog.config import PIDConfig, RobotConfig
 from cyberdog.core import kinematics as kin
 from cyberdog.core.foot_offsets import FootOffsetPath
 
-LEG_SIDES = np.array([1.0, -1.0, 1.0, -1.0])  # +1 left, -1 right: LF, RF, LH, RH
-
 
 def _spectral_derivative(x: np.ndarray, period: float) -> np.ndarray:
     """d/dt of a periodic signal sampled at n equal phases over `period` s (axis 0)."""
@@ -123,8 +121,7 @@ def pd_matched_offsets(phases: np.ndarray, q: np.ndarray, foot_targets: np.ndarr
     if q.shape != (steps, 12) or foot_targets.shape != (steps, 4, 3):
         raise ValueError(f"q must be (steps, 12) and foot_targets (steps, 4, 3), got {q.shape} and "
                          f"{foot_targets.shape}")
-    sides = np.broadcast_to(LEG_SIDES, (steps, 4))
-    command = kin.inverse_kinematics(foot_targets, robot, side=sides)  # (steps, 4, 3), the trot's IK
+    command = kin.inverse_kinematics(foot_targets, robot)  # (steps, 4, 3), the trot's IK, legs LF, RF, LH, RH
     n = offsets.n
     q_mean = phase_means(phases, q.reshape(steps, 4, 3), n)
     c_mean = phase_means(phases, command, n)
@@ -132,7 +129,7 @@ def pd_matched_offsets(phases: np.ndarray, q: np.ndarray, foot_targets: np.ndarr
     for leg in range(4):  # the gains are per joint type (abad, hip, knee), the same on every leg
         matched = pd_matched_command(q_mean[leg], c_mean[leg], offsets.period, pid.kp, pid.kd, new_pid.kp,
                                      new_pid.kd, velocity_feedforward)
-        side = np.full(n, LEG_SIDES[leg])
+        side = np.full(n, kin.LEFT_RIGHT[leg])
         table[leg] += kin.foot_position(matched, robot, side=side) - kin.foot_position(c_mean[leg], robot, side=side)
     return FootOffsetPath(table, offsets.period)
 
