@@ -108,6 +108,9 @@ def test_each_stiffness_is_its_own_comparison_and_a_fall_is_reported_in_its_row(
     assert "1 of 2 did not count, 1 fell" in line and "25.0 %" in line and "did not fall" not in line
     assert "did not count" not in next(x for x in md.splitlines() if x.startswith("| learned | 1x"))
     assert (tmp_path / "stiffness.json").is_file() and (tmp_path / "stiffness_walks.json").is_file()
+    assert "re-solved" not in md  # said only where the commands were re-solved
+    assert "command re-solved for that PD" in st.write_stiffness([{**r, "pd_matched": r["pd_scale"] != 1.0}
+                                                                  for r in rows], tmp_path / "matched")
 
 
 def test_a_slow_walk_left_out_of_the_saving_is_also_counted_beside_it(tmp_path):

@@ -159,8 +159,10 @@ def write_stiffness(rows: list[dict], folder: str | Path) -> str:
     write_rows(table, folder, "stiffness")
     seeds = seed_table(rows)
     write_rows(seeds, folder, "stiffness_seeds")
+    matched = (", every path's and trajectory's command re-solved for that PD (the motion it executes under the "
+               "configured PD kept: --pd-matched)" if any(r.get("pd_matched") for r in rows) else "")
     md = ("Battery saving against the cheaper common trajectory on the hardware-like robots, at each joint-PD "
-          "stiffness (kp × s, kd × √s); the common trajectories' rows give their battery % per 100 m\n\n"
+          f"stiffness (kp × s, kd × √s){matched}; the common trajectories' rows give their battery % per 100 m\n\n"
           + stiffness_markdown(table) + "\n\nPer seed (the mean of its robots where both walks counted; a walk "
           "that did not count, and why, in brackets)\n\n" + markdown_table(seeds) + "\n")
     (folder / "stiffness.md").write_text(md)
