@@ -7,8 +7,8 @@ state and may command another path under a stiffer PD; this script asks whether 
 replays better there. For one actor: a deterministic rollout at each speed in the actor's env with the joint
 PD scaled by `--pd-scale` (kp × s, kd × √s: `PIDConfig.stiffness_scaled`; the env's own gain draws on top, as
 in training, unless `--fixed-gains`), the mean commanded path of its settled cycles (`commanded_from_rollout`:
-the first rollout, env seed 0, 1, ..., that gives one), then the prototype run at the same stiffness on the hardware-like robots
-(`run_prototype`: the path beside the common trajectories at its lift, the battery saving against the cheaper
+the first rollout, env seed 0, 1, ..., that gives one), then the prototype run at the same stiffness on the
+hardware-like robots (`run_prototype`: the path beside the common trajectories at its lift, the battery saving against the cheaper
 one). No candidate selection and no replay check: a measurement, not an extraction for shipping.
 
     python tools/extract_at_stiffness.py --actor results/policy_battery/stage2_actor.pt --label seed0 \\

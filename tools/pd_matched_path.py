@@ -23,7 +23,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from cyberdog.analysis.pd_matched import pd_matched_foot_offsets  # noqa: E402
+from cyberdog.analysis.pd_matched import RECORD_S, SETTLE_S, pd_matched_foot_offsets  # noqa: E402
 from cyberdog.config import PIDConfig, WalkConfig  # noqa: E402
 from cyberdog.core.commanded_path import CommandedPath  # noqa: E402
 from cyberdog.core.learned_set import LearnedSet, LearnedSetError  # noqa: E402
@@ -68,8 +68,7 @@ def main(argv: list[str] | None = None) -> int:
         matched = pd_matched_foot_offsets(cfg, trajectory, offsets, target)
         shift = float(abs(matched.offsets - offsets.offsets).max()) * 1e3
         record = {"from_pid": dataclasses.asdict(cfg.pid), "to_pid": dataclasses.asdict(target),
-                  "recorded_on": "the ideal robot, 8 s, the first 3 s left out", "source": str(path.provenance.get(
-                      "source", "")) or None}
+                  "recorded_on": f"the ideal robot, {RECORD_S:g} s, the first {SETTLE_S:g} s left out"}
         commanded = CommandedPath(path.path.speed, path.path.gait, matched,
                                   {**path.provenance, "pd_matched": record})
         commanded.save(out)

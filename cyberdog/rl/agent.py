@@ -334,8 +334,8 @@ class Agent:
         """Start from an actor alone (an actor file's `actor`, e.g. a shipped policy; one that observed fewer
         entries at the end is widened, `_widened`; returns the parameters that widening added, 0 without): the
         actor and its target take its weights; the critics, their targets, the optimizers, the exploration noise
-        and the counters stay as built (new). The critics then know nothing of this actor's returns: a stage started so wants
-        `critic_warmup_updates` before the actor follows them."""
+        and the counters stay as built (new). The critics then know nothing of this actor's returns: a stage
+        started so wants `critic_warmup_updates` before the actor follows them."""
         mine = self.loss.state_dict()
         given = sum(v.numel() for v in actor_state.values())
         actor_state = _widened(actor_state, {k[len("actor_network_params."):]: v for k, v in mine.items()
