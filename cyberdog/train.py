@@ -67,7 +67,7 @@ def parse_args(argv=None) -> argparse.Namespace:
                         "a sweep folder (sweep.json), continue every seed of the sweep that is not done")
     p.add_argument("--init-from", type=Path, metavar="CHECKPOINT",
                    help="start from this checkpoint's agent (e.g. runs/x/stage1_final.pt), or from an actor file's "
-                        "actor with new critics (e.g. results/policy_battery_band/seed0/stage2_actor.pt; give the "
+                        "actor with new critics (e.g. results/battery/policy/seed0/stage2_actor.pt; give the "
                         "stage critic_warmup_updates); default for --stage 2: <run-dir>/stage1_final.pt")
     p.add_argument("--device", choices=C.DEVICES, help="overrides train.device: cpu, cuda or auto")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -16,7 +16,7 @@ def test_an_unwritable_output_folder_is_one_line(out, capsys):
 
 
 def test_a_policy_that_is_not_an_actor_file_is_one_line(tmp_path, capsys):
-    assert evaluate.main(["extract", "--policies", "results/policy_speeds/metrics.csv",
+    assert evaluate.main(["extract", "--policies", "results/table5/policy/seed0/metrics.csv",
                           "--out", str(tmp_path / "e")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not a file written by train.py" in err[0]
@@ -139,13 +139,13 @@ def test_a_mistyped_sub_command_is_one_line_naming_the_closest(capsys):
 
 @pytest.mark.parametrize("command", ["prototype", "stiffness"])
 def test_a_closed_loop_actor_that_is_no_actor_or_has_no_path_is_one_line_before_any_walk(command, tmp_path, capsys):
-    assert evaluate.main([command, "--closed-loop", "results/policy_speeds/metrics.csv",
+    assert evaluate.main([command, "--closed-loop", "results/table5/policy/seed0/metrics.csv",
                           "--out", str(tmp_path / "p")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--closed-loop" in err[0] and not (tmp_path / "p").exists()
     # seed 0's actor with a learned set that holds seed 1's path only: refused
-    assert evaluate.main([command, "--learned", "results/learned_battery/seed1_1mps.json", "--speeds", "1.0",
-                          "--closed-loop", "results/policy_battery/stage2_actor.pt",
+    assert evaluate.main([command, "--learned", "notebook/results/learned_battery/seed1_1mps.json", "--speeds", "1.0",
+                          "--closed-loop", "notebook/results/policy_battery/stage2_actor.pt",
                           "--out", str(tmp_path / "q")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no learned path of the same seed" in err[0] and "seed0" in err[0]

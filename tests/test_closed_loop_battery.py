@@ -16,8 +16,8 @@ ROOT = Path(__file__).resolve().parents[1]
 spec = importlib.util.spec_from_file_location("closed_loop_battery", ROOT / "tools/closed_loop_battery.py")
 closed_loop = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(closed_loop)
-ACTOR = ROOT / "results/policy_battery/stage2_actor.pt"
-LEARNED = ROOT / "results/learned_battery"
+ACTOR = ROOT / "notebook/results/policy_battery/stage2_actor.pt"
+LEARNED = ROOT / "notebook/results/learned_battery"
 
 
 def test_three_walks_per_robot_with_the_cycloid_at_the_paths_own_lift(tmp_path):

@@ -169,7 +169,7 @@ def test_extract_commanded_errors_are_clear():
 
 # ---- the saving survives extraction: closed loop vs replay ----------------------------------------------
 
-SHIPPED = Path(__file__).resolve().parents[1] / "results" / "policy_foot" / "stage2_actor.pt"
+SHIPPED = Path(__file__).resolve().parents[1] / "notebook" / "results" / "policy_foot" / "stage2_actor.pt"
 
 
 @pytest.mark.slow
@@ -206,7 +206,7 @@ def test_replaying_the_commanded_path_reproduces_the_closed_loop_energy():
 
 
 def test_the_shipped_learned_paths_cover_five_seeds_at_the_papers_speeds():
-    """results/learned/ (Table 5's input): one commanded path per seed and speed, each from a rollout at that
+    """results/table5/paths/ (Table 5's input): one commanded path per seed and speed, each from a rollout at that
     speed that did not fall, built from settled in-band cycles."""
     import evaluate
 

@@ -165,7 +165,7 @@ def test_the_prototype_run_notes_a_searched_shape_of_another_trot(tmp_path, caps
 
     _placed_set(0).save(tmp_path / "learned")
     reference = tmp_path / "searched.json"
-    SampledTrajectory.load(ROOT / "results" / "optimized_trajectory_H0.10.json").save(reference)  # default trot
+    SampledTrajectory.load(ROOT / "results" / "searched_shapes" / "optimized_trajectory_H0.10.json").save(reference)  # default trot
     assert evaluate.main(["prototype", "--learned", str(tmp_path / "learned"), "--speeds", "1.0",
                           "--prototype-distance", "0.2", "--prototype-run-up", "0", "--prototype-modes", "ideal",
                           "--prototype-reference", str(reference), "--workers", "1",

@@ -123,7 +123,7 @@ def test_missing_learned_trajectory_is_a_clear_error(tmp_path, monkeypatch, caps
     monkeypatch.setattr(learned_module, "DEFAULT_LEARNED", tmp_path / "results" / "learned")
     assert evaluate.main(["--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "results/learned does not exist" in err and "extract --sweep" in err
+    assert "results/table5/paths does not exist" in err and "extract --sweep" in err
     assert not (tmp_path / "o").exists()  # nothing started
     assert evaluate.main(["compare", "--learned", str(tmp_path / "nope.json"), "--out", str(tmp_path / "o")]) == 2
     assert evaluate.main(["extract", "--out", str(tmp_path / "o")]) == 2

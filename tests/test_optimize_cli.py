@@ -19,7 +19,7 @@ def test_overrides_reach_the_walk_config_and_keep_the_result_in_the_run_folder(t
     assert args.result == tmp_path / "optimized_trajectory.json"
     plain = tool.parse_args(["--out", str(tmp_path)])
     assert plain.base.controller.sagittal_placement_gain == 0.0
-    assert plain.result.parent == ROOT / "results"
+    assert plain.result.parent == ROOT / "results" / "searched_shapes"
 
 
 def test_a_bad_override_fails_before_any_walk(tmp_path, capsys):

@@ -14,7 +14,7 @@ from cyberdog.analysis.orbit import repeat_period, steady_orbit
 from cyberdog.core.foot_offsets import FootOffsetPath
 
 ROOT = Path(__file__).resolve().parents[1]
-BATTERY_ACTOR = ROOT / "results/policy_battery/stage2_actor.pt"
+BATTERY_ACTOR = ROOT / "notebook/results/policy_battery/stage2_actor.pt"
 
 
 def cycles(energies, speeds):
@@ -88,7 +88,7 @@ def test_a_hand_over_off_the_agent_step_or_from_a_torque_policy_is_refused():
         rollout(actor, speed=1.0, duration=1.0, then_path=(0.51, path))
     with pytest.raises(ValueError, match="before the end"):
         rollout(actor, speed=1.0, duration=1.0, then_path=(1.0, path))
-    torque = load_actor(ROOT / "results/policy_torque/stage2_actor.pt")
+    torque = load_actor(ROOT / "notebook/results/policy_torque/stage2_actor.pt")
     with pytest.raises(ValueError, match="foot targets"):
         rollout(torque, speed=1.0, duration=1.0, then_path=(0.5, path))
 
@@ -114,7 +114,7 @@ def test_the_tool_never_overwrites_and_refuses_a_torque_actor(tmp_path, capsys):
         tool.main(["--actor", str(BATTERY_ACTOR), "--speed", "1.2", "--out", str(existing)])
     assert existing.read_text() == "{}"
     with pytest.raises(SystemExit):
-        tool.main(["--actor", str(ROOT / "results/policy_torque/stage2_actor.pt"), "--speed", "1.2"])
+        tool.main(["--actor", str(ROOT / "notebook/results/policy_torque/stage2_actor.pt"), "--speed", "1.2"])
     assert "not on foot targets" in capsys.readouterr().err
 
 

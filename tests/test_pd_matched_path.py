@@ -15,7 +15,7 @@ from cyberdog.core.learned_set import LearnedSet
 from cyberdog.evaluation.trot import with_trot
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ROOT / "results/learned_battery_band/seed0_1.4mps.json"
+SHIPPED = ROOT / "results/battery/paths/seed0_1.4mps.json"
 spec = importlib.util.spec_from_file_location("pd_matched_path", ROOT / "tools/pd_matched_path.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)

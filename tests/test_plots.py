@@ -69,7 +69,7 @@ import importlib, json, pkgutil, sys
 import plots
 for m in pkgutil.iter_modules(plots.__path__):
     importlib.import_module("plots." + m.name)
-paths = plots.draw_all({str(SHIPPED_INPUTS)!r}, {str(tmp_path)!r}, metrics=[{str(ROOT / "results/policy_speeds/metrics.csv")!r}])
+paths = plots.draw_all({str(SHIPPED_INPUTS)!r}, {str(tmp_path)!r}, metrics=[{str(ROOT / "results/table5/policy/seed0/metrics.csv")!r}])
 print(json.dumps({{"paths": [str(p) for p in paths], "modules": sorted(sys.modules)}}))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)

@@ -28,7 +28,7 @@ EXPENSIVE = {
     "evaluate.py stiffness --closed-loop": "the prototype's hardware walks at three PD stiffnesses: about 15 min",
     "evaluate.py stiffness --pd-matched": "the same, every path re-commanded for each PD: about 7 min",
     "train.py --config configs/torque_prior.yaml --seed 0": "the paper's torque agent: 550,000 env steps, hours",
-    "evaluate.py extract --policies results/policy_speeds": "rolls out the shipped policy at 3 speeds: a minute",
+    "evaluate.py extract --policies results/table5/policy/seed0": "rolls out the shipped policy at 3 speeds: a minute",
     "evaluate.py compare --learned runs/extract_shipped/learned": "needs the extraction above; walks for minutes",
 }
 SERVER = {".venv/bin/tensorboard --logdir runs": "a server that runs until stopped: checked to be installed"}

@@ -1,4 +1,4 @@
-"""The shipped foot-mode policy (results/policy_foot/, configs/quick.yaml seed 0) still does what the README
+"""The shipped foot-mode policy (notebook/results/policy_foot/, configs/quick.yaml seed 0) still does what the README
 says in today's simulator: both stages walk 10 s at 1.0 m/s without falling, at the command (±10 % over the
 last 5 s), and stage 2 uses less energy per metre (Eq. 7) than stage 1. A change of the robot, controller or
 env that breaks the shipped numbers fails here."""
@@ -8,7 +8,7 @@ import pytest
 
 from cyberdog.rl.rollout import load_actor, rollout
 
-SHIPPED = Path(__file__).resolve().parents[1] / "results" / "policy_foot"
+SHIPPED = Path(__file__).resolve().parents[1] / "notebook" / "results" / "policy_foot"
 
 
 @pytest.fixture(scope="module")

@@ -255,7 +255,7 @@ def test_imitation_needs_the_reference_and_keeps_it_per_transition(tmp_path):
 
 
 # ---- the shipped torque policies --------------------------------------------------------------------------
-BAND = Path(__file__).resolve().parents[1] / "results" / "policy_torque_band"
+BAND = Path(__file__).resolve().parents[1] / "results" / "torque" / "policy"
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

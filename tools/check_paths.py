@@ -9,7 +9,7 @@ walks that failed). Uses: which shipped paths a changed check would reject (thei
 `evaluate.py extract --rollout-seed K --cycle C --no-replay-check`), and how close to the ±5 % band a kept path
 walks.
 
-    python tools/check_paths.py results/learned_battery_band/seed0_1.4mps.json --parts spread
+    python tools/check_paths.py results/battery/paths/seed0_1.4mps.json --parts spread
     python tools/check_paths.py runs/cands/*/learned/*mps.json --parts spread --workers 2 --out runs/spread.json
 """
 from __future__ import annotations

@@ -16,7 +16,7 @@ as a row of its tables; this script keeps the timed walks from a stand. Printed 
 whether the walk fell or left the ±5 % speed band.
 
     python tools/closed_loop_battery.py --actors runs/battery/seed*/stage2_final_actor.pt \\
-        --labels seed0 ... --learned results/learned_battery --speeds 1.0 1.2 --out runs/closed_loop
+        --labels seed0 ... --learned notebook/results/learned_battery --speeds 1.0 1.2 --out runs/closed_loop
 """
 from __future__ import annotations
 
@@ -61,8 +61,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--actors", type=Path, nargs="+", required=True, help="stage-2 actor files (train.py's)")
     p.add_argument("--labels", nargs="+", required=True, help="each actor's seed label in --learned (seed0 ...)")
-    p.add_argument("--learned", type=Path, default=Path("results/learned_battery"),
-                   help="the learned paths (default results/learned_battery)")
+    p.add_argument("--learned", type=Path, default=Path("notebook/results/learned_battery"),
+                   help="the learned paths (default notebook/results/learned_battery)")
     p.add_argument("--speeds", type=float, nargs="+", default=[1.0, 1.2, 1.4], help="m/s (default 1.0 1.2 1.4)")
     p.add_argument("--draws", type=int, default=2, help="hardware-like robots (default 2, as the prototype run)")
     p.add_argument("--duration", type=float, default=15.0, help="s per walk (default 15)")

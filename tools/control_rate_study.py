@@ -5,7 +5,7 @@ For each cell of the grid, control rate 1000 / 400 / 200 Hz (whole divisors of t
 physics step 0.5 / 1 / 1.25 ms (where it divides the control period), plus the reference (control and physics
 at 2 kHz), this script
 
-1. runs `evaluate.py compare` on the shipped learned paths (results/learned/, 5 seeds x 1.0 / 1.2 / 1.4 m/s)
+1. runs `evaluate.py compare` on the shipped learned paths (results/table5/paths/, 5 seeds x 1.0 / 1.2 / 1.4 m/s)
    with `--set sim.controller_dt=... sim.physics_dt=...`, into `<out>/<cell>/` (Table 5 at matched lift and
    the paper's protocol, every walk in comparison.json);
 2. times the shipped training preset's env (configs/quick_speeds.yaml: foot mode, zero action, stage-2

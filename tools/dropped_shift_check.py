@@ -3,14 +3,14 @@
 
 A foot shift that puts a target out of reach is dropped for that controller period (the unshifted target is
 sent, and the record says so: `TrotController.dropped_shifts`, `WalkResult.dropped_shifts`). This replays
-every learned path given (the folders of `evaluate.py extract`, e.g. results/learned results/learned_battery)
+every learned path given (the folders of `evaluate.py extract`, e.g. results/table5/paths notebook/results/learned_battery)
 at the speed it serves for `--duration` s on the ideal robot and on the hardware-like one, and with
 `--policies`, rolls out foot-mode actors (whose traced offsets a commanded path averages) at each path speed,
 and prints the dropped leg-periods of each walk. Nonzero means a path or a rollout held shifts the robot
 never got.
 
-    python tools/dropped_shift_check.py --learned results/learned results/learned_battery \\
-        --policies results/policy_speeds/stage2_actor.pt results/policy_battery/stage2_actor.pt
+    python tools/dropped_shift_check.py --learned results/table5/paths notebook/results/learned_battery \\
+        --policies results/table5/policy/seed0/stage2_actor.pt notebook/results/policy_battery/stage2_actor.pt
 """
 from __future__ import annotations
 

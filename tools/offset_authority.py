@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Is the foot-mode policy's authority what keeps it from a cheaper shape? Walk a searched shape as foot offsets.
 
-    python tools/offset_authority.py --shape results/optimized_trajectory_H0.095.json --clip 0.03 0.06
+    python tools/offset_authority.py --shape results/searched_shapes/optimized_trajectory_H0.095.json --clip 0.03 0.06
 
 A foot-mode policy (`CyberDog-v0`, action_mode="foot") can only shift each foot target of the trot's composite
 cycloid by ±`foot_offset_scale` per axis (0.03 m in the shipped presets). This tool asks whether a shape the
@@ -67,7 +67,7 @@ def run_walk(job: tuple) -> dict:
 
 def parse_args(argv=None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--shape", type=Path, default=REPO / "results" / "optimized_trajectory_H0.095.json",
+    p.add_argument("--shape", type=Path, default=REPO / "results" / "searched_shapes" / "optimized_trajectory_H0.095.json",
                    help="a shape saved by tools/optimize_trajectory.py (default: the shipped H = 0.095 m one); "
                         "walked at its own lift height")
     p.add_argument("--clip", type=float, nargs="+", default=[0.03],

@@ -17,7 +17,7 @@ for the spline's rounding), the composite cycloid and the straight line (rectang
 s (Table 5's 10 s) at each speed at the same H; printed table: E (J), energy per 100 m, mean speed, fell,
 status, D_t by Eq. (12) against the cheaper valid baseline (cycloid, straight) and against the cycloid.
 
-Writes the optimised path to --result (default results/optimized_trajectory_H<H>.json; SampledTrajectory
+Writes the optimised path to --result (default results/searched_shapes/optimized_trajectory_H<H>.json; SampledTrajectory
 JSON with provenance: parameters, objective, H, speeds, evaluations, git commit) and into --out (default
 runs/optimize-<time>/): optimized_trajectory.json, history.csv (every evaluation), table.{md,csv},
 summary.json. `--replay-only FILE` skips the optimisation and replays a saved path.
@@ -86,8 +86,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--replay-duration", type=float, default=10.0, help="s, the final comparison walks (default 10)")
     p.add_argument("--out", type=Path, default=None, help="run folder (default runs/optimize-<time>/)")
     p.add_argument("--result", type=Path, default=None,
-                   help="optimised path file (default results/optimized_trajectory_H<H>.json; with another "
-                        "--objective or --robot, results/optimized_trajectory_H<H>_<objective>_<robot>.json)")
+                   help="optimised path file (default results/searched_shapes/optimized_trajectory_H<H>.json; with another "
+                        "--objective or --robot, results/searched_shapes/optimized_trajectory_H<H>_<objective>_<robot>.json)")
     p.add_argument("--replay-only", type=Path, default=None, metavar="FILE",
                    help="skip the optimisation; replay this saved path (its provenance's H must match)")
     add_override_option(p, "controller.sagittal_placement_gain=0.1",
@@ -117,7 +117,7 @@ def parse_args(argv=None) -> argparse.Namespace:
         args.result = args.out / "optimized_trajectory.json"
     name = (f"optimized_trajectory_H{args.lift_height:.2f}" if (args.objective, args.robot) == ("eq7", "ideal")
             else f"optimized_trajectory_H{args.lift_height:.3f}_{args.objective}_{args.robot}")
-    args.result = args.result or REPO / "results" / f"{name}.json"
+    args.result = args.result or REPO / "results" / "searched_shapes" / f"{name}.json"
     return args
 
 

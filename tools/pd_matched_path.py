@@ -2,7 +2,7 @@
 """Write a learned path re-commanded for another joint PD: the gait it walks under the configured PD, commanded
 for your gains (`cyberdog.analysis.pd_matched`; the method in docs/pd_matching.md).
 
-    python tools/pd_matched_path.py results/learned_battery_band/seed0_1.4mps.json --pd-scale 1.4 --out runs/pd14
+    python tools/pd_matched_path.py results/battery/paths/seed0_1.4mps.json --pd-scale 1.4 --out runs/pd14
     python tools/pd_matched_path.py PATH.json --kp 84 84 84 --kd 2.4 2.4 2.4 --out runs/my_pd
 
 Each commanded path file (as `evaluate.py extract` writes them) is replayed for 8 s on the ideal robot under the

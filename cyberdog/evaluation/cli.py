@@ -43,8 +43,8 @@ run writes is listed at the end and recorded in outputs.json; the last line name
 COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of its own --help)
     "all": ("compare + prototype + figures (+ --video) on the learned trajectories (the default)",
             "compare, prototype and figures (+ a video with --video) on the learned trajectories (default: "
-            "Table 5 on results/learned/, the paper preset's commanded paths, one per seed and speed; the "
-            "prototype on results/learned_battery_band/, the deadband battery preset's; --learned "
+            "Table 5 on results/table5/paths/, the paper preset's commanded paths, one per seed and speed; the "
+            "prototype on results/battery/paths/, the deadband battery preset's; --learned "
             "FILE|DIR... (both), or --policies/--sweep to extract them first). Writes table5.md, "
             "table5_summary.*, table5.*, comparison.*, "
             "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.*, "
@@ -67,7 +67,7 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                 "electrical energy, positive work and foot slip, and as a reference row the direct search's shape at "
                 "the same lift (--reference); Figures 10 and 13."),
     "prototype": ("Section 4.2 in simulation: battery use and range",
-                  "every learned seed's paths (default results/learned_battery_band/, the deadband battery "
+                  "every learned seed's paths (default results/battery/paths/, the deadband battery "
                   "preset's, where shipped) and the common trajectories at their lift, walks of "
                   "--prototype-distance m (default "
                   "20; the paper's 100) on the ideal robot and on --prototype-draws hardware-like robots: battery "
@@ -179,8 +179,8 @@ def _learned_option() -> argparse.ArgumentParser:
     p.add_argument("--learned", type=Path, nargs="+", default=None, metavar="FILE",
                    help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
                         "per seed and speed) or sampled x-z paths (one per seed, rescaled to every speed); "
-                        "default results/learned/ (the paper's Eq. 7 preset), and for the prototype run "
-                        "results/learned_battery_band/ (the deadband battery preset) where it is shipped")
+                        "default results/table5/paths/ (the paper's Eq. 7 preset), and for the prototype run "
+                        "results/battery/paths/ (the deadband battery preset) where it is shipped")
     return p
 
 
@@ -247,7 +247,7 @@ def _prototype_options() -> argparse.ArgumentParser:
     g.add_argument("--prototype-reference", type=Path, default=None, metavar="FILE",
                    help="a shape saved by tools/optimize_trajectory.py walked beside the common trajectories at each "
                         "learned path's lift as the reference row \"searched\" (default "
-                        "results/optimized_trajectory_H0.085_electrical_hardware_placed_loop.json: searched for the "
+                        "results/searched_shapes/optimized_trajectory_H0.085_electrical_hardware_placed_loop.json: searched for the "
                         "battery on the hardware-like robot under the trot of the default battery paths)")
     g.add_argument("--no-prototype-reference", action="store_true", help="no reference row in the prototype run")
     g.add_argument("--closed-loop", type=Path, nargs="+", default=None, metavar="ACTOR",
@@ -260,7 +260,7 @@ def _metrics_option() -> argparse.ArgumentParser:
     p = _parent()
     p.add_argument("--metrics", type=Path, nargs="+", default=None, metavar="CSV",
                    help="training logs for Figure 6 (default: the policies' metrics.csv, else "
-                        "results/policy_speeds/metrics.csv)")
+                        "results/table5/policy/seed0/metrics.csv)")
     return p
 
 
@@ -323,7 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
         g = sub[name].add_argument_group("reference row of the matched-lift table")
         g.add_argument("--reference", type=Path, default=None, metavar="FILE",
                        help="a shape saved by tools/optimize_trajectory.py, walked at each speed at its own lift "
-                            "height (default results/optimized_trajectory_H0.095.json)")
+                            "height (default results/searched_shapes/optimized_trajectory_H0.095.json)")
         g.add_argument("--no-reference", action="store_true", help="no reference row")
     sub["stiffness"].add_argument("--pd-scales", type=positive, nargs="+", default=[0.7, 1.0, 1.4], metavar="S",
                                   help="joint-PD stiffness factors (default 0.7 1.0 1.4; training draws 0.8-1.2 in "

@@ -21,19 +21,19 @@ from cyberdog.evaluation.trot import trot_for
 from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]
-DEFAULT_LEARNED = ROOT / "results" / "learned"  # the shipped learned paths: one JSON per seed and speed
+DEFAULT_LEARNED = ROOT / "results" / "table5" / "paths"  # the shipped learned paths: one JSON per seed and speed
 # the prototype run's default: the battery paths of the deadband preset (configs/quick_speeds_battery_band.yaml,
 # recorded under the trot with foot placement and a speed loop bounded at +-10 %), where shipped; the stride preset's
-# (results/learned_battery_stride/) and the battery preset's earlier paths (configs/quick_speeds_battery.yaml,
-# default trot: results/learned_battery/) stay beside them. Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
-DEFAULT_LEARNED_BATTERY = ROOT / "results" / "learned_battery_band"
-DEFAULT_METRICS = ROOT / "results" / "policy_speeds" / "metrics.csv"  # the shipped policy's training log
+# (notebook/results/learned_battery_stride/) and the battery preset's earlier paths (configs/quick_speeds_battery.yaml,
+# default trot: notebook/results/learned_battery/) stay beside them. Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
+DEFAULT_LEARNED_BATTERY = ROOT / "results" / "battery" / "paths"
+DEFAULT_METRICS = ROOT / "results" / "table5" / "policy" / "seed0" / "metrics.csv"  # the shipped policy's training log
 # the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
 # (tools/optimize_trajectory.py --lift-height 0.095, the same budget at every speed)
-DEFAULT_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.095.json"
+DEFAULT_REFERENCE = ROOT / "results" / "searched_shapes" / "optimized_trajectory_H0.095.json"
 # the prototype run's reference row: the direct search's shape for the battery on the hardware-like robot, searched
 # under the trot the default battery paths were recorded under (..._hardware.json: under the default trot)
-DEFAULT_PROTOTYPE_REFERENCE = ROOT / "results" / "optimized_trajectory_H0.085_electrical_hardware_placed_loop.json"
+DEFAULT_PROTOTYPE_REFERENCE = ROOT / "results" / "searched_shapes" / "optimized_trajectory_H0.085_electrical_hardware_placed_loop.json"
 # preference order: the shipped name, then the actor at the end of stage 2 (fixed in advance), then the one of
 # its best-scoring episode (chosen on a noisy score)
 STAGE2_ACTORS = ("stage2_actor.pt", "stage2_final_actor.pt", "stage2_best_actor.pt")
@@ -326,7 +326,7 @@ def check_speeds_covered(learned: LearnedSet, speeds: list[float]) -> None:
         raise UsageError(
             f"no learned path at {', '.join(f'{v:g}' for v in missing)} m/s for every label: the learned paths are "
             f"at {have} m/s. Ask for those --speeds, or extract paths at the speed from a policy (evaluate.py "
-            f"extract --policies results/policy_speeds --speeds V; a policy trained at other speeds needs "
+            f"extract --policies results/table5/policy/seed0 --speeds V; a policy trained at other speeds needs "
             f"--policy-speed V) and pass them with --learned")
 
 

@@ -6,7 +6,7 @@ after Figure 6): the actor acts without exploration noise, and every controller 
 applied torques and foot contacts are kept, so that gait cycles can be cut at touch-down and their energy
 integrated by Eq. (7) exactly as in the scripted walks.
 
-    actor = load_actor("results/policy_speeds/stage2_actor.pt")
+    actor = load_actor("results/table5/policy/seed0/stage2_actor.pt")
     r = rollout(actor, speed=1.0, duration=10.0)
     r.mean_speed, r.energy_per_metre, r.fell  # a WalkResult, as a scripted walk's
 """
