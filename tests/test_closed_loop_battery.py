@@ -1,4 +1,4 @@
-"""tools/closed_loop_battery.py: the policy, its replayed path and the matched cycloid on the same robots."""
+"""notebook/tools/closed_loop_battery.py: the policy, its replayed path and the matched cycloid on the same robots."""
 from __future__ import annotations
 
 import dataclasses
@@ -13,7 +13,7 @@ from cyberdog.analysis.walk import walk
 from cyberdog.core.learned_set import LearnedSet, learned_files
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("closed_loop_battery", ROOT / "tools/closed_loop_battery.py")
+spec = importlib.util.spec_from_file_location("closed_loop_battery", ROOT / "notebook/tools/closed_loop_battery.py")
 closed_loop = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(closed_loop)
 ACTOR = ROOT / "notebook/results/policy_battery/stage2_actor.pt"

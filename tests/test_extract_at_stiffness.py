@@ -1,4 +1,4 @@
-"""tools/extract_at_stiffness.py: its refusals, before any rollout."""
+"""notebook/tools/extract_at_stiffness.py: its refusals, before any rollout."""
 from __future__ import annotations
 
 import importlib.util
@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("extract_at_stiffness", ROOT / "tools/extract_at_stiffness.py")
+spec = importlib.util.spec_from_file_location("extract_at_stiffness", ROOT / "notebook/tools/extract_at_stiffness.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)
 

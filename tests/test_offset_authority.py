@@ -1,4 +1,4 @@
-"""tools/offset_authority.py: a searched shape as foot offsets from the composite cycloid (no walking here)."""
+"""notebook/tools/offset_authority.py: a searched shape as foot offsets from the composite cycloid (no walking here)."""
 import importlib.util
 from pathlib import Path
 
@@ -10,7 +10,7 @@ from cyberdog.core.trajectories import CompositeCycloid
 from conftest import walk_config
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("offset_authority", ROOT / "tools" / "offset_authority.py")
+spec = importlib.util.spec_from_file_location("offset_authority", ROOT / "notebook" / "tools" / "offset_authority.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)
 

@@ -1,5 +1,5 @@
 """The steady orbit of a walk (cyberdog.analysis.orbit), the policy-to-path hand-over of a rollout, and the
-refusals of tools/replay_orbit.py."""
+refusals of notebook/tools/replay_orbit.py."""
 from __future__ import annotations
 
 import importlib.util
@@ -93,7 +93,7 @@ def test_a_hand_over_off_the_agent_step_or_from_a_torque_policy_is_refused():
         rollout(torque, speed=1.0, duration=1.0, then_path=(0.5, path))
 
 
-spec = importlib.util.spec_from_file_location("replay_orbit", ROOT / "tools/replay_orbit.py")
+spec = importlib.util.spec_from_file_location("replay_orbit", ROOT / "notebook/tools/replay_orbit.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)
 

@@ -285,7 +285,8 @@ class Agent:
         - `action_spatial_smoothness · mean((μ(s̃) − μ(s))²)` over s̃ near s (`_perturbed`, `near` = μ(s̃)):
           CAPS's spatial term, here a brake on the policy's feedback: a policy that hardly reacts to the state
           commands what a fixed path commands, so its gait must hold without feedback (a fixed path replayed
-          open loop loses the orbits that policies hold with sub-millimetre corrections: tools/replay_orbit.py);
+          open loop loses the orbits that policies hold with sub-millimetre corrections:
+          notebook/tools/replay_orbit.py);
         - `trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²)` over the transitions with a reference: pulls a
           torque policy toward the share of the trot controller's torque a_trot (stored per transition,
           `EnvConfig.trot_reference`) that the prior of weight w (`imitation_scale` = 1 − w) no longer gives;

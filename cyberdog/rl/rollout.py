@@ -76,7 +76,7 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     then_path: (t_s, offsets) hands the walk over at t_s (s, a multiple of the agent step) from the policy to a
     fixed commanded path: from then on the actions are zero (the policy's shift ramps out over one agent step)
     and the trot controller shifts its targets by `offsets` (a `FootOffsetPath`, as a replayed path does).
-    Whether a fixed path holds the gait the policy walked, started on it: `tools/replay_orbit.py`."""
+    Whether a fixed path holds the gait the policy walked, started on it: `notebook/tools/replay_orbit.py`."""
     if not (np.isfinite(speed) and speed >= 0):
         raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
     if not duration > 0:

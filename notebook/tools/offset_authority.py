@@ -1,7 +1,8 @@
 #!/usr/bin/env python
 """Is the foot-mode policy's authority what keeps it from a cheaper shape? Walk a searched shape as foot offsets.
 
-    python tools/offset_authority.py --shape results/searched_shapes/optimized_trajectory_H0.095.json --clip 0.03 0.06
+    python notebook/tools/offset_authority.py \\
+        --shape results/searched_shapes/optimized_trajectory_H0.095.json --clip 0.03 0.06
 
 A foot-mode policy (`CyberDog-v0`, action_mode="foot") can only shift each foot target of the trot's composite
 cycloid by ±`foot_offset_scale` per axis (0.03 m in the shipped presets). This tool asks whether a shape the
@@ -26,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
 from cyberdog.analysis.parallel import map_in_processes  # noqa: E402

@@ -11,8 +11,8 @@ the first rollout, env seed 0, 1, ..., that gives one), then the prototype run a
 hardware-like robots (`run_prototype`: the path beside the common trajectories at its lift, the battery saving against the cheaper
 one). No candidate selection and no replay check: a measurement, not an extraction for shipping.
 
-    python tools/extract_at_stiffness.py --actor notebook/results/policy_battery/stage2_actor.pt --label seed0 \\
-        --pd-scale 1.4 --out runs/extract_at_1.4
+    python notebook/tools/extract_at_stiffness.py --actor notebook/results/policy_battery/stage2_actor.pt \\
+        --label seed0 --pd-scale 1.4 --out runs/extract_at_1.4
 """
 from __future__ import annotations
 

@@ -9,7 +9,7 @@ Swept over the agent step Ts and the motor drivers' damping c (−c·q̇ at ever
 `EnvConfig.joint_damping`, motor torque that Eq. 7 books), at the commanded speeds, one 10 s walk each from the
 stand on the ideal robot. Printed and written to --out (held_trot.md, held_trot.json).
 
-    python tools/held_trot_study.py --out runs/held_trot
+    python notebook/tools/held_trot_study.py --out runs/held_trot
 """
 from __future__ import annotations
 

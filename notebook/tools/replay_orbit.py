@@ -23,7 +23,7 @@ whole walk (walks 1 and 2, from a stand). If walk 3 leaves the policy's orbit fo
 is one the fixed path cannot hold: its saving is in the policy's feedback, however small its shifts' cycle-to-
 cycle variation (printed too), not in any path it commands.
 
-    python tools/replay_orbit.py --actor runs/battery_stiff/seed2/stage2_final_actor.pt --speed 1.2
+    python notebook/tools/replay_orbit.py --actor runs/battery_stiff/seed2/stage2_final_actor.pt --speed 1.2
 """
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """How long does a command stay silent? Runs it, passes its output through, and prints the longest gaps.
 
-    python bench/quiet_gaps.py -- .venv/bin/python evaluate.py extract --policies results/table5/policy/seed0 --out runs/x
+    python notebook/tools/quiet_gaps.py -- \\
+        .venv/bin/python evaluate.py extract --policies results/table5/policy/seed0 --out runs/x
 
 Every line of the command's standard output and error is shown as it comes (a progress bar's in-place
 updates count as lines), then the three longest stretches without one (s), with the line that ended each. Long work in this project prints at least every ~15 s

@@ -15,7 +15,7 @@ as a row of its tables; this script keeps the timed walks from a stand. Printed 
 % per 100 m is proportional to it, Eq. 13) and the saving against the cycloid, per actor, speed and draw, and
 whether the walk fell or left the ±5 % speed band.
 
-    python tools/closed_loop_battery.py --actors runs/battery/seed*/stage2_final_actor.pt \\
+    python notebook/tools/closed_loop_battery.py --actors runs/battery/seed*/stage2_final_actor.pt \\
         --labels seed0 ... --learned notebook/results/learned_battery --speeds 1.0 1.2 --out runs/closed_loop
 """
 from __future__ import annotations

@@ -9,7 +9,7 @@ at the speed it serves for `--duration` s on the ideal robot and on the hardware
 and prints the dropped leg-periods of each walk. Nonzero means a path or a rollout held shifts the robot
 never got.
 
-    python tools/dropped_shift_check.py --learned results/table5/paths notebook/results/learned_battery \\
+    python notebook/tools/dropped_shift_check.py --learned results/table5/paths notebook/results/learned_battery \\
         --policies results/table5/policy/seed0/stage2_actor.pt notebook/results/policy_battery/stage2_actor.pt
 """
 from __future__ import annotations

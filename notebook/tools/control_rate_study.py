@@ -16,7 +16,7 @@ cycloid and straight line, at matched lift and at the paper's 0.15 m) and of the
 deviation from the reference cell; D_t at matched lift per speed; falls and walks outside the ±5 % speed band;
 env steps/s. The table is also written to `<out>/study.md` and the numbers to `<out>/study.json`.
 
-    python tools/control_rate_study.py [--out runs/control_rate] [--cells 400:1.25 1000:1 ...] [--workers 2]
+    python notebook/tools/control_rate_study.py [--out runs/control_rate] [--cells 400:1.25 1000:1 ...] [--workers 2]
 
 A cell already computed (its folder holds table5_summary.csv) is read, not walked again: the study resumes.
 """
@@ -32,9 +32,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = (2000, 0.5)  # (control Hz, physics ms)
 GRID = [(1000, 0.5), (1000, 1.0), (400, 0.5), (400, 1.25), (200, 0.5), (200, 1.0), (200, 1.25)]
 SPEEDS = (1.0, 1.2, 1.4)
@@ -68,8 +67,7 @@ def env_rate(hz: int, ms: float, steps: int, repeats: int) -> float:
     from cyberdog import config as C
     from cyberdog.envs.cyberdog_env import CyberDogEnv
 
-    with open(ROOT / "configs/quick_speeds.yaml") as f:
-        env_cfg = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
+    env_cfg = C.load(C.ExperimentConfig, ROOT / "configs/quick_speeds.yaml").env
     env_cfg = C.override(C.ExperimentConfig(env=env_cfg), [f"env.walk.{s}" for s in sim_sets(hz, ms)]).env
     env = CyberDogEnv(env_cfg, reward="stage2")
     action = np.zeros(12, dtype=np.float32)
