@@ -161,14 +161,15 @@ def test_the_environment_page_example_runs():
 
 
 def test_the_readme_tables_are_the_shipped_results_as_made():
-    """Table 5 and the prototype table in the README are `tools/readme_tables.py`'s output from results/figures_input/,
-    to the printed digit; a changed result, or a hand edit, shows here."""
+    """Table 5 and the prototype table in the README are `tools/make_readme_tables.py`'s output from
+    results/figures_input/, to the printed digit; a changed result, or a hand edit, shows here."""
     from cyberdog.analysis.readme_tables import NAMES, make_tables, readme_blocks
     blocks = readme_blocks(README)
     tables = make_tables(ROOT / "results" / "figures_input")  # the stiffness table where its walks are shipped
     assert set(blocks) == set(tables) and set(tables) <= set(NAMES)
     for name in tables:
-        assert blocks[name] == tables[name], f"README's {name} table differs: python tools/readme_tables.py --write"
+        assert blocks[name] == tables[name], \
+            f"README's {name} table differs: python tools/make_readme_tables.py --write"
 
 
 def test_the_readme_tables_follow_the_rows_they_are_made_from(tmp_path):

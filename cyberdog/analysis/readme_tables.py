@@ -1,6 +1,6 @@
 """The README's result tables, made from the shipped results (so the README and `results/` cannot disagree).
 
-`python tools/readme_tables.py` prints them from `results/figures_input/` (what `python evaluate.py` wrote
+`python tools/make_readme_tables.py` prints them from `results/figures_input/` (what `python evaluate.py` wrote
 and `tools/ship_result.py` shipped); `--write` puts them into README.md between its `<!-- table:NAME -->` and
 `<!-- /table:NAME -->` markers; `tests/test_readme.py` checks that the README holds them as made.
 

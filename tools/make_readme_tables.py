@@ -1,9 +1,9 @@
 #!/usr/bin/env python
 """Make the README's two result tables (Table 5, the prototype run) from the shipped results.
 
-    python tools/readme_tables.py                      # print them from results/figures_input/
-    python tools/readme_tables.py --write              # and put them into README.md between its markers
-    python tools/readme_tables.py --from runs/eval     # from another `evaluate.py` output folder
+    python tools/make_readme_tables.py                 # print them from results/figures_input/
+    python tools/make_readme_tables.py --write         # and put them into README.md between its markers
+    python tools/make_readme_tables.py --from runs/eval # from another `evaluate.py` output folder
 
 The tables are made by `cyberdog.analysis.readme_tables` from comparison.json and prototype.json, the walks
 that `python evaluate.py` writes; results/figures_input/ holds the shipped ones. tests/test_readme.py checks that the
