@@ -2,8 +2,14 @@
 `train.py`. `python -m cyberdog.train` is the same command without the sweep's learning-curve figure (drawn
 by the checkout's `plots/`); it is what a sweep launches for each seed, and what an installed package has.
 
+A preset (configs/<recipe>.yaml) is a whole recipe: its phases (stage 1, stage 2, continuations) run in order
+for each seed, each in RUN_DIR/<phase>/ (per seed: RUN_DIR/seed<N>/<phase>/), each starting from the previous
+one's final agent; an interrupted lineage continues with --resume at the phase it reached. The presets:
+{presets}
 Examples:
-  python train.py --config configs/quick.yaml --run-dir runs/quick            # stage 1 then stage 2
+  python train.py --config configs/battery.yaml --seeds 5-9 --run-dir runs/battery   # every phase, 5 seeds
+  python train.py --show configs/battery.yaml     # its resolved settings per phase, as changes from the defaults
+  python train.py --config configs/tiny.yaml --run-dir runs/tiny              # stage 1 then stage 2
   python train.py --config configs/paper.yaml --stage 1 --seed 3 --run-dir runs/paper_s3
   python train.py --config configs/quick.yaml --set agent.algorithm=ddpg --set train.batch_size=128
   python train.py --resume runs/quick                                         # continue a killed run
@@ -49,12 +55,27 @@ from pathlib import Path
 from cyberdog import config as C
 
 
+PRESETS = Path(__file__).resolve().parents[1] / "configs"  # a checkout's presets (an installed wheel has none)
+
+
+def _preset_lines() -> str:
+    from cyberdog.config.preset import preset_summaries
+
+    rows = preset_summaries(PRESETS) if PRESETS.is_dir() else []
+    return "\n".join(f"  configs/{name:<14} {summary}" for name, summary in rows) or "  (none: configs/ not found)"
+
+
 def parse_args(argv=None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--config", type=Path, help="experiment YAML (ExperimentConfig: env, agent, train); "
-                   "default: built-in defaults")
-    p.add_argument("--stage", choices=("1", "2", "both"), default="both",
-                   help="stage 1 (no energy term), stage 2 (Eq. 11 with energy), or both in sequence (default)")
+    p = argparse.ArgumentParser(description=__doc__.replace("{presets}", _preset_lines()),
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--config", type=Path, help="a preset (configs/<recipe>.yaml: env, agent, train settings as "
+                   "changes from its base, its phases, its extraction); default: built-in defaults")
+    p.add_argument("--show", type=Path, metavar="PRESET",
+                   help="print the preset's resolved settings, phase by phase, as changes from the defaults; no "
+                        "training")
+    p.add_argument("--stage", choices=("1", "2", "both"), default=None,
+                   help="stage 1 (no energy term), stage 2 (Eq. 11 with energy), or both in sequence (default); "
+                        "a preset with phases names its own stages")
     p.add_argument("--seed", type=int, help="random seed; overrides train.seed")
     p.add_argument("--run-dir", type=Path, help="output folder (default runs/<config name>_seed<seed>)")
     C.add_override_option(p, "train.stage1.max_env_steps=5000",
@@ -130,16 +151,24 @@ def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
                 if getattr(args, o) is not None:
                     sys.exit(f"--seeds cannot be combined with {_flag(o)}" + (
                         ": resume a sweep with --resume SWEEP_DIR alone" if o == "resume" else ""))
-            if args.stage == "2":
-                sys.exit("--seeds trains --stage both or 1 (stage 2 alone needs a stage-1 agent per seed)")
             seeds = parse_seeds(args.seeds)
-            cfg, name = _resolve_config(args)
-            try:
-                C.check_planned_updates(cfg, (1, 2) if args.stage == "both" else (int(args.stage),))
-            except ValueError as e:
-                sys.exit(f"config error: {e}")
+            preset, cfg, name = _resolve_config(args)
             sweep_dir = args.run_dir or Path("runs") / f"sweep_{name}"
-            create_sweep(sweep_dir, cfg, seeds, args.stage, source_config=args.config, overrides=args.overrides)
+            if preset.phased:
+                _check_lineage_args(args)
+                _check_phases(preset)
+                create_sweep(sweep_dir, cfg, seeds, "phases", source_config=args.config, overrides=args.overrides)
+                for seed in seeds:
+                    C.write_phases(sweep_dir / f"seed{seed}", preset, seed)
+            else:
+                stage = args.stage or "both"
+                if stage == "2":
+                    sys.exit("--seeds trains --stage both or 1 (stage 2 alone needs a stage-1 agent per seed)")
+                try:
+                    C.check_planned_updates(cfg, (1, 2) if stage == "both" else (int(stage),))
+                except ValueError as e:
+                    sys.exit(f"config error: {e}")
+                create_sweep(sweep_dir, cfg, seeds, stage, source_config=args.config, overrides=args.overrides)
             print(f"sweep: seeds {seeds} in {sweep_dir}")
         status = run_sweep(sweep_dir, backend=args.backend or "local", workers=args.workers,
                            max_retries=2 if args.max_retries is None else args.max_retries,
@@ -184,18 +213,40 @@ def _aggregate(args, sweep_dir: Path) -> int:
 
 
 def _resolve_config(args):
-    """The experiment config from --config, --set and --device (+ --seed); and its name for default folders."""
+    """The preset of --config with --set, --device and --seed applied to every phase's settings; its main
+    settings; and its name for default folders."""
+    from cyberdog.config.preset import Preset, _phases
+
+    sets = list(args.overrides)
+    if args.seed is not None:
+        sets.append(f"train.seed={args.seed}")
+    if args.device:
+        sets.append(f"train.device={args.device}")
     try:
-        cfg = C.load(C.ExperimentConfig, args.config) if args.config else C.ExperimentConfig()
-        sets = list(args.overrides)
-        if args.seed is not None:
-            sets.append(f"train.seed={args.seed}")
-        if args.device:
-            sets.append(f"train.device={args.device}")
-        cfg = C.override(cfg, sets)
+        if args.config:
+            preset = C.load_preset(args.config, sets)
+        else:
+            cfg = C.override(C.ExperimentConfig(), sets)
+            preset = Preset(path=Path("default.yaml"), summary="", config=cfg,
+                            phases=_phases(None, Path("default.yaml"), {}, sets))
     except (ValueError, TypeError, OSError) as e:
         sys.exit(f"config error: {e}")
-    return cfg, (args.config.stem if args.config else "default")
+    return preset, preset.config, (args.config.stem if args.config else "default")
+
+
+def _check_lineage_args(args) -> None:
+    for given, flag in ((args.stage, "--stage"), (args.init_from, "--init-from")):
+        if given is not None:
+            sys.exit(f"{args.config} names its phases (train.py --show {args.config}); do not combine it with {flag}")
+
+
+def _check_phases(preset) -> None:
+    """Every phase's planned updates, before the first starts (a phase hours in must not fail on its settings)."""
+    for phase in preset.phases:
+        try:
+            C.check_planned_updates(phase.config, (1, 2) if phase.stage == "both" else (int(phase.stage),))
+        except ValueError as e:
+            sys.exit(f"config error: phase {phase.name}: {e}")
 
 
 def _warning_line(message, category, filename, lineno, line=None) -> str:
@@ -208,6 +259,12 @@ def main(argv=None, draw_learning_curves=None) -> int:
     args = parse_args(argv)
     args.draw_learning_curves = draw_learning_curves
     warnings.formatwarning = _warning_line  # one plain line per warning (a lock taken over, a cut metrics.csv)
+    if args.show is not None:
+        try:
+            print(C.describe(C.load_preset(args.show)))
+        except (ValueError, OSError) as e:
+            sys.exit(f"config error: {e}")
+        return 0
     if args.seeds is not None or args.aggregate is not None:
         return _sweep_main(args, None, resume=False)
     if args.resume is not None and (args.resume / "sweep.json").is_file():  # a sweep folder
@@ -218,8 +275,36 @@ def main(argv=None, draw_learning_curves=None) -> int:
     used = [_flag(o) for o in SWEEP_OPTIONS if getattr(args, o) is not None]
     if used:
         sys.exit(f"{', '.join(used)} only apply to sweeps (--seeds, --resume SWEEP_DIR, --aggregate)")
+    if args.resume is not None and C.is_lineage(args.resume):
+        if args.config or args.overrides or args.seed is not None or args.init_from or args.device or args.stage:
+            sys.exit("--resume of a lineage folder (phases.yaml) continues its phases as resolved; do not combine "
+                     "it with --config, --set, --seed, --init-from, --device or --stage")
+        return _lineage(args, args.resume)
+    if args.resume is None and args.config is not None:
+        preset, cfg, name = _resolve_config(args)
+        if preset.phased:
+            _check_lineage_args(args)
+            _check_phases(preset)
+            run_dir = args.run_dir or Path("runs") / f"{name}_seed{cfg.train.seed}"
+            if C.is_lineage(run_dir) or (run_dir / "checkpoint.pt").exists():
+                sys.exit(f"{run_dir} already holds a run; use --resume {run_dir} or another --run-dir")
+            C.write_phases(run_dir, preset, cfg.train.seed)
+            return _lineage(args, run_dir)
     cfg, run_dir, trainer_kwargs = _resumed_run(args) if args.resume is not None else _new_run(args)
     return _train(args, cfg, run_dir, trainer_kwargs)
+
+
+def _lineage(args, folder: Path) -> int:
+    """Every phase of the lineage in `folder` (cyberdog.lineage); a failure names its seed and phase."""
+    from cyberdog.lineage import LineageError, run_lineage
+
+    def train(cfg, label, **kwargs):
+        return _train(args, cfg, kwargs["run_dir"], kwargs, label=label, resume_hint=folder)
+
+    try:
+        return run_lineage(folder, train)
+    except (LineageError, ValueError) as e:
+        sys.exit(f"error: {e}")
 
 
 def _resumed_run(args) -> tuple:
@@ -240,11 +325,11 @@ def _resumed_run(args) -> tuple:
 
 def _new_run(args) -> tuple:
     """(config, run folder, Trainer keywords) of a new run (--config, --stage, --init-from, --run-dir)."""
-    cfg, name = _resolve_config(args)
+    _, cfg, name = _resolve_config(args)
     run_dir = args.run_dir or Path("runs") / f"{name}_seed{cfg.train.seed}"
     if (run_dir / "checkpoint.pt").exists():
         sys.exit(f"{run_dir} already holds a run; use --resume {run_dir} or another --run-dir")
-    stages = (1, 2) if args.stage == "both" else (int(args.stage),)
+    stages = (1, 2) if args.stage in (None, "both") else (int(args.stage),)
     init_from = args.init_from
     if stages == (2,) and init_from is None:
         init_from = run_dir / "stage1_final.pt"
@@ -253,24 +338,26 @@ def _new_run(args) -> tuple:
     return cfg, run_dir, dict(run_dir=run_dir, stages=stages, init_from=init_from)
 
 
-def _train(args, cfg, run_dir: Path, trainer_kwargs: dict) -> int:
-    """Run the trainer; one line for a refused setting, a pause (SIGINT/SIGTERM) or the result."""
+def _train(args, cfg, run_dir: Path, trainer_kwargs: dict, label: str = "", resume_hint: Path | None = None) -> int:
+    """Run the trainer; one line for a refused setting, a pause (SIGINT/SIGTERM) or the result (a lineage's
+    phase: prefixed by its `label`, and the resume hint names the lineage folder)."""
     from cyberdog.rl import CheckpointError, NonFiniteError, Trainer  # slow import after --help
     from cyberdog.rl.stop import TrainingInterrupted
     from cyberdog.runlock import RunFolderError
 
+    where, resume = f"{label}: " if label else "", resume_hint or run_dir
     try:
         summary = Trainer(cfg, progress=not args.no_progress, **trainer_kwargs).run()
     except (CheckpointError, NonFiniteError, RunFolderError) as e:
-        sys.exit(f"error: {e}")
+        sys.exit(f"error: {where}{e}")
     except (ValueError, OSError) as e:  # settings refused before the start (no update would happen, no CUDA)
-        sys.exit(f"error: {e}")
+        sys.exit(f"error: {where}{e}")
     except TrainingInterrupted as stop:
-        print(f"\n{stop}; continue with: python train.py --resume {run_dir}", file=sys.stderr)
+        print(f"\n{where}{stop}; continue with: python train.py --resume {resume}", file=sys.stderr)
         return stop.exit_code
     except KeyboardInterrupt:  # a second Ctrl-C: stopped at once
-        print(f"\nstopped at once: the steps since the last checkpoint are lost; continue with: python train.py "
-              f"--resume {run_dir}", file=sys.stderr)
+        print(f"\n{where}stopped at once: the steps since the last checkpoint are lost; continue with: python "
+              f"train.py --resume {resume}", file=sys.stderr)
         return 130
     print("done: " + ", ".join(f"{k}={v}" for k, v in summary.items()
                                if k in ("stage", "env_steps", "episodes", "updates", "buffer_size",

@@ -103,14 +103,14 @@ def test_a_trained_trajectory_actor_is_blind_after_loading(tmp_path):
 
 
 def test_a_stage_can_drop_the_lateral_offset_term_and_relabel_needs_the_same_in_both():
-    """`StageConfig.y_offset_weight` sets B of Eq. (10) for a stage (a trajectory actor cannot hold the line):
+    """A stage's `reward.y_offset` sets B of Eq. (10) for a stage (a trajectory actor cannot hold the line):
     the env's reward then differs from the paper's by exactly B·y² per step, and relabelling refuses stages
     whose B differ (only the stored energy and the constant keep-moving term can be recomputed)."""
     from cyberdog.envs.cyberdog_env import CyberDogEnv
-    stage = C.StageConfig(y_offset_weight=0.0)
+    stage = C.StageConfig(reward=C.replace(C.STAGE1_REWARD, y_offset=0.0))
     assert C.stage_reward(stage).y_offset == 0.0 and C.stage_reward(C.StageConfig()).y_offset == -20.0
-    with pytest.raises(ValueError, match="y_offset_weight"):
-        C.StageConfig(y_offset_weight=5.0)
+    with pytest.raises(ValueError, match="RewardConfig.y_offset"):
+        C.RewardConfig(y_offset=5.0)
     env_cfg = C.load(C.ExperimentConfig, ROOT / "configs/tiny.yaml").env
     steps = []
     for s in (C.StageConfig(), stage):
@@ -122,12 +122,12 @@ def test_a_stage_can_drop_the_lateral_offset_term_and_relabel_needs_the_same_in_
         y_term = info["reward_terms"]["y_offset"]
         assert y_term > 0
         assert r_no_y == pytest.approx(r_paper + 20.0 * y_term, abs=1e-9)
-    with pytest.raises(ValueError, match="y_offset_weight"):
-        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", y_offset_weight=0.0))
-    with pytest.raises(ValueError, match="speed_weight"):
-        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_weight=-40.0))
-    with pytest.raises(ValueError, match="speed_weight"):
-        C.StageConfig(speed_weight=1.0)
-    assert C.stage_reward(C.StageConfig(reward="stage2", speed_weight=-40.0)).speed == -40.0
-    C.TrainConfig(buffer_between_stages="relabel", stage1=stage,
-                  stage2=C.StageConfig(reward="stage2", y_offset_weight=0.0))  # the same B in both: accepted
+    no_y = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, y_offset=0.0))
+    with pytest.raises(ValueError, match="stage1.reward.y_offset"):
+        C.TrainConfig(buffer_between_stages="relabel", stage2=no_y)
+    with pytest.raises(ValueError, match="stage1.reward.speed"):
+        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward=C.replace(C.STAGE2_REWARD,
+                                                                                             speed=-40.0)))
+    with pytest.raises(ValueError, match="RewardConfig.speed"):
+        C.RewardConfig(speed=1.0)
+    C.TrainConfig(buffer_between_stages="relabel", stage1=stage, stage2=no_y)  # the same B in both: accepted

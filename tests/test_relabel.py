@@ -25,8 +25,8 @@ def test_relabelled_buffer_carries_stage1_experience_with_stage2_rewards(tmp_pat
     """buffer_between_stages="relabel": stage 2 starts with stage 1's transitions, each reward recomputed with
     stage 2's energy weight; critic_warmup_updates holds the actor for the stage's first updates."""
     e2, d2 = -0.05, 40.0
-    cfg = C.override(tiny_config(), ["train.buffer_between_stages=relabel", f"train.stage2.energy_weight={e2}",
-                               f"train.stage2.keep_moving_weight={d2}",
+    cfg = C.override(tiny_config(), ["train.buffer_between_stages=relabel", f"train.stage2.reward.energy={e2}",
+                               f"train.stage2.reward.keep_moving={d2}",
                                "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100",
                                "train.init_random_frames=0", "train.stage2.critic_warmup_updates=1000"])
     trainer = Trainer(cfg, tmp_path, progress=False)
@@ -56,8 +56,8 @@ def test_relabelled_buffer_carries_stage1_experience_with_stage2_rewards(tmp_pat
         C.TrainConfig(buffer_between_stages="relabel-all")
     with pytest.raises(ValueError, match="critic_warmup_updates"):
         C.StageConfig(critic_warmup_updates=-1)
-    with pytest.raises(ValueError, match="keep_moving_weight"):
-        C.StageConfig(keep_moving_weight=-1.0)
+    with pytest.raises(ValueError, match="RewardConfig.keep_moving"):
+        C.RewardConfig(keep_moving=-1.0)
 
 
 def test_relabel_formula_gives_the_reward_the_next_stage_would_have_given():
@@ -65,7 +65,7 @@ def test_relabel_formula_gives_the_reward_the_next_stage_would_have_given():
     ΔE · energy + ΔD · Ts/Tf, the correction `relabel_rewards` applies."""
     from cyberdog.envs.cyberdog_env import CyberDogEnv
     s1 = C.StageConfig()
-    s2 = C.StageConfig(reward="stage2", energy_weight=-0.05, keep_moving_weight=40.0)
+    s2 = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, energy=-0.05, keep_moving=40.0))
     w1, w2 = C.stage_reward(s1).weights, C.stage_reward(s2).weights
     assert (w2["energy"], w2["keep_moving"]) == (-0.05, 40.0) and w1["energy"] == 0.0
     env_cfg = tiny_config().env

@@ -57,7 +57,7 @@ def assert_one_clear_line(proc: subprocess.CompletedProcess, *words: str) -> str
     ("train.batch_size=2.5", ["train.batch_size", "2.5", "an integer"]),
     ("agent.gamma=true", ["AgentConfig.gamma", "True", "a number"]),
     ("train.deterministic=1", ["train.deterministic", "true or false"]),
-    ("train.stage1.energy_weight=x", ["StageConfig.energy_weight", "'x'", "null"]),
+    ("train.stage1.reward.energy=x", ["RewardConfig.energy", "'x'", "a number"]),
     ("env.walk.pid.kp=[1, 2]", ["PIDConfig.kp", "3 numbers", "[1, 2]"]),
     ("agent.algorithm=3", ["AgentConfig.algorithm", "a string", "3"]),
     ("train.stage1=5", ["train.stage1", "mapping", "5"]),

@@ -82,6 +82,8 @@ def test_config_validation_names_the_field():
         C.TrainConfig(batch_size=10, buffer_size=5)
     with pytest.raises(ValueError, match="StageConfig.reward"):
         C.StageConfig(reward="stage3")
+    with pytest.raises(ValueError, match="StageConfig.reward"):  # an earlier file's preset name other than these two
+        C.from_dict(C.StageConfig, {"reward": "stage3"})
 
 
 def test_corrupt_checkpoint_raises_clear_error(tmp_path):

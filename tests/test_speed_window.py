@@ -55,12 +55,13 @@ def test_speed_window_is_checked_and_reaches_the_stage_reward():
     with pytest.raises(ValueError, match="speed_window"):
         C.RewardConfig(speed_window=-0.1)
     with pytest.raises(ValueError, match="speed_window"):
-        C.StageConfig(speed_window=float("nan"))
-    assert C.stage_reward(C.StageConfig(reward="stage2", speed_window=0.4)).speed_window == 0.4
-    assert C.stage_reward(C.StageConfig(reward="stage2")).speed_window == 0.0
+        C.RewardConfig(speed_window=float("nan"))
+    windowed = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, speed_window=0.4))
+    assert C.stage_reward(windowed).speed_window == 0.4
+    assert C.stage_reward(C.TrainConfig().stage2).speed_window == 0.0
     with pytest.raises(ValueError, match="speed_window"):  # a relabel keeps each stored speed term as it was
-        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_window=0.4))
-    C.TrainConfig(buffer_between_stages="clear", stage2=C.StageConfig(reward="stage2", speed_window=0.4))
+        C.TrainConfig(buffer_between_stages="relabel", stage2=windowed)
+    C.TrainConfig(buffer_between_stages="clear", stage2=windowed)
 
 
 def test_speed_window_class_keeps_the_last_steps():
@@ -104,13 +105,12 @@ def test_speed_deadband_is_checked_and_reaches_the_stage_reward():
     for bad in (-0.01, 1.0, float("nan")):
         with pytest.raises(ValueError, match="speed_deadband"):
             C.RewardConfig(speed_deadband=bad)
-        with pytest.raises(ValueError, match="speed_deadband"):
-            C.StageConfig(speed_deadband=bad)
-    assert C.stage_reward(C.StageConfig(reward="stage2", speed_deadband=0.03)).speed_deadband == 0.03
-    assert C.stage_reward(C.StageConfig(reward="stage2")).speed_deadband == 0.0
+    banded = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, speed_deadband=0.03))
+    assert C.stage_reward(banded).speed_deadband == 0.03
+    assert C.stage_reward(C.TrainConfig().stage2).speed_deadband == 0.0
     with pytest.raises(ValueError, match="speed_deadband"):  # a relabel keeps each stored speed term as it was
-        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", speed_deadband=0.03))
-    C.TrainConfig(buffer_between_stages="clear", stage2=C.StageConfig(reward="stage2", speed_deadband=0.03))
+        C.TrainConfig(buffer_between_stages="relabel", stage2=banded)
+    C.TrainConfig(buffer_between_stages="clear", stage2=banded)
 
 
 def test_speed_at_nominal_stride_pays_the_speed_loops_lengthening():
@@ -144,10 +144,8 @@ def test_speed_at_nominal_stride_pays_the_speed_loops_lengthening():
 def test_speed_at_nominal_stride_is_checked_and_reaches_the_stage_reward():
     with pytest.raises(ValueError, match="speed_at_nominal_stride"):
         C.RewardConfig(speed_at_nominal_stride=1)
+    nominal = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, energy=0.0, speed_at_nominal_stride=True))
+    assert C.stage_reward(nominal).speed_at_nominal_stride
+    assert not C.stage_reward(C.TrainConfig().stage2).speed_at_nominal_stride
     with pytest.raises(ValueError, match="speed_at_nominal_stride"):
-        C.StageConfig(speed_at_nominal_stride="yes")
-    assert C.stage_reward(C.StageConfig(reward="stage2", speed_at_nominal_stride=True)).speed_at_nominal_stride
-    assert not C.stage_reward(C.StageConfig(reward="stage2")).speed_at_nominal_stride
-    with pytest.raises(ValueError, match="speed_at_nominal_stride"):
-        C.TrainConfig(buffer_between_stages="relabel", stage2=C.StageConfig(reward="stage2", energy_weight=0.0,
-                                                                            speed_at_nominal_stride=True))
+        C.TrainConfig(buffer_between_stages="relabel", stage2=nominal)

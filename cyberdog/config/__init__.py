@@ -19,3 +19,5 @@ from cyberdog.config.learning import stage_reward  # noqa: F401
 from cyberdog.config.robot import *  # noqa: F401,F403
 from cyberdog.config.hardware import *  # noqa: F401,F403
 from cyberdog.config.schedule import *  # noqa: F401,F403
+from cyberdog.config.preset import (Phase, Preset, changed_settings, current_run, describe, final_run,  # noqa: F401
+                                    is_lineage, load_preset, read_phases, write_phases)

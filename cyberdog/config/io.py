@@ -101,6 +101,9 @@ def from_dict(cls: type, data: dict | None, _path: str = "") -> Any:
     field (`Class.field (dotted.path)`), the value and what is allowed; missing keys take defaults."""
     if data is None:
         data = {}
+    upgrade = getattr(cls, "upgrade_fields", None)  # a class that reads an earlier file form says how
+    if upgrade is not None and isinstance(data, dict):
+        data = upgrade(data)
     if not isinstance(data, dict):
         where = f"the {_path} section" if _path else f"a {cls.__name__}"
         raise ValueError(f"{where} must be a mapping of field: value ({cls.__name__} fields: "
@@ -157,6 +160,13 @@ def load(cls: type, path: str | Path) -> Any:
             data = yaml.safe_load(f)
         except yaml.YAMLError as e:
             raise ValueError(f"config {path} is not valid YAML: {' '.join(str(e).split())}") from None
+    if isinstance(data, dict) and {"base", "summary", "phases", "extract"} & set(data):  # a preset file
+        from cyberdog.config.preset import load_preset
+
+        preset = load_preset(path)
+        if not isinstance(preset.config, cls):
+            raise ValueError(f"{path} is a training preset, not a {cls.__name__}")
+        return preset.config
     try:
         return from_dict(cls, data)
     except ValueError as e:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
-from cyberdog.config.env import ENERGY_MODELS, STAGE1_REWARD, STAGE2_REWARD, EnvConfig, RewardConfig
+from cyberdog.config.env import STAGE1_REWARD, STAGE2_REWARD, EnvConfig, RewardConfig
 from cyberdog.config.robot import GaitConfig, WalkConfig
 
 
@@ -21,6 +21,7 @@ EXPLORATION_NOISES = ("gaussian", "ou")
 DEVICES = ("cpu", "cuda", "auto")
 BUFFER_POLICIES = ("clear", "keep", "relabel")
 COLLECTION_MODES = ("sync", "async")
+RELABELLED_TERMS = ("energy", "keep_moving")  # the reward terms a relabel recomputes at the start of stage 2
 
 
 @dataclass(frozen=True)
@@ -90,38 +91,16 @@ class StageConfig:
     """One stage of the paper's two-stage training (Section 3). Scores are in *our* reward units: one
     episode's summed reward, whose keep-moving bonus adds up to at most +25 (see configs/paper.yaml)."""
 
-    reward: str = "stage1"  # reward preset of CyberDog-v0: "stage1" (E = 0) or "stage2" (Eq. 11)
+    reward: RewardConfig = field(default_factory=lambda: STAGE1_REWARD)  # Eq. (10)'s weights in this stage, by
+    #                 the env's term names (speed, y_offset, fuselage, keep_moving, energy, energy_model, ...); a
+    #                 partial mapping in YAML changes the named terms of the stage's default: stage 1 Eq. (11)
+    #                 with E = 0 (STAGE1_REWARD), stage 2 Eq. (11) (STAGE2_REWARD). Training uses these, never
+    #                 env.reward (ExperimentConfig refuses a changed one). With buffer_between_stages="relabel"
+    #                 the two stages must agree on every term but energy and keep_moving (TrainConfig checks)
     max_episodes: int = 20_000  # episode budget of this stage (Table 4 "max episodes")
     max_env_steps: int = 0  # env-step budget of this stage; 0 = no step budget (episodes only)
     stop_score: float = 19.0  # stop when the mean score over `score_window` episodes reaches this; .inf = never
     save_score: float = 20.0  # save the agent whenever an episode's score reaches this (Table 4 "save agent")
-    energy_weight: Optional[float] = None  # E of Eq. (10) per J for this stage; None = the preset's (0 or −0.2)
-    keep_moving_weight: Optional[float] = None  # D of Eq. (10) for this stage; None = the preset's (25): the
-    #                                             survival bonus per episode, which must outweigh the energy
-    #                                             cost of walking or falling at once becomes the best policy
-    speed_weight: Optional[float] = None  # A of Eq. (10) per (m/s)² for this stage; None = the preset's (−2).
-    #                                       With E = −0.2 per J, walking Δv slower saves ~0.9·Δv per step
-    #                                       (the trot's power rises ~185 W per m/s) and costs |A|·Δv², so the
-    #                                       reward's optimum is Δv = 0.9 / (2|A|): 0.23 m/s below the command
-    #                                       with A = −2, 0.011 m/s with A = −40. With "relabel" both stages
-    #                                       must have the same A (TrainConfig checks)
-    speed_window: Optional[float] = None  # s over which the speed term averages speed and command
-    #                                       (RewardConfig.speed_window); None = per step, the paper's. With
-    #                                       "relabel" both stages must have the same window (TrainConfig checks)
-    speed_deadband: Optional[float] = None  # share of the command within which the speed term is 0
-    #                                         (RewardConfig.speed_deadband); None = the paper's term. With
-    #                                         "relabel" both stages must have the same (TrainConfig checks)
-    speed_at_nominal_stride: Optional[bool] = None  # the speed term on the speed at the commanded stride
-    #                                                 (RewardConfig.speed_at_nominal_stride); None = the
-    #                                                 preset's (False). With "relabel" both stages must agree
-    y_offset_weight: Optional[float] = None  # B of Eq. (10) per m² for this stage; None = the preset's (−20).
-    #                                          An actor that does not see the lateral offset cannot hold the
-    #                                          line (the trot controller's heading correction does), so for it
-    #                                          the term is noise in the return. With "relabel" both stages
-    #                                          must have the same B (TrainConfig checks)
-    energy_model: Optional[str] = None  # what this stage's energy term measures (RewardConfig.energy_model);
-    #                                     None = "mechanical" (Eq. 7). With buffer_between_stages="relabel" both
-    #                                     stages must name the same model: the stored step energy is the model's
     action_l2: Optional[float] = None  # the actor's action penalty in this stage; None = agent.action_l2
     trot_imitation: Optional[float] = None  # the pull toward the trot's torque in this stage; None = the agent's
     actor_anchor: float = 0.0  # actor loss += actor_anchor · mean((μ(s) − μ₀(s))²), μ₀ the actor this stage
@@ -140,33 +119,16 @@ class StageConfig:
     #                                      updates), so that the critics evaluate the actor as it is over many
     #                                      steps; False: they wait too (one step's reward over frozen targets)
 
+    @staticmethod
+    def upgrade_fields(data: dict) -> dict:
+        """Read by `from_dict` before the fields: an earlier file's stage in today's form (`upgrade_stage`)."""
+        return upgrade_stage(data)
+
     def __post_init__(self) -> None:
-        _check(self.reward in ("stage1", "stage2"), "StageConfig.reward", "'stage1' or 'stage2'", self.reward)
+        _check(isinstance(self.reward, RewardConfig), "StageConfig.reward", "a RewardConfig", self.reward)
         _check(self.max_episodes >= 1, "StageConfig.max_episodes", ">= 1", self.max_episodes)
         _check(self.max_env_steps >= 0, "StageConfig.max_env_steps", ">= 0 (0 = no step budget)",
                self.max_env_steps)
-        _check(self.energy_weight is None or (math.isfinite(self.energy_weight) and self.energy_weight <= 0),
-               "StageConfig.energy_weight", "None (the preset's) or a finite number <= 0 (per J)",
-               self.energy_weight)
-        _check(self.keep_moving_weight is None or (math.isfinite(self.keep_moving_weight)
-                                                    and self.keep_moving_weight >= 0),
-               "StageConfig.keep_moving_weight", "None (the preset's) or a finite number >= 0",
-               self.keep_moving_weight)
-        _check(self.speed_weight is None or (math.isfinite(self.speed_weight) and self.speed_weight <= 0),
-               "StageConfig.speed_weight", "None (the preset's) or a finite number <= 0 (per (m/s)²)",
-               self.speed_weight)
-        _check(self.speed_window is None or (math.isfinite(self.speed_window) and 0 <= self.speed_window <= 10),
-               "StageConfig.speed_window", "None (per step) or in [0, 10] s", self.speed_window)
-        _check(self.speed_deadband is None or (math.isfinite(self.speed_deadband) and 0 <= self.speed_deadband < 1),
-               "StageConfig.speed_deadband", "None (the paper's term) or in [0, 1)", self.speed_deadband)
-        _check(self.speed_at_nominal_stride is None or isinstance(self.speed_at_nominal_stride, bool),
-               "StageConfig.speed_at_nominal_stride", "None (the preset's), True or False",
-               self.speed_at_nominal_stride)
-        _check(self.y_offset_weight is None or (math.isfinite(self.y_offset_weight) and self.y_offset_weight <= 0),
-               "StageConfig.y_offset_weight", "None (the preset's) or a finite number <= 0 (per m²)",
-               self.y_offset_weight)
-        _check(self.energy_model is None or self.energy_model in ENERGY_MODELS, "StageConfig.energy_model",
-               f"None or one of {ENERGY_MODELS}", self.energy_model)
         _check(self.actor_lr is None or (math.isfinite(self.actor_lr) and self.actor_lr > 0),
                "StageConfig.actor_lr", "None (agent.actor_lr) or a finite number > 0", self.actor_lr)
         _check(self.critic_warmup_updates >= 0, "StageConfig.critic_warmup_updates", ">= 0",
@@ -184,28 +146,34 @@ class StageConfig:
 
 
 def stage_reward(stage: StageConfig) -> RewardConfig:
-    """The reward weights one training stage uses: its preset, with `energy_weight`, `keep_moving_weight`,
-    `speed_weight`, `speed_window`, `speed_deadband`, `speed_at_nominal_stride`, `y_offset_weight` and
-    `energy_model` if set."""
-    preset = STAGE1_REWARD if stage.reward == "stage1" else STAGE2_REWARD
-    changes = {}
-    if stage.energy_weight is not None:
-        changes["energy"] = float(stage.energy_weight)
-    if stage.keep_moving_weight is not None:
-        changes["keep_moving"] = float(stage.keep_moving_weight)
-    if stage.speed_weight is not None:
-        changes["speed"] = float(stage.speed_weight)
-    if stage.speed_window is not None:
-        changes["speed_window"] = float(stage.speed_window)
-    if stage.speed_deadband is not None:
-        changes["speed_deadband"] = float(stage.speed_deadband)
-    if stage.speed_at_nominal_stride is not None:
-        changes["speed_at_nominal_stride"] = stage.speed_at_nominal_stride
-    if stage.y_offset_weight is not None:
-        changes["y_offset"] = float(stage.y_offset_weight)
-    if stage.energy_model is not None:
-        changes["energy_model"] = stage.energy_model
-    return dataclasses.replace(preset, **changes) if changes else preset
+    """The reward weights one training stage uses (its `reward`)."""
+    return stage.reward
+
+
+# The stage settings of earlier config files (before the stage's reward was a RewardConfig): a file or an actor
+# file that still has them is read as the same reward, so that old runs resume and old actors load.
+_LEGACY_STAGE_TERMS = {"energy_weight": "energy", "keep_moving_weight": "keep_moving", "speed_weight": "speed",
+                       "y_offset_weight": "y_offset", "speed_window": "speed_window",
+                       "speed_deadband": "speed_deadband", "speed_at_nominal_stride": "speed_at_nominal_stride",
+                       "energy_model": "energy_model"}
+
+
+def upgrade_stage(data: dict) -> dict:
+    """A stage mapping in the earlier form (`reward: stage1|stage2` and `<term>_weight` fields) in today's
+    (`reward: {term: weight}`); today's form is returned unchanged."""
+    if not isinstance(data, dict) or not (isinstance(data.get("reward"), str)
+                                          or any(k in data for k in _LEGACY_STAGE_TERMS)):
+        return data
+    out = {k: v for k, v in data.items() if k not in _LEGACY_STAGE_TERMS}
+    preset = data.get("reward", "stage1")
+    if preset not in ("stage1", "stage2"):
+        raise ValueError(f"StageConfig.reward must be a mapping of reward terms (or, in an earlier file, "
+                         f"'stage1' or 'stage2'), got {preset!r}")
+    base = STAGE1_REWARD if preset == "stage1" else STAGE2_REWARD
+    reward = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)}
+    reward.update({term: data[k] for k, term in _LEGACY_STAGE_TERMS.items() if data.get(k) is not None})
+    out["reward"] = reward
+    return out
 
 
 @dataclass(frozen=True)
@@ -215,7 +183,7 @@ class TrainConfig:
     seed: int = 0  # seeds torch, numpy, python and the environment
     device: str = "cpu"  # "cpu", "cuda" or "auto" (cuda if available); networks and updates
     stage1: StageConfig = field(default_factory=StageConfig)  # speed and direction, no energy term
-    stage2: StageConfig = field(default_factory=lambda: StageConfig(reward="stage2", stop_score=math.inf))
+    stage2: StageConfig = field(default_factory=lambda: StageConfig(reward=STAGE2_REWARD, stop_score=math.inf))
     score_window: int = 250  # episodes averaged for the stop test (Table 4 "score averaging window length")
     buffer_size: int = 1_000_000  # transitions kept in the replay buffer
     buffer_between_stages: str = "clear"  # "clear": rewards change at stage 2, so old transitions are dropped;
@@ -250,24 +218,14 @@ class TrainConfig:
                self.collection)
         _check(self.buffer_between_stages in BUFFER_POLICIES, "TrainConfig.buffer_between_stages",
                f"one of {BUFFER_POLICIES}", self.buffer_between_stages)
-        models = [s.energy_model or "mechanical" for s in (self.stage1, self.stage2)]
-        _check(self.buffer_between_stages != "relabel" or models[0] == models[1], "TrainConfig.stage1.energy_model",
-               f"the same as stage2's ({models[1]!r}) with buffer_between_stages='relabel' (the stored step "
-               "energy is the model's)", models[0])
-        for term in ("speed", "y_offset"):  # a stored reward's speed and lateral terms cannot be recomputed
-            w = [stage_reward(s).weights[term] for s in (self.stage1, self.stage2)]
-            _check(self.buffer_between_stages != "relabel" or w[0] == w[1], f"TrainConfig.stage1.{term}_weight",
-                   f"the same weight as stage2's ({w[1]}) with buffer_between_stages='relabel'", w[0])
-        windows = [stage_reward(s).speed_window for s in (self.stage1, self.stage2)]
-        _check(self.buffer_between_stages != "relabel" or windows[0] == windows[1], "TrainConfig.stage1.speed_window",
-               f"the same window as stage2's ({windows[1]} s) with buffer_between_stages='relabel'", windows[0])
-        bands = [stage_reward(s).speed_deadband for s in (self.stage1, self.stage2)]
-        _check(self.buffer_between_stages != "relabel" or bands[0] == bands[1], "TrainConfig.stage1.speed_deadband",
-               f"the same deadband as stage2's ({bands[1]}) with buffer_between_stages='relabel'", bands[0])
-        strides = [stage_reward(s).speed_at_nominal_stride for s in (self.stage1, self.stage2)]
-        _check(self.buffer_between_stages != "relabel" or strides[0] == strides[1],
-               "TrainConfig.stage1.speed_at_nominal_stride",
-               f"the same as stage2's ({strides[1]}) with buffer_between_stages='relabel'", strides[0])
+        if self.buffer_between_stages == "relabel":  # a stored reward is recomputed from its step's energy and
+            #                                          bonus only: every other term must be the same in both stages
+            one, two = self.stage1.reward, self.stage2.reward
+            for f in dataclasses.fields(RewardConfig):
+                if f.name not in RELABELLED_TERMS:
+                    _check(getattr(one, f.name) == getattr(two, f.name), f"TrainConfig.stage1.reward.{f.name}",
+                           f"the same as stage2's ({getattr(two, f.name)!r}) with buffer_between_stages='relabel' "
+                           "(only energy and keep_moving are recomputed)", getattr(one, f.name))
         for n in ("score_window", "buffer_size", "batch_size", "frames_per_batch", "checkpoint_every"):
             _check(getattr(self, n) >= 1, f"TrainConfig.{n}", ">= 1", getattr(self, n))
         _check(type(self.num_envs) is int and self.num_envs >= 1, "TrainConfig.num_envs", "an integer >= 1",
@@ -299,6 +257,9 @@ class ExperimentConfig:
 
     def __post_init__(self) -> None:
         env, s1 = self.env, self.train.stage1
+        _check(env.reward == RewardConfig(), "EnvConfig.reward (env.reward)",
+               "left at its default in a training config: each stage trains on its own reward "
+               "(train.stage1.reward, train.stage2.reward)", env.reward)
         if env.prior_weight > 0 and env.prior_decay_steps > 0:  # the prior must be gone before stage 1 ends
             end = env.prior_decay_start + env.prior_decay_steps
             _check(0 < s1.max_env_steps and end <= s1.max_env_steps, "EnvConfig.prior_decay_steps",

@@ -52,16 +52,43 @@ def policy_file(path: Path) -> Path:
 
 
 def policy_paths(policies: list[Path] | None, sweep: Path | None) -> list[Path]:
-    """The actor files of --policies and of every run folder of --sweep."""
+    """The actor files of --policies and of every run folder of --sweep (a seed that is a lineage of phases:
+    its last phase's run folder)."""
     paths = [policy_file(p) for p in (policies or [])]
     if sweep is not None:
         if not sweep.is_dir():
             raise UsageError(f"--sweep {sweep} is not a folder")
-        runs = sorted(d for d in sweep.iterdir() if d.is_dir() and any((d / n).is_file() for n in STAGE2_ACTORS))
+        try:
+            folders = sorted(C.final_run(d) for d in sweep.iterdir() if d.is_dir())
+        except ValueError as e:
+            raise UsageError(f"--sweep {sweep}: {e}") from None
+        runs = [d for d in folders if any((d / n).is_file() for n in STAGE2_ACTORS)]
         if not runs:
             raise UsageError(f"--sweep {sweep} has no run folder with a stage-2 actor ({', '.join(STAGE2_ACTORS)})")
         paths += [policy_file(d) for d in runs]
     return paths
+
+
+def take_recipe_extraction(args) -> dict:
+    """For --sweep of a preset's lineages (train.py --config configs/<recipe>.yaml --seeds ...): the preset's
+    `extract:` settings, for every option left at its default on the command line (one given wins). Returns
+    what was taken."""
+    from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
+
+    sweep = getattr(args, "sweep", None)
+    lineages = sorted(d for d in sweep.iterdir() if C.is_lineage(d)) if sweep is not None and sweep.is_dir() else []
+    if not lineages:
+        return {}
+    try:
+        settings = C.read_phases(lineages[0])[1]
+    except ValueError as e:
+        raise UsageError(f"--sweep {sweep}: {e}") from None
+    taken = {k: v for k, v in settings.items() if getattr(args, k) == EXTRACT_DEFAULTS[k]}
+    for key, value in taken.items():
+        setattr(args, key, value)
+    if taken:
+        print(f"extract: the recipe's settings: {', '.join(f'{k}={v}' for k, v in taken.items())}")
+    return taken
 
 
 def unique_labels(labels: list[str]) -> list[str]:

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cyberdog import config as C
 from cyberdog.analysis.parallel import map_in_processes
 from cyberdog.analysis.report import json_safe, markdown_table, write_rows
 from cyberdog.analysis.stats import mean_ci, mean_ci_band
@@ -52,7 +53,7 @@ def seed_runs(sweep_dir) -> list[tuple[str, Path]]:
     if not sweep_dir.is_dir():
         raise SweepError(f"{sweep_dir} is not a folder")
     if is_sweep_dir(sweep_dir):
-        return [(str(s), seed_dir(sweep_dir, s)) for s in load_sweep(sweep_dir).seeds]
+        return [(str(s), C.final_run(seed_dir(sweep_dir, s))) for s in load_sweep(sweep_dir).seeds]
     runs = sorted((p for p in sweep_dir.iterdir() if (p / "metrics.csv").is_file()),
                   key=lambda p: (int(m[1]) if (m := re.fullmatch(r"seed(\d+)", p.name)) else math.inf, p.name))
     if not runs:

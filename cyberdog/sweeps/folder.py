@@ -58,7 +58,7 @@ class SweepSpec:
     """The contents of sweep.json."""
 
     seeds: list
-    stage: str  # "both" or "1"
+    stage: str  # "both", "1", or "phases" (each seed folder is a lineage: phases.yaml, one run folder per phase)
     source_config: str | None  # the config file the sweep was made from (informative; sweep_config.yaml rules)
     overrides: list = field(default_factory=list)
     created: str = ""
@@ -67,14 +67,14 @@ class SweepSpec:
 
     @property
     def last_stage(self) -> int:
-        return 2 if self.stage == "both" else int(self.stage)
+        return 1 if self.stage == "1" else 2
 
 
 def create_sweep(sweep_dir, cfg: C.ExperimentConfig, seeds: list[int], stage: str = "both",
                  source_config=None, overrides=()) -> SweepSpec:
     """Make a new sweep folder (refusing one that exists and is not empty) with sweep.json and sweep_config.yaml."""
     sweep_dir = Path(sweep_dir)
-    if stage not in ("both", "1"):
+    if stage not in ("both", "1", "phases"):
         raise SweepError(f"a sweep trains --stage both or 1, got {stage!r} (stage 2 alone needs a stage-1 agent "
                          f"per seed: run the stage-1 sweep with --stage both instead)")
     if not seeds:
@@ -103,6 +103,23 @@ def load_sweep(sweep_dir) -> SweepSpec:
         return SweepSpec(**data)
     except (ValueError, TypeError) as e:
         raise SweepError(f"{path} cannot be read: {e}") from e
+
+
+def final_actor_file(sweep_dir, spec: SweepSpec, seed: int) -> Path:
+    """The actor file a seed of the sweep ends with (a lineage's: its last phase's)."""
+    run = seed_dir(sweep_dir, seed)
+    if spec.stage == "phases":
+        last = C.read_phases(run)[0][-1]
+        return run / last.name / f"stage{last.last_stage}_final_actor.pt"
+    return run / f"stage{spec.last_stage}_final_actor.pt"
+
+
+def sweep_budget(sweep_dir, spec: SweepSpec, cfg: C.ExperimentConfig) -> int:
+    """Env steps one seed of the sweep runs at most (a lineage: every phase's)."""
+    if spec.stage == "phases":
+        phases = C.read_phases(seed_dir(sweep_dir, spec.seeds[0]))[0]
+        return sum(stage_budget(p.config, p.stage) for p in phases)
+    return stage_budget(cfg, spec.stage)
 
 
 def stage_budget(cfg: C.ExperimentConfig, stage: str) -> int:
@@ -152,6 +169,8 @@ def attempt_args(sweep_dir: Path, spec: SweepSpec, seed: int) -> list[str]:
     """train.py arguments of the next attempt of `seed`: --resume from its checkpoint if it has one, else a fresh
     start (whatever a killed attempt left before its first checkpoint is moved to seed<N>/discarded_<k>/)."""
     run_dir = seed_dir(sweep_dir, seed).resolve()
+    if spec.stage == "phases":  # a lineage resumes itself at the phase it reached (cyberdog.lineage)
+        return ["--resume", str(run_dir), "--no-progress"]
     if (run_dir / "checkpoint.pt").is_file():
         return ["--resume", str(run_dir), "--no-progress"]
     leftovers = [p for p in run_dir.iterdir() if p.name not in _KEEP_ON_RESTART

@@ -17,7 +17,7 @@ from cyberdog import config as C
 from cyberdog.analysis.parallel import available_cores
 from cyberdog.runlock import break_lock
 from cyberdog.sweeps.folder import (CONFIG_FILE, LOCK_FILE, STATUS_FILE, SweepSpec, attempt_args, load_sweep,
-                                    read_attempt, seed_dir, stage_budget)
+                                    read_attempt, seed_dir, sweep_budget)
 from cyberdog.sweeps.process import ENTRY_POINT, LOG_FILE, LocalBackend, RayBackend, SweepError
 from cyberdog.sweeps.status import SweepStatus, seed_statuses
 
@@ -44,7 +44,7 @@ def run_sweep(sweep_dir, backend: str = "local", workers: int | None = None, max
     cfg = C.load(C.ExperimentConfig, sweep_dir / CONFIG_FILE)
     code_root = Path(__file__).resolve().parents[2]  # the folder holding this `cyberdog` package
     with _driver_lock(sweep_dir):
-        budget = stage_budget(cfg, spec.stage)
+        budget = sweep_budget(sweep_dir, spec, cfg)
         info = {"sweep_dir": str(sweep_dir.resolve()), "backend": backend, "max_retries": max_retries,
                 "started": time.strftime("%Y-%m-%d %H:%M:%S"), "budget_env_steps_per_seed": budget}
         status = SweepStatus(sweep_dir, seed_statuses(sweep_dir, spec), budget, info)

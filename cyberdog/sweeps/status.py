@@ -9,8 +9,9 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from cyberdog.sweeps.folder import (STATUS_FILE, SweepSpec, load_previous_status, process_alive, read_attempt,
-                                    seed_dir, write_json)
+from cyberdog import config as C
+from cyberdog.sweeps.folder import (STATUS_FILE, SweepSpec, final_actor_file, load_previous_status, process_alive,
+                                    read_attempt, seed_dir, write_json)
 from cyberdog.sweeps.process import SweepError
 
 STATES = ("pending", "running", "retrying", "done", "failed", "interrupted")
@@ -48,7 +49,7 @@ class SeedStatus:
     def read_metrics(self) -> None:
         """Steps, episodes and scores from the run's metrics.csv (read incrementally; a resumed run may have
         truncated it, in which case it is read again from the start)."""
-        path = Path(self.run_dir) / "metrics.csv"
+        path = C.current_run(self.run_dir) / "metrics.csv"
         try:
             size = path.stat().st_size
         except OSError:
@@ -86,14 +87,13 @@ def seed_statuses(sweep_dir: Path, spec: SweepSpec) -> dict[int, SeedStatus]:
     attempts and errors count on from sweep_status.json, metrics are read back. Refuses a seed whose training
     process is still alive (a previous driver was killed but its child was not)."""
     previous = load_previous_status(sweep_dir)
-    final_actor = f"stage{spec.last_stage}_final_actor.pt"
     seeds: dict[int, SeedStatus] = {}
     for s in spec.seeds:
         run_dir = seed_dir(sweep_dir, s)
         st = SeedStatus(seed=s, run_dir=str(run_dir))
         prev = previous.get(s, {})
         st.attempts, st.errors = int(prev.get("attempts", 0)), list(prev.get("errors", []))
-        if prev.get("state") == "done" and (run_dir / final_actor).is_file():
+        if prev.get("state") == "done" and final_actor_file(sweep_dir, spec, s).is_file():
             st.state, st.wall_s = "done", float(prev.get("wall_s", 0.0))
         elif process_alive(read_attempt(run_dir), run_dir.resolve()):
             raise SweepError(f"seed {s} is still being trained by process {read_attempt(run_dir)['pid']} "

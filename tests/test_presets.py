@@ -1,0 +1,163 @@
+"""Presets as recipes: a delta over its base resolves to the long form it replaced, its phases run as one lineage
+per seed that resumes mid-phase, and a broken preset is one line."""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cyberdog import config as C
+
+ROOT = Path(__file__).resolve().parents[1]
+NOTEBOOK = ROOT / "notebook" / "configs"
+
+
+def _long(name: str, *sets: str) -> C.ExperimentConfig:
+    """A long-form preset of the search (earlier file form) with the command line's --set of the shipped run."""
+    return C.override(C.load(C.ExperimentConfig, NOTEBOOK / name), list(sets))
+
+
+def _phases(name: str) -> dict[str, C.Phase]:
+    return {p.name: p for p in C.load_preset(ROOT / "configs" / name).phases}
+
+
+# Each shipped phase against the long form and the command that made the shipped actors (docs/results.md).
+SHIPPED = {
+    ("table5.yaml", "train"): ("both", _long("quick_speeds.yaml", "train.stage2.max_env_steps=160000")),
+    # stage 1 only: quick_speeds.yaml's stage-2 budget (40,000) is never used by a stage-1 run
+    ("battery.yaml", "stage1"): ("1", _long("quick_speeds.yaml", "train.stage2.max_env_steps=160000")),
+    ("battery.yaml", "stage2"): ("2", _long("quick_speeds_battery_loop.yaml")),
+    ("battery.yaml", "band"): ("2", _long("quick_speeds_battery_band.yaml")),
+    ("torque.yaml", "main"): ("both", _long("torque_prior.yaml")),
+    ("torque.yaml", "speed1"): ("1", _long("torque_prior.yaml", "env.prior_weight=0", "train.stage1.reward.speed=-100",
+                                           "train.stage2.reward.speed=-100", "train.stage1.max_env_steps=100000",
+                                           "train.stage1.critic_warmup_updates=2000")),
+    ("torque.yaml", "speed2"): ("2", _long("torque_prior.yaml", "train.stage1.reward.speed=-100",
+                                           "train.stage2.reward.speed=-100", "train.stage2.max_env_steps=100000")),
+    ("torque.yaml", "energy"): ("2", _long("torque_prior.yaml", "train.stage1.reward.speed=-100",
+                                           "train.stage2.reward.speed=-100", "train.stage2.reward.energy=-0.6",
+                                           "train.stage2.max_env_steps=50000")),
+}
+
+
+@pytest.mark.parametrize("preset, phase", sorted(SHIPPED), ids=lambda x: str(x))
+def test_a_shipped_phase_resolves_to_the_long_form_it_replaced(preset, phase):
+    stage, long_form = SHIPPED[(preset, phase)]
+    resolved = _phases(preset)[phase]
+    assert resolved.stage == stage
+    assert C.changed_settings(resolved.config, long_form) == {}
+
+
+def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():
+    assert set(p.name for p in (ROOT / "configs").glob("*.yaml")) == {"table5.yaml", "battery.yaml", "torque.yaml",
+                                                                       "paper.yaml", "tiny.yaml"}
+    assert [(p.name, p.start) for p in _phases("battery.yaml").values()] == [
+        ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
+    assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
+        ("main", None), ("speed1", "main/stage1_final.pt"), ("speed2", "main/stage2_final.pt"),
+        ("energy", "speed2/stage2_final.pt")]
+    assert C.load_preset(ROOT / "configs/battery.yaml").extract == {"replay_attempts": 16, "candidates": 2}
+    assert not C.load_preset(ROOT / "configs/tiny.yaml").phased  # a plain two-stage run, as before phases
+
+
+def _write(path: Path, data: dict) -> Path:
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(base="b.yaml"), ["base loop", "a.yaml -> b.yaml -> a.yaml"]),
+    (dict(phases=[{"name": "Stage One", "stage": 1}]), ["phase 'Stage One'", "lower-case"]),
+    (dict(phases=[{"name": "one", "stage": 3}]), ["phase 'one'", "stage must be 1, 2 or both"]),
+    (dict(phases=[{"name": "one", "stage": 2}]), ["phase 'one'", "stage 2 alone"]),
+    (dict(phases=[{"name": "one", "stage": 1}, {"name": "one", "stage": 2}]), ["earlier phase"]),
+    (dict(phases=[{"name": "one", "stage": 1}, {"name": "two", "stage": 2, "from": "three/x.pt"}]), ["earlier phase"]),
+    (dict(phases=[{"name": "one", "stage": 1, "set": {"train": {"batch_size": "x"}}}]), ["phase 'one'", "batch_size"]),
+    (dict(extract={"replay_attempt": 3}), ["extract.replay_attempt", "replay_attempts"]),
+    (dict(stages=[]), ["unknown key", "stages"]),
+])
+def test_a_broken_preset_is_one_line_naming_the_file(tmp_path, change, words):
+    _write(tmp_path / "b.yaml", {"base": "a.yaml"})
+    path = _write(tmp_path / "a.yaml", {"base": str(ROOT / "configs/tiny.yaml"), **change})
+    with pytest.raises(ValueError) as err:
+        C.load_preset(path)
+    message = str(err.value)
+    assert "\n" not in message and "a.yaml" in message
+    for w in words:
+        assert w in message
+    out = subprocess.run([sys.executable, str(ROOT / "train.py"), "--config", str(path), "--run-dir",
+                          str(tmp_path / "run")], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode != 0 and len(out.stderr.strip().splitlines()) == 1 and words[0] in out.stderr
+    assert not (tmp_path / "run").exists()
+
+
+def _tiny_lineage(tmp_path: Path, third_budget: int) -> Path:
+    return _write(tmp_path / f"lineage{third_budget}.yaml", {
+        "base": str(ROOT / "configs/tiny.yaml"), "summary": "three tiny phases",
+        "phases": [{"name": "first", "stage": 1}, {"name": "second", "stage": 2},
+                   {"name": "third", "stage": 2, "set": {"train": {"stage2": {"max_env_steps": third_budget,
+                                                                               "reward": {"energy": -0.1}}}}}],
+        "extract": {"replay_attempts": 2}})
+
+
+def _train(*args) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(ROOT / "train.py"), "--no-progress", *map(str, args)],
+                          capture_output=True, text=True, cwd=ROOT)
+
+
+def _episodes(run: Path) -> list[str]:
+    return (run / "metrics.csv").read_text().splitlines()
+
+
+def test_a_lineage_runs_its_phases_in_order_and_resumed_mid_phase_continues_that_phase(tmp_path):
+    folder = tmp_path / "seed3"
+    first = _train("--config", _tiny_lineage(tmp_path, 50), "--seed", 3, "--run-dir", folder)
+    assert first.returncode == 0, first.stderr
+    phases, extract = C.read_phases(folder)
+    assert [p.name for p in phases] == ["first", "second", "third"] and extract == {"replay_attempts": 2}
+    assert all(p.config.train.seed == 3 for p in phases)
+    assert (folder / "second" / "config.yaml").is_file() and C.final_run(folder) == folder / "third"
+    assert C.load(C.ExperimentConfig, folder / "third/config.yaml").train.stage2.reward.energy == -0.1
+    # the state a kill leaves mid-phase: third has its checkpoint (50 of its 100 env steps) and no final agent
+    C.write_phases(folder, C.load_preset(_tiny_lineage(tmp_path, 100)), 3)
+    for f in (folder / "third").glob("stage2_final*"):
+        f.unlink()
+    before = {name: _episodes(folder / name) for name in ("first", "second", "third")}
+    again = _train("--resume", folder)
+    assert again.returncode == 0, again.stderr
+    assert "phase first (1/3, stage 1): done" in again.stdout and "phase second (2/3, stage 2): done" in again.stdout
+    assert "phase third (3/3, stage 2): resuming" in again.stdout
+    for name in ("first", "second"):  # finished phases are not trained again
+        assert _episodes(folder / name) == before[name]
+    after = _episodes(folder / "third")
+    assert after[:len(before["third"])] == before["third"] and len(after) > len(before["third"])
+    assert (folder / "third" / "stage2_final_actor.pt").is_file()
+
+
+def test_a_failed_phase_names_the_seed_and_the_phase(tmp_path):
+    folder = tmp_path / "lineage"
+    C.write_phases(folder, C.load_preset(_tiny_lineage(tmp_path, 50)), 7)
+    (folder / "first").mkdir()
+    (folder / "first" / "stage1_final.pt").write_bytes(b"not a checkpoint")  # first looks done, its agent is not
+    out = _train("--resume", folder)
+    assert out.returncode != 0 and "first (1/3, stage 1): done" in out.stdout
+    assert out.stderr.strip().splitlines()[-1].startswith("error: seed 7, phase second (2/3, stage 2):")
+
+
+def test_extraction_takes_the_recipe_settings_unless_given(tmp_path):
+    from cyberdog.evaluation import learned as L
+    from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
+
+    sweep = tmp_path / "sweep"
+    C.write_phases(sweep / "seed5", C.load_preset(ROOT / "configs/battery.yaml"), 5)
+    args = argparse.Namespace(sweep=sweep, **EXTRACT_DEFAULTS)
+    assert L.take_recipe_extraction(args) == {"replay_attempts": 16, "candidates": 2}
+    assert (args.replay_attempts, args.candidates, args.cycle) == (16, 2, "mean")
+    given = argparse.Namespace(sweep=sweep, **{**EXTRACT_DEFAULTS, "candidates": 4})
+    L.take_recipe_extraction(given)
+    assert (given.replay_attempts, given.candidates) == (16, 4)
+    assert C.final_run(sweep / "seed5") == sweep / "seed5" / "band"
