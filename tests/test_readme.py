@@ -160,16 +160,42 @@ def test_the_environment_page_example_runs():
     exec(compile(code, "docs/environment.md", "exec"), {})
 
 
-def test_the_readme_tables_are_the_shipped_results_as_made():
-    """Table 5 and the prototype table in the README are `tools/make_readme_tables.py`'s output from
-    results/figures_input/, to the printed digit; a changed result, or a hand edit, shows here."""
-    from cyberdog.analysis.readme_tables import NAMES, make_tables, readme_blocks
-    blocks = readme_blocks(README)
-    tables = make_tables(ROOT / "results" / "figures_input")  # the stiffness table where its walks are shipped
-    assert set(blocks) == set(tables) and set(tables) <= set(NAMES)
-    for name in tables:
+@pytest.mark.parametrize("page", ["README.md", "docs/results.md"])
+def test_the_result_tables_are_the_shipped_results_as_made(page):
+    """The tables of the README and docs/results.md are `tools/make_readme_tables.py`'s output from
+    results/figures_input/, to the printed digit; a changed result, or a hand edit, shows here. docs/results.md
+    holds every table made (Table 5, the prototype run, the stiffness table where its walks are shipped), the
+    README the ones it marks."""
+    from cyberdog.analysis.readme_tables import DOCUMENTS, NAMES, make_tables, readme_blocks
+    blocks = readme_blocks((ROOT / page).read_text())
+    tables = make_tables(ROOT / "results" / "figures_input")
+    assert set(blocks) <= set(tables) <= set(NAMES)
+    if DOCUMENTS[page]:
+        assert set(blocks) == set(tables), f"{page} lacks the markers of {sorted(set(tables) - set(blocks))}"
+    for name in blocks:
         assert blocks[name] == tables[name], \
-            f"README's {name} table differs: python tools/make_readme_tables.py --write"
+            f"{page}'s {name} table differs: python tools/make_readme_tables.py --write"
+
+
+def test_writing_the_tables_fills_both_pages_and_refuses_a_results_page_without_markers(tmp_path):
+    """`--write` rewrites every marked table of both pages (a README may mark fewer), and refuses, before
+    writing anything, a docs/results.md that lacks a table's markers."""
+    from cyberdog.analysis.readme_tables import make_tables, write_documents
+    tables = make_tables(ROOT / "results" / "figures_input")
+    stale = {name: f"<!-- table:{name} -->\nstale\n<!-- /table:{name} -->" for name in tables}
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "README.md").write_text("intro\n" + stale["table5"] + "\nend\n")
+    (tmp_path / "docs" / "results.md").write_text("\n\n".join(stale.values()) + "\n")
+    assert write_documents(tmp_path, tables) == {"README.md": True, "docs/results.md": True}
+    assert (tmp_path / "README.md").read_text() == f"intro\n<!-- table:table5 -->\n{tables['table5']}\n" \
+                                                  "<!-- /table:table5 -->\nend\n"
+    assert all(tables[n] in (tmp_path / "docs" / "results.md").read_text() for n in tables)
+    assert write_documents(tmp_path, tables) == {"README.md": False, "docs/results.md": False}
+    (tmp_path / "README.md").write_text(stale["table5"])
+    (tmp_path / "docs" / "results.md").write_text(stale["table5"])
+    with pytest.raises(ValueError, match="table:prototype.*docs/results.md"):
+        write_documents(tmp_path, tables)
+    assert (tmp_path / "README.md").read_text() == stale["table5"]  # nothing written
 
 
 def test_the_readme_tables_follow_the_rows_they_are_made_from(tmp_path):

@@ -1,8 +1,10 @@
-"""The README's result tables, made from the shipped results (so the README and `results/` cannot disagree).
+"""The result tables of the README and of docs/results.md, made from the shipped results (so the pages and
+`results/` cannot disagree).
 
 `python tools/make_readme_tables.py` prints them from `results/figures_input/` (what `python evaluate.py` wrote
-and `tools/ship_result.py` shipped); `--write` puts them into README.md between its `<!-- table:NAME -->` and
-`<!-- /table:NAME -->` markers; `tests/test_readme.py` checks that the README holds them as made.
+and `tools/ship_result.py` shipped); `--write` puts them into each page of `DOCUMENTS` between its
+`<!-- table:NAME -->` and `<!-- /table:NAME -->` markers: docs/results.md holds every table, the README the ones
+it marks; `tests/test_readme.py` checks that both hold them as made.
 
 - `table5`: Table 5 over the seeds (`comparison.json`, the walks of `evaluate.py compare`): the learned paths'
   Eq. 7 energy, the common trajectories at each path's own lift, D_t (Eq. 12) on E and on the electrical
@@ -35,6 +37,9 @@ TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
 MINUS = "\u2212"  # the README's minus sign
+# the pages the tables are written into (relative to the repository root), and whether a page must hold every
+# table made (the full tables live in docs/results.md; the README marks the ones it shows)
+DOCUMENTS = {"README.md": False, "docs/results.md": True}
 
 
 def number(x: float, fmt: str, sign: bool = False) -> str:
@@ -203,11 +208,27 @@ def readme_blocks(text: str) -> dict[str, str]:
     return {name: m.group(2) for name in NAMES if (m := _block(name).search(text))}
 
 
-def replace_blocks(text: str, tables: dict[str, str]) -> str:
-    """`text` with each marked block replaced by its table; a missing marker is an error naming it."""
+def replace_blocks(text: str, tables: dict[str, str], page: str = "the README", every: bool = True) -> str:
+    """`text` with each marked block replaced by its table; with `every`, a table without its markers in `text`
+    is an error naming it and `page`, else such a table is left out."""
     for name, table in tables.items():
         pattern = _block(name)
         if not pattern.search(text):
-            raise ValueError(f"no '<!-- table:{name} -->' ... '<!-- /table:{name} -->' block in the README")
+            if not every:
+                continue
+            raise ValueError(f"no '<!-- table:{name} -->' ... '<!-- /table:{name} -->' block in {page}")
         text = pattern.sub(lambda m: m.group(1) + table + m.group(3), text)
     return text
+
+
+def write_documents(root: Path, tables: dict[str, str]) -> dict[str, bool]:
+    """Each page of `DOCUMENTS` under `root` with its marked tables rewritten; whether each changed. A page that
+    must hold every table and misses one's markers is refused (ValueError) before any page is written."""
+    new = {}
+    for page, every in DOCUMENTS.items():
+        text = (Path(root) / page).read_text()
+        new[page] = (text, replace_blocks(text, tables, page, every))
+    for page, (old, text) in new.items():
+        if text != old:
+            (Path(root) / page).write_text(text)
+    return {page: old != text for page, (old, text) in new.items()}
