@@ -115,15 +115,15 @@ def _episodes(run: Path) -> list[str]:
 
 def test_a_lineage_runs_its_phases_in_order_and_resumed_mid_phase_continues_that_phase(tmp_path):
     folder = tmp_path / "seed3"
-    first = _train("--config", _tiny_lineage(tmp_path, 50), "--seed", 3, "--run-dir", folder)
+    first = _train("--config", _tiny_lineage(tmp_path, 100), "--seed", 3, "--run-dir", folder)
     assert first.returncode == 0, first.stderr
     phases, extract = C.read_phases(folder)
     assert [p.name for p in phases] == ["first", "second", "third"] and extract == {"replay_attempts": 2}
     assert all(p.config.train.seed == 3 for p in phases)
     assert (folder / "second" / "config.yaml").is_file() and C.final_run(folder) == folder / "third"
     assert C.load(C.ExperimentConfig, folder / "third/config.yaml").train.stage2.reward.energy == -0.1
-    # the state a kill leaves mid-phase: third has its checkpoint (50 of its 100 env steps) and no final agent
-    C.write_phases(folder, C.load_preset(_tiny_lineage(tmp_path, 100)), 3)
+    # the state a kill leaves mid-phase: third has its checkpoint (100 of its 200 env steps) and no final agent
+    C.write_phases(folder, C.load_preset(_tiny_lineage(tmp_path, 200)), 3)
     for f in (folder / "third").glob("stage2_final*"):
         f.unlink()
     before = {name: _episodes(folder / name) for name in ("first", "second", "third")}
@@ -140,7 +140,7 @@ def test_a_lineage_runs_its_phases_in_order_and_resumed_mid_phase_continues_that
 
 def test_a_failed_phase_names_the_seed_and_the_phase(tmp_path):
     folder = tmp_path / "lineage"
-    C.write_phases(folder, C.load_preset(_tiny_lineage(tmp_path, 50)), 7)
+    C.write_phases(folder, C.load_preset(_tiny_lineage(tmp_path, 100)), 7)
     (folder / "first").mkdir()
     (folder / "first" / "stage1_final.pt").write_bytes(b"not a checkpoint")  # first looks done, its agent is not
     out = _train("--resume", folder)
