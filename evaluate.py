@@ -2,11 +2,13 @@
 """Evaluate foot trajectories on the simulated CyberDog (paper Sections 3 and 4).
 
   python evaluate.py                  # all: Table 5, the prototype experiment and the figures (the default)
-  python evaluate.py SUB --help       # SUB: all, baselines, extract, compare, prototype, figures, video
+  python evaluate.py SUB --help       # SUB: all, baselines, extract, compare, prototype, stiffness, figures,
+                                      #      video, check, pd-match
 
 The sub-commands live in `cyberdog/evaluation/`: `cli.py` parses (each sub-command has only its own options),
 `commands.py` runs one sub-command, `learned.py` loads or extracts the learned trajectories, `parts.py` walks,
-tabulates and draws. The last line printed names the output folder.
+tabulates and draws; `check.py` and `pd_match.py` are the check and pd-match sub-commands, options included. The
+last line printed names the output folder.
 """
 from __future__ import annotations
 

@@ -178,7 +178,8 @@ def test_replaying_the_commanded_path_reproduces_the_closed_loop_energy():
     replayed by IK + PID with no policy in the loop, costs what those cycles cost in closed loop (within 5 %),
     and clearly less than the plain trot at the same base lift height; the measured-path extraction (the
     paper's) still works on the same rollout."""
-    from cyberdog.analysis.extract import commanded_from_rollout, extract_from_rollout
+    from cyberdog.analysis.extract import commanded_from_rollout
+    from cyberdog.analysis.extract_measured import extract_from_rollout
     from cyberdog.analysis.walk import walk
     from cyberdog.rl.rollout import load_actor, rollout
 

@@ -1,17 +1,14 @@
-"""tools/check_paths.py: every walk of the replay check, not only up to the first that fails, and a verdict per path."""
+"""`evaluate.py check`: every walk of the replay check, not only up to the first that fails, and a verdict per
+path; the policy check's inputs refused before any walk."""
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("check_paths", ROOT / "tools/check_paths.py")
-tool = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(tool)
+import evaluate
 
 
 @pytest.fixture
@@ -36,14 +33,14 @@ def test_every_spread_walk_is_walked_and_a_path_that_fails_one_is_named_with_it(
                                electrical_energy=4000.0, dropped_shifts=0)
 
     monkeypatch.setattr(replay_check, "replay_walk", stand_in)
-    out = tmp_path / "spread.json"
-    code = tool.main([str(f) for f in two_paths] + ["--parts", "spread", "--workers", "1", "--out", str(out)])
+    out = tmp_path / "spread"
+    code = evaluate.main(["check", *map(str, two_paths), "--parts", "spread", "--workers", "1", "--out", str(out)])
     n = len(replay_check.SPREAD_CHECK_SEEDS) * len(replay_check.SPREAD_CHECK_PD_SCALES)
     assert code == 1  # one path failed
     assert len(walked) == 2 * n  # seed1's failing first walk did not stop its other walks
     assert sorted({round(kp, 6) for _, _, kp in walked}) == sorted(round(60.0 * s, 6)
                                                                  for s in replay_check.SPREAD_CHECK_PD_SCALES)
-    result = json.loads(out.read_text())
+    result = json.loads((out / "replay_check.json").read_text())
     verdicts = {Path(f).name: v for f, v in result["verdicts"].items()}
     first = replay_check.SPREAD_CHECK_SEEDS[0]
     assert verdicts[two_paths[0].name] == "ok"
@@ -52,9 +49,9 @@ def test_every_spread_walk_is_walked_and_a_path_that_fails_one_is_named_with_it(
     assert len(slow) == 1 and slow[0]["speed_share"] == pytest.approx(1.1 / 1.2)
     assert all(r["electrical_J_per_m"] == pytest.approx(200.0) for r in result["rows"])
     # the output is never overwritten
-    with pytest.raises(SystemExit):
-        tool.main([str(two_paths[0]), "--out", str(out)])
-    assert "exists" in capsys.readouterr().err
+    capsys.readouterr()
+    assert evaluate.main(["check", str(two_paths[0]), "--out", str(out)]) == 2
+    assert "already holds" in capsys.readouterr().err
 
 
 def test_a_sampled_path_is_refused_before_any_walk(tmp_path, capsys):
@@ -62,7 +59,37 @@ def test_a_sampled_path_is_refused_before_any_walk(tmp_path, capsys):
 
     from cyberdog.core.learned_set import LearnedPath
 
-    file = LearnedPath("seed0", sampled_trajectory()).save(tmp_path)
-    with pytest.raises(SystemExit):
-        tool.main([str(file)])
+    file = LearnedPath("seed0", sampled_trajectory()).save(tmp_path / "in")
+    assert evaluate.main(["check", str(file), "--out", str(tmp_path / "out")]) == 2
     assert "not commanded paths" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("argv, words", [
+    ([], ["PATH", "--runs"]),  # neither
+    (["PATHS", "--runs", "RUN"], ["PATH", "--runs"]),  # both
+    (["PATHS", "--speeds", "1.0"], ["--speeds", "check --runs"]),  # a policy option with paths
+    (["--runs", "RUN", "--parts", "ideal"], ["--parts", "not for --runs"]),  # a path option with policies
+    (["--runs", "RUN", "--set", "pid.kp=[80,80,80]"], ["--set", "not for --runs"]),
+    (["--runs", "RUN"], ["no stage1_final_actor.pt"]),  # a run folder without actors
+])
+def test_check_refuses_what_it_cannot_serve_before_any_walk(argv, words, two_paths, tmp_path, capsys):
+    run = tmp_path / "run"
+    run.mkdir()
+    argv = [str(two_paths[0]) if a == "PATHS" else str(run) if a == "RUN" else a for a in argv]
+    assert evaluate.main(["check", *argv, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+    assert not (tmp_path / "out").exists()
+
+
+def test_check_and_pd_match_are_listed_and_refuse_each_others_options(capsys):
+    with pytest.raises(SystemExit):
+        evaluate.main(["--help"])
+    top = capsys.readouterr().out
+    assert "    check " in top and "    pd-match " in top
+    with pytest.raises(SystemExit) as exit_:
+        evaluate.main(["pd-match", "PATH.json", "--pd-scale", "1.4", "--runs", "runs/x"])
+    assert exit_.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "unrecognized arguments: --runs" in last and "is an option of: check" in last

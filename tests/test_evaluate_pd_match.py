@@ -1,14 +1,14 @@
-"""tools/pd_matched_path.py: a shipped path re-commanded for another PD is written beside, never over, a file,
+"""`evaluate.py pd-match`: a shipped path re-commanded for another PD is written beside, never over, a file,
 says which PD it is for, and walks under that PD as it walked under its own, where the plain command does not."""
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+import evaluate
 from cyberdog import config as C
 from cyberdog.analysis.walk import walk
 from cyberdog.core.learned_set import LearnedSet
@@ -16,14 +16,11 @@ from cyberdog.evaluation.trot import with_trot
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "results/battery/paths/seed0_1.4mps.json"
-spec = importlib.util.spec_from_file_location("pd_matched_path", ROOT / "tools/pd_matched_path.py")
-tool = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(tool)
 
 
 def test_a_path_re_commanded_for_a_stiffer_pd_walks_there_as_it_walked_under_its_own(tmp_path):
-    assert tool.main([str(SHIPPED), "--pd-scale", "1.4", "--out", str(tmp_path)]) == 0
-    written = tmp_path / SHIPPED.name
+    assert evaluate.main(["pd-match", str(SHIPPED), "--pd-scale", "1.4", "--out", str(tmp_path)]) == 0
+    written = tmp_path / "learned" / SHIPPED.name
     record = json.loads(written.read_text())["provenance"]["pd_matched"]
     assert record["to_pid"]["kp"] == pytest.approx([84.0] * 3) and record["from_pid"]["kp"] == pytest.approx([60.0] * 3)
     own, matched = LearnedSet.load([SHIPPED]).paths()[0], LearnedSet.load([written]).paths()[0]
@@ -40,13 +37,30 @@ def test_a_path_re_commanded_for_a_stiffer_pd_walks_there_as_it_walked_under_its
     # few per cent; the plain command falls into a slower, rocking gait that costs far more (docs/pd_matching.md)
     assert abs(cost["matched"] / cost["own"] - 1) < 0.05, cost
     assert cost["plain"] / cost["own"] > 1.3, cost
-    with pytest.raises(SystemExit):  # never over an existing file
-        tool.main([str(SHIPPED), "--pd-scale", "1.4", "--out", str(tmp_path)])
+    assert evaluate.main(["pd-match", str(SHIPPED), "--pd-scale", "1.4", "--out", str(tmp_path)]) == 2  # never over
+    # nor over the paths it reads, even with --force
+    assert evaluate.main(["pd-match", str(written), "--pd-scale", "1.4", "--out", str(tmp_path), "--force"]) == 2
+    assert json.loads(written.read_text())["provenance"]["pd_matched"] == record
 
 
 @pytest.mark.parametrize("args", [["--kd", "1", "1", "1"], ["--pd-scale", "0"], ["--pd-scale", "nan"],
-                                  ["--pd-scale", "1.4", "--kp", "80", "80", "80"]])
+                                  ["--pd-scale", "1.4", "--kp", "80", "80", "80"], ["--kp", "80", "80", "-1"]])
 def test_bad_gains_are_refused_before_any_walk(args, tmp_path):
-    with pytest.raises(SystemExit):
-        tool.main([str(SHIPPED), *args, "--out", str(tmp_path)])
+    with pytest.raises(SystemExit) as exit_:  # by the command line's parser
+        evaluate.main(["pd-match", str(SHIPPED), *args, "--out", str(tmp_path)])
+    assert exit_.value.code == 2
     assert not any(tmp_path.iterdir())
+
+
+def test_kd_without_kp_and_a_sampled_path_are_refused_before_any_walk(tmp_path, capsys):
+    from test_fast_paths import sampled_trajectory
+
+    from cyberdog.core.learned_set import LearnedPath
+
+    out = tmp_path / "out"
+    assert evaluate.main(["pd-match", str(SHIPPED), "--pd-scale", "1.4", "--kd", "1", "1", "1", "--out", str(out)]) == 2
+    assert "--kd goes with --kp" in capsys.readouterr().err
+    sampled = LearnedPath("seed0", sampled_trajectory()).save(tmp_path / "in")
+    assert evaluate.main(["pd-match", str(sampled), "--pd-scale", "1.4", "--out", str(out)]) == 2
+    assert "no foot shifts" in capsys.readouterr().err
+    assert not out.exists()

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cyberdog import config as C
-from cyberdog.analysis.extract import (ExtractionError, cycle_rows, debounce, extract_trajectory, foot_paths,
-                                       touch_downs)
+from cyberdog.analysis.extract import ExtractionError, cycle_rows
+from cyberdog.analysis.extract_measured import debounce, extract_trajectory, foot_paths, touch_downs
 from cyberdog.core import kinematics as kin
 from cyberdog.core.trajectories import CompositeCycloid, SampledTrajectory
 from cyberdog.provenance import portable_path

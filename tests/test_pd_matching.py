@@ -1,6 +1,7 @@
-"""A path re-commanded for another joint PD (`cyberdog.core.pd_matching`, `cyberdog.analysis.pd_matched`): along
-the same motion the new PD gives the old torque, and walked so the robot executes the motion it executed
-under its own PD, where the plain command under a stiffer PD does not."""
+"""A path re-commanded for another joint PD (`cyberdog.core.pd_match_solver`,
+`cyberdog.analysis.pd_match_recording`): along the same motion the new PD gives the old torque, and walked so
+the robot executes the motion it executed under its own PD, where the plain command under a stiffer PD does
+not."""
 from __future__ import annotations
 
 import math
@@ -10,11 +11,11 @@ import pytest
 
 from cyberdog import config as C
 from cyberdog.analysis import prototype as proto
-from cyberdog.analysis.pd_matched import SETTLE_S, pd_matched_foot_offsets
+from cyberdog.analysis.pd_match_recording import SETTLE_S, pd_matched_foot_offsets
 from cyberdog.analysis.walk import walk
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler
-from cyberdog.core.pd_matching import pd_matched_command, pd_matched_offsets, phase_means
+from cyberdog.core.pd_match_solver import pd_matched_command, pd_matched_offsets, phase_means
 
 PERIOD = 0.4  # s
 N = 64
@@ -127,7 +128,7 @@ def test_walked_re_commanded_under_a_stiffer_pd_the_robot_executes_its_old_motio
 
 def test_a_pd_matched_prototype_run_re_commands_every_trajectory_and_says_so(monkeypatch):
     """The motion is recorded under the path's own PD (kp 60) and the walk is made under the scaled one (84)."""
-    from cyberdog.analysis import pd_matched
+    from cyberdog.analysis import pd_match_recording
     from cyberdog.core import pid as pid_module
     built = []
     original = pid_module.JointPID.__init__
@@ -136,7 +137,7 @@ def test_a_pd_matched_prototype_run_re_commands_every_trajectory_and_says_so(mon
         original(self, kp, *args, **kwargs)
         built.append(float(self.kp[0]))
     monkeypatch.setattr(pid_module.JointPID, "__init__", recording)
-    monkeypatch.setattr(pd_matched, "_cache", {})
+    monkeypatch.setattr(pd_match_recording, "_cache", {})
     rows = proto.run_prototype({"cycloid": None}, speeds=(1.0,), distance_m=0.3, modes=("ideal",), run_up_s=0.0,
                                workers=1, log=lambda *_: None, pd_scale=1.4, pd_matched=True)
     assert [r["pd_matched"] for r in rows] == [True] and rows[0]["pd_scale"] == 1.4

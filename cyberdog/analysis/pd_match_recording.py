@@ -3,9 +3,9 @@
 A foot path (a common trajectory, a searched shape, a learned commanded path) is a command: what the robot does
 with it depends on the joint PD that follows it. A user who sets other gains than the path was made under (a
 stiffer PD, `PIDConfig.stiffness_scaled`) and wants the path's gait keeps the *executed* motion and re-solves
-the command for the new gains (`cyberdog.core.pd_matching`). Here that motion is recorded on the ideal robot under the
-path's own PD (`RECORD_S` s, the first `SETTLE_S` s left out: the speed ramp and the blend into the path) and
-averaged over its gait cycles; the answer is the path's foot shifts plus the change of command, a
+the command for the new gains (`cyberdog.core.pd_match_solver`). Here that motion is recorded on the ideal robot
+under the path's own PD (`RECORD_S` s, the first `SETTLE_S` s left out: the speed ramp and the blend into the
+path) and averaged over its gait cycles; the answer is the path's foot shifts plus the change of command, a
 `FootOffsetPath` the trot walks like any learned path's. The recording never uses the robots a comparison
 reports on, and every trajectory of a comparison goes through it alike (`run_prototype(pd_matched=True)`).
 """
@@ -20,7 +20,7 @@ from cyberdog.analysis.walk import walk
 from cyberdog.config import PIDConfig, WalkConfig
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler
-from cyberdog.core.pd_matching import pd_matched_offsets
+from cyberdog.core.pd_match_solver import pd_matched_offsets
 from cyberdog.core.trajectories import FootTrajectory
 
 RECORD_S = 8.0  # s walked on the ideal robot under the path's own PD

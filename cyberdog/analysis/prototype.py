@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 from cyberdog.analysis.parallel import map_in_processes, progress_log
-from cyberdog.analysis.pd_matched import pd_matched_foot_offsets
+from cyberdog.analysis.pd_match_recording import pd_matched_foot_offsets
 from cyberdog.analysis.prototype_summary import summary_markdown, summary_rows
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
@@ -185,7 +185,7 @@ def run_prototype(trajectories: dict | None = None,
         `PIDConfig.stiffness_scaled`); rows carry it as `pd_scale`.
     pd_matched: at a `pd_scale` other than 1, every path and trajectory (not a policy) walks with its command
         re-solved for the scaled PD so that it executes the motion it executes under `base_cfg.pid`
-        (`cyberdog.analysis.pd_matched`); rows carry `pd_matched` (True only where a command was re-solved).
+        (`cyberdog.analysis.pd_match_recording`); rows carry `pd_matched` (True where a command was re-solved).
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them).
     Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
@@ -193,36 +193,14 @@ def run_prototype(trajectories: dict | None = None,
     """
     base_cfg = base_cfg or WalkConfig()
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
-    speeds, modes = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws)
-    if not (math.isfinite(run_up_s) and run_up_s >= 0):
-        raise ValueError(f"run_up_s must be >= 0 s and finite, got {run_up_s!r}")
-    policies = dict(policies or {})
-    unknown = [label for label in policies if learned is None or label not in learned.labels]
-    if unknown:
-        raise ValueError(f"policies {unknown} have no learned path of the same label (labels: "
-                         f"{list(learned.labels) if learned is not None else []})")
+    speeds, modes, policies = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws,
+                                              run_up_s, policies)
     own_pid = base_cfg.pid if pd_matched and pd_scale != 1.0 else None  # the PD the paths were made under
     base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
-    jobs = []
-    for label in learned.labels if learned is not None else [""]:
-        paths = {v: learned.path(label, v) for v in speeds} if learned is not None else {}
-        lifts = dict(lift_heights) if lift_heights is not None else {v: p.lift_height for v, p in paths.items()}
-        for v, path in paths.items():
-            cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
-            jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), float(distance_m), offsets,
-                          label, d, float(run_up_s), float(path.lift_height), pd_scale=pd_scale,
-                          pd_matched_from=own_pid) for mode, d in robots]
-            if label in policies:
-                jobs += [_Job(POLICY, None, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
-                              float(run_up_s), policy=str(policies[label]), pd_scale=pd_scale) for mode, d in robots]
-        for name, traj in trajectories.items():
-            for v in speeds:
-                cfg = _job_config(base_cfg, name, traj, v)
-                if v in lifts:
-                    cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
-                jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), float(distance_m), None, label, d,
-                              float(run_up_s), pd_scale=pd_scale, pd_matched_from=own_pid) for mode, d in robots]
+    jobs = _walk_jobs(trajectories, speeds, base_cfg, robots, hardware, float(distance_m), float(run_up_s), learned,
+                      lift_heights, policies, pd_scale, own_pid)
+
     def line(row: dict) -> str:
         return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
                 f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "
@@ -234,14 +212,40 @@ def run_prototype(trajectories: dict | None = None,
     return add_gaps(rows)
 
 
+def _walk_jobs(trajectories: dict, speeds, base_cfg: WalkConfig, robots: list, hardware: HardwareConfig,
+               distance_m: float, run_up_s: float, learned, lift_heights, policies: dict, pd_scale: float,
+               own_pid) -> list[_Job]:
+    """`run_prototype`'s walks, per learned label: its paths (and policy) on every robot, then the trajectories."""
+    jobs = []
+    for label in learned.labels if learned is not None else [""]:
+        paths = {v: learned.path(label, v) for v in speeds} if learned is not None else {}
+        lifts = dict(lift_heights) if lift_heights is not None else {v: p.lift_height for v, p in paths.items()}
+        for v, path in paths.items():
+            cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
+            jobs += [_Job("learned", foot_trajectory, v, mode, cfg, _draw(hardware, d), distance_m, offsets, label, d,
+                          run_up_s, float(path.lift_height), pd_scale=pd_scale, pd_matched_from=own_pid)
+                     for mode, d in robots]
+            if label in policies:
+                jobs += [_Job(POLICY, None, v, mode, cfg, _draw(hardware, d), distance_m, None, label, d, run_up_s,
+                              policy=str(policies[label]), pd_scale=pd_scale) for mode, d in robots]
+        for name, traj in trajectories.items():
+            for v in speeds:
+                cfg = _job_config(base_cfg, name, traj, v)
+                if v in lifts:
+                    cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
+                jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), distance_m, None, label, d, run_up_s,
+                              pd_scale=pd_scale, pd_matched_from=own_pid) for mode, d in robots]
+    return jobs
+
+
 def _draw(hardware: HardwareConfig, d: int) -> HardwareConfig:
     """The hardware-like robot of draw d: its own mass draw and sensor noise (seed + d)."""
     return hardware if d == 0 else dataclasses.replace(hardware, seed=hardware.seed + d)
 
 
-def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardware, learned, draws: int
-                    ) -> tuple[tuple[float, ...], tuple[str, ...]]:
-    """(speeds, modes) as tuples, after checking every argument of `run_prototype`."""
+def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardware, learned, draws: int,
+                    run_up_s: float, policies: dict | None) -> tuple[tuple[float, ...], tuple[str, ...], dict]:
+    """(speeds, modes) as tuples and the policies as a dict, after checking every argument of `run_prototype`."""
     if not trajectories and learned is None:
         raise ValueError("trajectories must name at least one trajectory")
     speeds = tuple(float(v) for v in speeds)
@@ -265,7 +269,13 @@ def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardwa
         if traj is not None and not isinstance(traj, FootTrajectory):
             raise TypeError(f"trajectory {name!r} must be a FootTrajectory or None, got {type(traj).__name__}")
         _check_picklable(name, traj)
-    return speeds, modes
+    if not (math.isfinite(run_up_s) and run_up_s >= 0):
+        raise ValueError(f"run_up_s must be >= 0 s and finite, got {run_up_s!r}")
+    unknown = [label for label in policies or {} if learned is None or label not in learned.labels]
+    if unknown:
+        raise ValueError(f"policies {unknown} have no learned path of the same label (labels: "
+                         f"{list(learned.labels) if learned is not None else []})")
+    return speeds, modes, dict(policies or {})
 
 
 def _per_m(row: dict, key: str) -> float:

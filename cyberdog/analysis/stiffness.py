@@ -36,7 +36,7 @@ def check_scales(scales) -> tuple[float, ...]:
 
 def run_stiffness(scales=DEFAULT_SCALES, log=print, **prototype) -> list[dict]:
     """Every walk of `run_prototype(**prototype)` at each stiffness of `scales` (rows carry `pd_scale`; with
-    `pd_matched=True` the paths' commands are re-solved for each PD, `cyberdog.analysis.pd_matched`)."""
+    `pd_matched=True` the paths' commands are re-solved for each PD, `cyberdog.analysis.pd_match_recording`)."""
     rows = []
     matched = ", every path's command re-solved for it" if prototype.get("pd_matched") else ""
     for s in check_scales(scales):

@@ -24,7 +24,7 @@ state that is not a function of the phase, so it is refused.
 `phase_means` averages a recorded walk over its gait cycles, `pd_matched_command` solves the equations above,
 and `pd_matched_offsets` turns the change of command back into a shift of each foot target (forward kinematics,
 Eq. 1-2) added to a path's `FootOffsetPath`. Recording the walk is the analysis layer's
-(`cyberdog.analysis.pd_matched`).
+(`cyberdog.analysis.pd_match_recording`).
 """
 from __future__ import annotations
 

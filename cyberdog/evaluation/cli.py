@@ -15,6 +15,7 @@ from pathlib import Path
 from cyberdog.config import LEG_NAMES, add_override_option
 from cyberdog.config.paper import (PAPER_DISTANCE_M, PAPER_SPEEDS, PAPER_WALK_DURATION, PROTOTYPE_DISTANCE_M,
                                    PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S, SPEED_BAND)
+from cyberdog.evaluation import check, pd_match
 
 # Literal copies of library constants whose modules import the simulator or numpy (a test keeps them equal):
 BASELINE_CHOICES = ("cycloid", "straight")  # cyberdog.analysis.baselines.BASELINES
@@ -85,6 +86,8 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                 "`compare`); by default they are written beside those results."),
     "video": ("a GIF (or MP4) of the trot with one trajectory",
               "a GIF (or MP4) of the trot with one trajectory (--video-trajectory, --video-speed)."),
+    "check": (check.LINE, check.PARAGRAPH),
+    "pd-match": (pd_match.LINE, pd_match.PARAGRAPH),
 }
 
 
@@ -306,6 +309,8 @@ def build_parser() -> argparse.ArgumentParser:
         "stiffness": [output, speeds, workers, learned, extraction, prototype],
         "figures": [output, metrics, learned],
         "video": [output, learned, extraction, video],
+        "check": [output, workers],
+        "pd-match": [output],
     }
     top = _Parser(prog="evaluate.py", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     subs = top.add_subparsers(dest="command", metavar="SUB-COMMAND", parser_class=_Parser, required=True)
@@ -332,10 +337,12 @@ def build_parser() -> argparse.ArgumentParser:
                                   help="at each stiffness, walk every path and trajectory (not a policy) with its "
                                        "command re-solved for that PD, so that it executes the motion it executes "
                                        "under the configured PD (recorded on the ideal robot; "
-                                       "cyberdog.analysis.pd_matched)")
+                                       "cyberdog.analysis.pd_match_recording)")
     sub["stiffness"].set_defaults(prototype_modes=["hardware"])
     sub["baselines"].add_argument("--trajectories", nargs="+", default=list(BASELINE_CHOICES),
                                   choices=BASELINE_CHOICES, help="which common trajectories to walk")
+    check.add_options(sub["check"])
+    pd_match.add_options(sub["pd-match"])
     sub["figures"].add_argument("--from", dest="from_dir", type=Path, default=None, metavar="DIR",
                                 help="the results folder to draw from (default: --out)")
     known: dict[str, list[str]] = {}

@@ -9,8 +9,10 @@ from pathlib import Path
 
 from cyberdog import config as C
 from cyberdog.core.learned_set import LearnedSetError
+from cyberdog.evaluation.check import cmd_check
 from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
+from cyberdog.evaluation.pd_match import cmd_pd_match
 from cyberdog.evaluation.trot import note_searched_trot, walk_under_recorded_trot
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
@@ -243,7 +245,8 @@ def cmd_video(args, cfg: C.WalkConfig) -> int:
 
 
 COMMAND_FUNCTIONS = {"all": cmd_all, "baselines": cmd_baselines, "extract": cmd_extract, "compare": cmd_compare,
-                     "prototype": cmd_prototype, "stiffness": cmd_stiffness, "figures": cmd_figures, "video": cmd_video}
+                     "prototype": cmd_prototype, "stiffness": cmd_stiffness, "figures": cmd_figures, "video": cmd_video,
+                     "check": cmd_check, "pd-match": cmd_pd_match}
 
 
 def run(args, argv: list[str], draw_figures=None) -> int:

@@ -10,8 +10,8 @@ import time
 from pathlib import Path
 
 from cyberdog import config as C
-from cyberdog.analysis.extract import (CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows,
-                                      extract_from_rollout)
+from cyberdog.analysis.extract import CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows
+from cyberdog.analysis.extract_measured import extract_from_rollout
 from cyberdog.analysis.replay_check import ReplayCheck, check_settings, replay_check
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
