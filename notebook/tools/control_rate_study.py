@@ -8,7 +8,7 @@ at 2 kHz), this script
 1. runs `evaluate.py compare` on the shipped learned paths (results/table5/paths/, 5 seeds x 1.0 / 1.2 / 1.4 m/s)
    with `--set sim.controller_dt=... sim.physics_dt=...`, into `<out>/<cell>/` (Table 5 at matched lift and
    the paper's protocol, every walk in comparison.json);
-2. times the shipped training preset's env (configs/quick_speeds.yaml: foot mode, zero action, stage-2
+2. times the shipped training preset's env (configs/table5.yaml: foot mode, zero action, stage-2
    reward) at that cell, in this process, CPU time;
 
 and prints one markdown table: per cell, the mean Eq. (7) and electrical energy of the baselines (composite
@@ -65,9 +65,10 @@ def run_cell(hz: int, ms: float, out: Path, workers: int) -> Path:
 def env_rate(hz: int, ms: float, steps: int, repeats: int) -> float:
     """Median env steps per CPU second of the shipped preset's env at this cell (zero action, from a reset)."""
     from cyberdog import config as C
+    from cyberdog.config.preset import load_preset
     from cyberdog.envs.cyberdog_env import CyberDogEnv
 
-    env_cfg = C.load(C.ExperimentConfig, ROOT / "configs/quick_speeds.yaml").env
+    env_cfg = load_preset(ROOT / "configs/table5.yaml").config.env
     env_cfg = C.override(C.ExperimentConfig(env=env_cfg), [f"env.walk.{s}" for s in sim_sets(hz, ms)]).env
     env = CyberDogEnv(env_cfg, reward="stage2")
     action = np.zeros(12, dtype=np.float32)
