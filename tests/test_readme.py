@@ -19,17 +19,14 @@ OUTPUT_OPTIONS = ("--run-dir", "--out")  # what a run writes to: moved into tmp_
 
 # the start of each README command that is not run here, and why (each is parsed instead)
 EXPENSIVE = {
-    "train.py --config configs/quick_speeds.yaml --seed 0": "one seed of the shipped preset: about 5 min",
-    "train.py --config configs/quick_speeds.yaml --seeds 0-4": "the shipped five-seed sweep: about 20 min",
-    "train.py --resume runs/speeds/seed0 --set": "needs the sweep above; 120,000 stage-2 env steps: about 12 min",
-    "evaluate.py extract --sweep runs/speeds": "needs the sweep above; rolls out 5 policies at 3 speeds",
-    "evaluate.py compare --learned runs/extract/learned": "needs the extraction above; walks for minutes",
-    "evaluate.py prototype --prototype-distance 100": "18 walks of 100 m: about 5x command 1's prototype part",
-    "evaluate.py stiffness --closed-loop": "the prototype's hardware walks at three PD stiffnesses: about 15 min",
-    "evaluate.py stiffness --pd-matched": "the same, every path re-commanded for each PD: about 7 min",
-    "train.py --config configs/torque_prior.yaml --seed 0": "the paper's torque agent: 550,000 env steps, hours",
-    "evaluate.py extract --policies results/table5/policy/seed0": "rolls out the shipped policy at 3 speeds: a minute",
-    "evaluate.py compare --learned runs/extract_shipped/learned": "needs the extraction above; walks for minutes",
+    "train.py --config configs/table5.yaml --seeds 5-9": "the Table 5 recipe on five seeds: about an hour",
+    "evaluate.py extract --sweep runs/table5": "needs the sweep above; rolls out 5 policies at 3 speeds",
+    "evaluate.py compare --learned runs/table5_paths/learned": "needs the extraction above; walks for minutes",
+    "train.py --config configs/battery.yaml --seeds 5-9": "the battery recipe's three phases on five seeds: hours",
+    "evaluate.py extract --sweep runs/battery": "needs the sweep above; up to 16 rollouts per seed and speed",
+    "evaluate.py prototype --learned runs/battery_paths/learned": "needs the extraction above; 120 walks of 20 m",
+    "evaluate.py stiffness --pd-matched": "the prototype's walks at three PD stiffnesses, re-commanded: about 7 min",
+    "train.py --config configs/torque.yaml --seeds 0-2": "the paper's torque agent: 800,000 env steps a seed, hours",
 }
 SERVER = {".venv/bin/tensorboard --logdir runs": "a server that runs until stopped: checked to be installed"}
 RUN = ("train.py --config configs/tiny.yaml", "-m plots --from results/figures_input", "train.py --help",
@@ -87,7 +84,7 @@ def test_ci_runs_exactly_the_readme_test_command():
 
 # ---- the README itself ------------------------------------------------------------------------------------------
 def test_readme_is_short_and_its_links_and_images_exist():
-    assert len(README.splitlines()) <= 200
+    assert len(README.splitlines()) <= 160
     targets = re.findall(r"\]\(([^)#]+)\)", README)
     local = [t for t in targets if not t.startswith("http")]
     assert any(t.endswith(".png") for t in local) and any(t.startswith("docs/") for t in local)
@@ -141,9 +138,7 @@ def test_expensive_next_commands_parse(command):
         from cyberdog import train  # train.py's command line
 
         parsed = train.parse_args(args[1:])
-        # a resume's --set applies to the run's saved config: in the README, a seed of the quick_speeds sweep
-        C.override(C.load(C.ExperimentConfig, ROOT / (parsed.config or "configs/quick_speeds.yaml")),
-                   parsed.overrides)
+        C.load_preset(ROOT / parsed.config, parsed.overrides)
     else:
         from cyberdog.evaluation.cli import parse_args
 
@@ -153,6 +148,15 @@ def test_expensive_next_commands_parse(command):
 @pytest.mark.parametrize("command", commands_of("server"))
 def test_servers_are_installed(command):
     assert (Path(sys.executable).parent / Path(shlex.split(command)[0]).name).is_file()
+
+
+def test_the_readme_python_example_runs(tmp_path, monkeypatch):
+    """The README's ten lines, as written, from the repository root (its training run into tmp_path)."""
+    code = re.search(r"```python\n(.*?)```", README, flags=re.S)[1]
+    assert len(code.strip().splitlines()) <= 12 and '"runs/example"' in code
+    monkeypatch.chdir(ROOT)
+    exec(compile(code.replace('"runs/example"', repr(str(tmp_path / "example"))), "README.md", "exec"), {})
+    assert (tmp_path / "example" / "stage2_final_actor.pt").is_file()
 
 
 def test_the_environment_page_example_runs():
@@ -166,12 +170,17 @@ def test_the_result_tables_are_the_shipped_results_as_made(page):
     results/figures_input/, to the printed digit; a changed result, or a hand edit, shows here. docs/results.md
     holds every table made (Table 5, the prototype run, the stiffness table where its walks are shipped), the
     README the ones it marks."""
-    from cyberdog.analysis.readme_tables import DOCUMENTS, NAMES, make_tables, readme_blocks
+    from cyberdog.analysis.readme_tables import DOCUMENTS, HEADLINES, NAMES, make_tables, readme_blocks
     blocks = readme_blocks((ROOT / page).read_text())
     tables = make_tables(ROOT / "results" / "figures_input")
     assert set(blocks) <= set(tables) <= set(NAMES)
+    full = set(tables) - set(HEADLINES)
     if DOCUMENTS[page]:
-        assert set(blocks) == set(tables), f"{page} lacks the markers of {sorted(set(tables) - set(blocks))}"
+        assert set(blocks) == full, f"{page} lacks the markers of {sorted(full - set(blocks))}"
+    else:  # the README: the headline of every result
+        assert set(blocks) == set(HEADLINES), f"{page} shows {sorted(blocks)}, not the headlines"
+        for name, (source, rows) in HEADLINES.items():
+            assert blocks[name].count("\n") == len(rows) + 1 <= 5 and blocks[name] in tables[name]
     for name in blocks:
         assert blocks[name] == tables[name], \
             f"{page}'s {name} table differs: python tools/make_readme_tables.py --write"
@@ -180,8 +189,8 @@ def test_the_result_tables_are_the_shipped_results_as_made(page):
 def test_writing_the_tables_fills_both_pages_and_refuses_a_results_page_without_markers(tmp_path):
     """`--write` rewrites every marked table of both pages (a README may mark fewer), and refuses, before
     writing anything, a docs/results.md that lacks a table's markers."""
-    from cyberdog.analysis.readme_tables import make_tables, write_documents
-    tables = make_tables(ROOT / "results" / "figures_input")
+    from cyberdog.analysis.readme_tables import HEADLINES, make_tables, write_documents
+    tables = {n: t for n, t in make_tables(ROOT / "results" / "figures_input").items() if n not in HEADLINES}
     stale = {name: f"<!-- table:{name} -->\nstale\n<!-- /table:{name} -->" for name in tables}
     (tmp_path / "docs").mkdir()
     (tmp_path / "README.md").write_text("intro\n" + stale["table5"] + "\nend\n")

@@ -31,7 +31,19 @@ from cyberdog.analysis.compare import REFERENCE
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
 from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
-NAMES = ("table5", "prototype", "stiffness")
+# the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
+HEADLINES = {
+    "table5_headline": ("table5", ("E, learned (kJ)", "E, composite cycloid (kJ)", "**D_t on E, Eq. 12**",
+                                   "*paper: D_t*")),
+    "prototype_headline": ("prototype", ("battery % per 100 m: learned",
+                                         "battery % per 100 m: composite cycloid / straight line",
+                                         "**battery saving against the cheaper common trajectory**",
+                                         "*paper, 1 m/s: range learned / cycloid*")),
+    "stiffness_headline": ("stiffness", ("**replayed learned path, PD 0.7×**", "**replayed learned path, PD 1×**",
+                                         "**replayed learned path, PD 1.4×**",
+                                         "**replayed learned path re-commanded for the PD, PD 1.4×**")),
+}
+NAMES = ("table5", "prototype", "stiffness", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
@@ -196,7 +208,19 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         matched = results / STIFFNESS_MATCHED_SOURCE
         tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
                                                  matched=json.loads(matched.read_text()) if matched.is_file() else None)
+    tables.update({name: headline(tables[full], rows) for name, (full, rows) in HEADLINES.items() if full in tables})
     return tables
+
+
+def headline(table: str, rows: tuple[str, ...]) -> str:
+    """The header and the `rows` (by first cell, in the full table's order) of a Markdown table; a row that is
+    not there is an error (a renamed row must not vanish from the README unnoticed)."""
+    lines = table.splitlines()
+    kept = [ln for ln in lines[2:] if ln.split("|")[1].strip() in rows]
+    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept}
+    if missing:
+        raise ValueError(f"headline rows {sorted(missing)} are not in the table")
+    return "\n".join(lines[:2] + kept)
 
 
 def _block(name: str) -> re.Pattern:
@@ -227,7 +251,8 @@ def write_documents(root: Path, tables: dict[str, str]) -> dict[str, bool]:
     new = {}
     for page, every in DOCUMENTS.items():
         text = (Path(root) / page).read_text()
-        new[page] = (text, replace_blocks(text, tables, page, every))
+        shown = tables if not every else {n: t for n, t in tables.items() if n not in HEADLINES}
+        new[page] = (text, replace_blocks(text, shown, page, every))
     for page, (old, text) in new.items():
         if text != old:
             (Path(root) / page).write_text(text)
