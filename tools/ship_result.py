@@ -1,12 +1,14 @@
 #!/usr/bin/env python
-"""Copy a finished training run into the small shipped result folder that `evaluate.py` uses by default.
+"""Copy a finished training run into a small shipped result folder (results/<recipe>/policy/seed<N>/).
 
-    python tools/ship_result.py runs/sweep_quick/seed0 --out results/policy
+    python tools/ship_result.py runs/table5/seed0 --out results/table5/policy/seed0
 
-Writes (never over an existing folder unless --force): stage1_actor.pt and stage2_actor.pt (the final
-actors of the two stages; no stage1_actor.pt for a stage-2 run started with --init-from), config.yaml (the resolved experiment), metrics.csv (the training log, for
-Figure 6) and metadata.json (seed, env steps, episodes and wall time per stage, final window scores, the
-git commit of the code, the source run). Checkpoints with replay buffers are not copied (tens of MB).
+The run is a train.py run folder, or a seed folder of a preset's phases (then its last phase's run is shipped).
+Writes (never over an existing folder unless --force): stage1_actor.pt and stage2_actor.pt (the final actors of
+the two stages; no stage1_actor.pt for a stage-2 run started from another's agent), config.yaml (the resolved
+experiment), metrics.csv (the training log, for Figure 6) and metadata.json (seed, env steps, episodes and wall
+time per stage, final window scores, the git commit of the code, the source run). Checkpoints with replay
+buffers are not copied (tens of MB).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from cyberdog.config.preset import final_run
 from cyberdog.provenance import portable_path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -59,11 +62,14 @@ def git_commit() -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("run_dir", type=Path, help="a finished run folder (train.py output): both stages, or stage 2 "
-                   "alone started with --init-from")
-    p.add_argument("--out", type=Path, default=REPO / "results" / "policy", help="default: results/policy")
+                   "alone started from another's agent; or a preset's seed folder (its last phase's run)")
+    p.add_argument("--out", type=Path, required=True, help="the shipped folder, e.g. results/table5/policy/seed0")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
     p.add_argument("--note", default="", help="free text stored in metadata.json")
     args = p.parse_args(argv)
+    if final_run(args.run_dir) != args.run_dir:
+        args.run_dir = final_run(args.run_dir)
+        print(f"a preset's seed folder: shipping its last phase, {args.run_dir}")
     missing = [f for f in FILES if not (args.run_dir / f).is_file() and f not in OPTIONAL]
     if missing:
         sys.exit(f"{args.run_dir} is not a finished run: missing {missing}")
