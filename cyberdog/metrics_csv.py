@@ -15,9 +15,12 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from pathlib import Path
 
 import numpy as np
+
+SEED_FOLDER = re.compile(r"^(?:(?P<name>.+?)_)?seed(?P<seed>\d+)$")  # a run folder named by its seed: quick_seed0
 
 
 def read_rows(path: str | Path) -> list[dict[str, str]]:
@@ -60,9 +63,21 @@ def read_stages(path: str | Path) -> dict[int, dict[str, np.ndarray]]:
 
 
 def run_name(path: str | Path) -> str:
-    """The name a figure gives the run that wrote `path`: its run folder's name (e.g. `policy_speeds`)."""
-    path = Path(path).resolve()
-    return path.parent.name or path.stem
+    """The name a figure gives the run that wrote `path`, by recipe and seed where its folders say them:
+    results/table5/policy/seed0/metrics.csv and runs/table5/seed0/metrics.csv → "table5, seed 0",
+    runs/quick_seed3/ → "quick, seed 3", a phase of a lineage runs/table5/seed5/<phase>/ → "table5, seed 5
+    (<phase>)"; a run folder not named by its seed keeps its folder's name."""
+    folder, phase = Path(path).resolve().parent, ""
+    m = SEED_FOLDER.match(folder.name)
+    if m is None and SEED_FOLDER.match(folder.parent.name):
+        folder, phase = folder.parent, f" ({folder.name})"
+        m = SEED_FOLDER.match(folder.name)
+    if m is None:
+        return folder.name or Path(path).stem
+    recipe = m["name"]
+    if recipe is None:  # .../<recipe>/seed<N> or .../<recipe>/policy/seed<N>
+        recipe = folder.parent.parent.name if folder.parent.name == "policy" else folder.parent.name
+    return (f"{recipe}, seed {int(m['seed'])}" if recipe else f"seed {int(m['seed'])}") + phase
 
 
 __all__ = ["read_rows", "read_stages", "run_name"]

@@ -9,6 +9,7 @@ One module per figure; none runs physics or imports the simulator or torch (`tes
     figure13         energy (comparison.json) and battery use (prototype.json) against speed
     learning_curves  a seed sweep's curves with a 95 % band, from its learning_curves.csv
     results          reading a results folder written by `evaluate.py`
+    walk_strip       the README's picture: frames of the trot (learned, cycloid), cut from `evaluate.py video`
     shipped          the README's copies of Figures 7, 10 and 13 and the small inputs they are drawn from
 
 `draw_all(results_dir, out_dir)` draws every figure the folder has inputs for; each module's `figureN(...)`
@@ -22,7 +23,7 @@ from plots import figure4, figure6, figure7, figure10, figure13, learning_curves
 from plots.results import load_results
 from plots.style import DPI
 
-FIGURES = ("4", "6", "7", "10", "13", "learning_curves")
+FIGURES = ("4", "6", "7", "10", "13", "learning_curves", "walk_strip")
 
 
 def draw_all(results_dir: str | Path, out_dir: str | Path, metrics=None, only=None, dpi: int = DPI,
@@ -68,6 +69,13 @@ def draw_all(results_dir: str | Path, out_dir: str | Path, metrics=None, only=No
             skipped.append("13 (no comparison.json)")
     if "learning_curves" in wanted and (results.folder / learning_curves.CSV_NAME).is_file():
         paths += learning_curves.learning_curves(results.folder, out_dir, **save)
+    if "walk_strip" in wanted:
+        from plots import walk_strip  # here, not above: `python -m plots.walk_strip` runs it as __main__
+
+        if (results.folder / walk_strip.INPUT_NAME).is_file():
+            paths += walk_strip.walk_strip(results.folder, out_dir, **save)
+        elif only is not None:
+            skipped.append(f"walk_strip (no {walk_strip.INPUT_NAME}: python -m plots.walk_strip)")
     if skipped and log:
         log(f"figures skipped (no input in {results.folder}): {'; '.join(skipped)}")
     return paths

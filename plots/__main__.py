@@ -1,7 +1,7 @@
 """Draw the paper's figures from a results folder: `python -m plots --from DIR --out DIR`.
 
     python -m plots --from runs/evaluate-<time> --out runs/figures          # every figure it has inputs for
-    python -m plots --from results/figures_input --out plots/png --readme    # the README's three PNGs
+    python -m plots --from results/figures_input --out plots/png --readme    # the README's PNGs
 """
 from __future__ import annotations
 

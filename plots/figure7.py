@@ -2,9 +2,10 @@
 the gait phase.
 
 The learned paths are read from the results folder's `learned/*.json` as a `LearnedSet`: per seed the path
-`LearnedSet.figure_paths` gives at 1 m/s, the one Table 5 walked there (a commanded path's reference leg, LF). The baselines are drawn at the learned S and at the H Table 5
-matches them at (solid: the first seed's lift height, the mean of its four legs' peaks, which the legend
-gives beside the LF leg's own) and at the paper's H (dotted: the paper's protocol).
+`LearnedSet.figure_paths` gives at 1 m/s, the one Table 5 walked there (a commanded path's reference leg, LF).
+The baselines are drawn at the learned S and at the H Table 5 matches them at (solid: the first seed's lift
+height, the mean of its four legs' peaks, which the legend gives beside the LF leg's own) and at the paper's H
+(dotted: the paper's protocol).
 """
 from __future__ import annotations
 

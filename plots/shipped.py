@@ -1,4 +1,5 @@
-"""The README's figures: small PNGs of Figures 7, 10 and 13 of the shipped results, and their inputs.
+"""The README's figures: small PNGs of Figures 7, 10 and 13 of the shipped results and the walk strip, and their
+inputs.
 
 A full `evaluate.py` results folder is ~4 MB (mostly 10 s power traces of 49 walks at 1 kHz); the three
 figures need a small part of it, shipped in `results/figures_input/`:
@@ -9,6 +10,7 @@ figures need a small part of it, shipped in `results/figures_input/`:
     power_traces.npz   their power, cut to the two gait cycles Figure 10 draws
     prototype.json     the prototype walks (Figure 13b)
     learned/<seed>.json  each seed's Figure 7 path (its reference leg's x–z path at 1.0 m/s)
+    walk_strip.npz     the walk strip's cropped frames (written by `python -m plots.walk_strip`, not by the export)
 
 `export_inputs(results_dir, dst)` writes that subset; drawn from it, the figures are the same as drawn from
 the full folder (`tests/test_plots.py` checks). `python -m plots --from DIR --out plots/png --readme
@@ -27,8 +29,8 @@ from cyberdog.analysis.prototype_summary import REFERENCE
 from plots.figure10 import chosen_walks, last_cycles_window
 from plots.results import load_results
 
-README_FIGURES = ("7", "10", "13")
-README_DPI = 80  # small enough for the repository (each PNG < 150 kB), large enough to read in a browser
+README_FIGURES = ("7", "10", "13", "walk_strip")
+README_DPI = 80  # small enough for the repository (each PNG < 250 kB), large enough to read in a browser
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED_INPUTS = ROOT / "results" / "figures_input"
 SHIPPED_PNG = ROOT / "plots" / "png"

@@ -1,5 +1,6 @@
 """The figures: drawn from saved results only, never importing the simulator or torch; the README's PNGs are
 redrawn by their documented command from the shipped inputs; the figure faults that were fixed stay fixed."""
+import dataclasses
 import json
 import subprocess
 import sys
@@ -14,8 +15,8 @@ import plots
 from cyberdog import config as C
 from cyberdog.config.paper import SPEED_BAND, speed_within_band
 from conftest import commanded
-from cyberdog.metrics_csv import read_rows, read_stages
-from plots import figure6, figure7, figure10, figure13, results
+from cyberdog.metrics_csv import read_rows, read_stages, run_name
+from plots import figure6, figure7, figure10, figure13, results, walk_strip
 from plots.learning_curves import NUMBER_COLUMNS, read_curves
 from plots.shipped import README_FIGURES, SHIPPED_INPUTS, SHIPPED_PNG, export_inputs
 from plots.style import COLORS, FADED_ALPHA
@@ -69,7 +70,8 @@ import importlib, json, pkgutil, sys
 import plots
 for m in pkgutil.iter_modules(plots.__path__):
     importlib.import_module("plots." + m.name)
-paths = plots.draw_all({str(SHIPPED_INPUTS)!r}, {str(tmp_path)!r}, metrics=[{str(ROOT / "results/table5/policy/seed0/metrics.csv")!r}])
+paths = plots.draw_all({str(SHIPPED_INPUTS)!r}, {str(tmp_path)!r},
+                       metrics=[{str(ROOT / "results/table5/policy/seed0/metrics.csv")!r}])
 print(json.dumps({{"paths": [str(p) for p in paths], "modules": sorted(sys.modules)}}))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
@@ -79,7 +81,7 @@ print(json.dumps({{"paths": [str(p) for p in paths], "modules": sorted(sys.modul
     assert loaded == []
     drawn = {Path(p).name for p in out["paths"]}
     for stem in ("figure4_baseline_trajectories", "figure6_reward_curves", "figure7_learned_trajectory",
-                 "figure10_power", "figure13_energy_vs_speed"):
+                 "figure10_power", "figure13_energy_vs_speed", "walk_strip"):
         assert {f"{stem}.png", f"{stem}.pdf"} <= drawn
 
 
@@ -93,7 +95,7 @@ def test_readme_figures_regenerate_from_the_shipped_inputs(tmp_path):
     assert len(shipped) == len(README_FIGURES)
     assert sorted(p.name for p in tmp_path.iterdir()) == [p.name for p in shipped]  # PNG only
     for path in shipped:
-        assert path.stat().st_size < 200_000, path.name  # small enough to commit (Figure 10: five traces a panel)
+        assert path.stat().st_size < 250_000, path.name  # small enough to commit (Figure 10: two rows of traces)
         new, old = pixels(tmp_path / path.name), pixels(path)
         assert new.shape == old.shape, path.name
         # the same figure: anti-aliasing may differ between matplotlib builds, a changed figure does not pass
@@ -117,19 +119,48 @@ def test_exported_inputs_draw_the_same_figures_as_the_full_folder(tmp_path):
 
 
 # ---- figure faults ----------------------------------------------------------------------------------------------
-def test_figure10_draws_the_learned_trace_on_top(tmp_path):
-    full = fake_results(tmp_path / "r")
-    walks = json.loads((full / "walks.json").read_text())
-    with np.load(full / "power_traces.npz") as z:
+def figure10_of(folder: Path):
+    walks = json.loads((folder / "walks.json").read_text())
+    with np.load(folder / "power_traces.npz") as z:
         power = {int(k.split("_")[1]): z[k] for k in z.files}
-    fig = figure10.draw(walks, power)
+    return figure10.draw(walks, power)
+
+
+def traces(ax) -> list:
+    return [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]  # not the gait period boundary
+
+
+def test_figure10_draws_the_learned_trace_on_top(tmp_path):
+    fig = figure10_of(fake_results(tmp_path / "r"))
+    top_row, bottom_row = fig.axes[:2], fig.axes[2:]  # two speeds: (a), (b) above, (c), (d) below
     for ax in fig.axes:
-        traces = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]  # not the cycle boundary line
-        assert len(traces) == 4  # the cycloid at the learned path's lift (matched), both baselines at the paper's
-        top = max(traces, key=lambda ln: ln.get_zorder())
-        assert top is traces[-1] and top.get_color() == COLORS["learned"]
-        styles = {ln.get_label().split(",")[0]: ln.get_linestyle() for ln in traces}
-        assert styles["cycloid (matched)"] == "-" and styles["cycloid (paper)"] == ":"  # the headline is solid
+        top = max(traces(ax), key=lambda ln: ln.get_zorder())
+        assert top is traces(ax)[-1] and top.get_color() == COLORS["learned"]
+    for ax in top_row:  # the learned path and the cycloid at its lift height (the headline pair), nothing else
+        assert [ln.get_label().split(",")[0] for ln in traces(ax)] == ["cycloid (matched)", "learned (RL) [seed0]"]
+    for ax in bottom_row:  # the cycloid at the paper's H; the straight line was walked at the paper's H only
+        styles = {ln.get_label().split(",")[0]: ln.get_linestyle() for ln in traces(ax)}
+        assert styles == {"cycloid (paper)": ":", "straight (paper)": ":", "learned (RL) [seed0]": "-"}
+
+
+def test_figure10_shows_learned_and_cycloid_on_their_own_scale_and_labels_every_line():
+    """From the shipped inputs: the straight line's ~1.5 kW spikes are on another axis than the learned path and
+    the cycloid, whose axis reaches less than twice their highest power; every line, the gait period boundary
+    included, has an entry in the legend under its column."""
+    fig = figure10_of(SHIPPED_INPUTS)
+    n = len(fig.axes) // 2
+    for col in range(n):
+        top, bottom = fig.axes[col], fig.axes[n + col]
+        pair = traces(top)
+        assert {ln.get_color() for ln in pair} == {COLORS["learned"], COLORS["cycloid"]}
+        highest = max(float(np.max(ln.get_ydata())) for ln in pair)
+        assert top.get_ylim()[1] < 2 * highest, (top.get_ylim(), highest)
+        assert max(float(np.max(ln.get_ydata())) for ln in traces(bottom)) > 2 * highest  # the spikes: below
+        legend = [t.get_text() for t in bottom.get_legend().get_texts()]
+        for ax in (top, bottom):
+            for ln in ax.get_lines():
+                assert ln.get_label() in legend or ln.get_label() == "_boundary", ln.get_label()
+        assert any(lab.startswith("gait period boundary (T = 0.4 s)") for lab in legend)
 
 
 def test_figure13_draws_the_matched_baselines_beside_the_papers_protocol(tmp_path):
@@ -155,43 +186,132 @@ def test_figure7_matches_the_baselines_at_table5s_lift_height(tmp_path):
     assert any(f"H = {own:.3f} m" in lab for lab in labels if "learned" in lab)
 
 
-def test_figure13_fades_every_prototype_walk_off_the_speed_band_and_says_it_scales(tmp_path):
+def test_figure13_marks_every_prototype_walk_off_the_speed_band_and_says_it_scales(tmp_path):
     rows = json.loads((fake_results(tmp_path / "r") / "comparison.json").read_text())
     proto = [{"trajectory": "straight", "speed_mps": 1.0, "robot": r, "fell": False, "reached": True,
               "mean_speed_mps": v, "distance_m": 20.0, "battery_used_pct": 1.0}
              for r, v in (("ideal", 1.0), ("hardware", 1.0 - 2 * SPEED_BAND))]  # the second walked too slowly
     fig = figure13.draw(rows, proto)
-    bars = [p for p in fig.axes[1].patches if p.get_height() > 0]
-    assert len(bars) == 2
-    for bar, row in zip(bars, proto):
+    assert len(fig.axes) == 3  # (a), then (b) the ideal and (c) the hardware-like robot
+    for ax, row in zip(fig.axes[1:], proto):
+        assert row["robot"] in ax.get_title()
+        (bar,) = [p for p in ax.patches if p.get_height() > 0]
         counts = speed_within_band(row["mean_speed_mps"], row["speed_mps"])
-        assert (bar.get_alpha() or 1.0) == (1.0 if counts else FADED_ALPHA)
+        assert (bar.get_alpha() or 1.0) == (1.0 if counts else FADED_ALPHA) and not bar.get_hatch()
+        crosses = [ln for ln in ax.get_lines() if ln.get_marker() == figure13.MISS_MARKER]
+        assert len(crosses) == (0 if counts else 1)
+        assert [t.get_text() for t in ax.texts] == ([] if counts else ["1/1"])
+        assert "20 m walks" in ax.get_title() and "100 m" in ax.get_title()
     assert not all(figure13.prototype_counts(r) for r in proto)
-    assert "20 m walks" in fig.axes[1].get_title() and "100 m" in fig.axes[1].get_title()
 
 
-def test_figure13s_two_legends_do_not_overlap():
-    """Drawn from the shipped inputs (the README's figure): the left panel's legend stays under its own panel,
-    clear of the right panel and its legend."""
+def shipped_figure13():
     rows = json.loads((SHIPPED_INPUTS / "comparison.json").read_text())
-    fig = figure13.draw(rows, json.loads((SHIPPED_INPUTS / "prototype.json").read_text()))
+    return rows, figure13.draw(rows, json.loads((SHIPPED_INPUTS / "prototype.json").read_text()))
+
+
+def test_figure13_each_mark_means_one_thing():
+    """The shipped figure: a hatch is used by one legend entry and only on the paper's-protocol bars of (a); a
+    bar with walks that fell or left the speed band carries the ×, which has its own legend entry."""
+    rows, fig = shipped_figure13()
+    legend = fig.legends[0]
+    hatches: dict[str, list[str]] = {}
+    for handle, text in zip(legend.legend_handles, legend.get_texts()):
+        if getattr(handle, "get_hatch", lambda: None)():
+            hatches.setdefault(handle.get_hatch(), []).append(text.get_text())
+    assert list(hatches) == [figure13.PAPER_HATCH] and len(hatches[figure13.PAPER_HATCH]) == 1
+    assert "the paper's protocol" in hatches[figure13.PAPER_HATCH][0]
+    paper = {(r["trajectory"], r["speed_command_mps"]) for r in rows
+             if r["set"] == "paper" and r["trajectory"] in ("cycloid", "straight")}
+    hatched = [p for p in fig.axes[0].patches if p.get_hatch()]
+    assert len(hatched) == len(paper) and {p.get_hatch() for p in hatched} == {figure13.PAPER_HATCH}
+    assert not any(p.get_hatch() for ax in fig.axes[1:] for p in ax.patches)
+    missed = {r["speed_command_mps"] for r in rows if r["set"] == "paper" and not r["valid"]}
+    crosses = [ln for ln in fig.axes[0].get_lines() if ln.get_marker() == figure13.MISS_MARKER]
+    assert missed and len(crosses) == len(missed)  # the learned bar at 1.4 m/s: 2 of 5 seeds missed the band
+    labels = [t.get_text() for t in legend.get_texts()]
+    assert sum(lab.startswith("× k/n") for lab in labels) == 1
+    assert not any("cross-hatched" in t for t in (fig.get_suptitle(), *labels))
+
+
+def test_figure13s_legend_stays_under_the_panels():
+    """Drawn from the shipped inputs (the README's figure): the one legend lies below every panel and its axis
+    labels."""
+    _, fig = shipped_figure13()
     renderer = FigureCanvasAgg(fig).get_renderer()
-    left, right = (ax.get_legend().get_window_extent(renderer) for ax in fig.axes[:2])
-    right_panel = fig.axes[1].get_window_extent(renderer)
-    assert left.x1 < right_panel.x0 and left.x1 < right.x0, (left, right, right_panel)
+    legend = fig.legends[0].get_window_extent(renderer)
+    for ax in fig.axes:
+        assert legend.y1 < ax.get_tightbbox(renderer).y0, (legend, ax.get_title())
+
+
+def write_metrics(folder: Path, episodes: dict[int, int]) -> Path:
+    folder.mkdir(parents=True)
+    lines = ["stage,stage_episode,score"] + [f"{s},{e},{np.sin(e)}" for s, n in episodes.items()
+                                              for e in range(1, n + 1)]
+    (folder / "metrics.csv").write_text("\n".join(lines) + "\n")
+    return folder / "metrics.csv"
 
 
 def test_figure6_names_its_run_and_labels_the_raw_scores(tmp_path):
     run = tmp_path / "policy_of_this_test"
-    run.mkdir()
-    lines = ["stage,stage_episode,score"] + [f"{s},{e},{np.sin(e)}" for s in (1, 2) for e in range(1, 40)]
-    (run / "metrics.csv").write_text("\n".join(lines) + "\n")
-    fig = figure6.draw([run / "metrics.csv"])
+    fig = figure6.draw([write_metrics(run, {1: 39, 2: 39})])
     assert run.name in fig.get_suptitle()
     for ax in fig.axes:
         raw = [ln for ln in ax.get_lines() if ln.get_alpha() == 0.25]
         legend = [t.get_text() for t in ax.get_legend().get_texts()]
         assert raw and raw[0].get_label() in legend
+
+
+def test_figure6_names_the_run_by_recipe_and_smooths_both_stages_alike(tmp_path):
+    """The shipped run's folders (table5/policy/seed0) give "table5, seed 0"; a short stage 1 and a long stage 2
+    (37 and 400 episodes, as the shipped run) are smoothed over the same number of episodes, said in the legend."""
+    path = write_metrics(tmp_path / "table5" / "policy" / "seed0", {1: 37, 2: 400})
+    fig = figure6.draw([path])
+    assert "table5, seed 0" in fig.get_suptitle() and "seed0" not in fig.get_suptitle()
+    means = [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_alpha() is None]
+    assert len(means) == 2
+    assert {ln.get_label() for ln in means} == {f"moving mean of {figure6.WINDOW_EPISODES} episodes"}
+    w = figure6.WINDOW_EPISODES
+    for ln in means:
+        raw = [r for r in ln.axes.get_lines() if r.get_alpha() == 0.25][0].get_ydata()
+        assert np.allclose(ln.get_ydata()[w - 1:], np.convolve(raw, np.ones(w) / w, mode="valid"))
+    assert run_name(tmp_path / "runs" / "table5" / "seed5" / "stage2" / "metrics.csv") == "table5, seed 5 (stage2)"
+    assert run_name(tmp_path / "quick_seed3" / "metrics.csv") == "quick, seed 3"
+
+
+# ---- the walk strip ---------------------------------------------------------------------------------------------
+def fake_video_run(folder: Path, name: str, frames: int, lift: float = 0.11) -> Path:
+    """An `evaluate.py video` run folder: its config, record and a GIF whose frame i is a uniform grey of 4·i."""
+    from PIL import Image
+
+    folder.mkdir(parents=True)
+    C.save(dataclasses.replace(C.WalkConfig(), gait=dataclasses.replace(C.WalkConfig().gait, lift_height=lift)),
+           folder / "config.yaml")
+    argv = ["video", "--learned", "results/battery/paths"] if name.startswith("learned") else ["video"]
+    (folder / "outputs.json").write_text(json.dumps({"runs": [{"argv": argv}]}))
+    if name.startswith("learned"):
+        commanded(1.0, -0.005, 0).save(folder / "learned" / "seed0_1mps.json")
+    images = [Image.new("RGB", (480, 360), (4 * i,) * 3) for i in range(frames)]
+    images[0].save(folder / f"trot_{name}_1mps.gif", save_all=True, append_images=images[1:], duration=40)
+    return folder
+
+
+def test_walk_strip_takes_the_same_frames_of_the_last_whole_gait_period_from_each_video(tmp_path):
+    learned = fake_video_run(tmp_path / "learned", "learned_seed0", 30)  # 1.2 s at 25 frames/s
+    cycloid = fake_video_run(tmp_path / "cycloid", "cycloid", 40)  # 1.6 s: the shorter video decides
+    strip = walk_strip.extract([learned, cycloid])
+    assert np.allclose(strip.times_s, [0.40, 0.48, 0.56, 0.64, 0.72])  # the period [0.4, 0.8) s, T = 0.4 s
+    for row in strip.frames:  # frame i is grey 4·i: frames 10, 12, ..., 18 in both rows
+        assert [int(np.median(f)) for f in row] == [40, 48, 56, 64, 72]
+    assert strip.labels[0].startswith("learned (RL), battery recipe, seed 0, H = 0.")
+    assert strip.labels[1] == "composite cycloid, H = 0.110 m"
+    saved = strip.save(tmp_path / "in")
+    back = walk_strip.StripInput.load(saved)
+    assert np.array_equal(back.frames, strip.frames) and back.labels == strip.labels
+    (png,) = plots.draw_all(tmp_path / "in", tmp_path / "out", only=["walk_strip"], pdf=False)
+    assert png.name == "walk_strip.png"
+    with pytest.raises(ValueError, match="one GIF"):
+        walk_strip.extract([tmp_path / "in"])
 
 
 # ---- metrics.csv ------------------------------------------------------------------------------------------------
