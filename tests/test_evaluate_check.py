@@ -93,3 +93,17 @@ def test_check_and_pd_match_are_listed_and_refuse_each_others_options(capsys):
     assert exit_.value.code == 2
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert "unrecognized arguments: --runs" in last and "is an option of: check" in last
+
+
+def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
+    from cyberdog.evaluation.check import run_actors
+    from cyberdog.evaluation.cli import UsageError
+
+    root = Path(__file__).resolve().parents[1]
+    shipped, run = root / "results/table5/policy/seed0", root / "results/torque/policy/seed0"
+    assert run_actors([shipped], "final")["seed0"] == {1: shipped / "stage1_actor.pt", 2: shipped / "stage2_actor.pt"}
+    assert run_actors([run], "final")["seed0"][2] == run / "stage2_final_actor.pt"
+    with pytest.raises(UsageError, match="stage1_best_actor.pt"):
+        run_actors([shipped], "best")  # a shipped folder holds the final actors only
+    with pytest.raises(UsageError, match="two runs named seed0"):
+        run_actors([shipped, run], "final")  # the label is the folder's name

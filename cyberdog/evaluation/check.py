@@ -43,7 +43,8 @@ def add_options(p) -> None:
                         "at the stiffness's ends, the 100 m hardware-like walks")
     g = p.add_argument_group("trained policies")
     g.add_argument("--runs", type=Path, nargs="+", default=None, metavar="RUN",
-                   help="train.py run folders (label: the folder's name) whose actors walk alone")
+                   help="train.py run folders, or shipped ones (results/<recipe>/policy/seed<N>), whose actors walk "
+                        "alone (label: the folder's name)")
     g.add_argument("--speeds", type=positive, nargs="+", default=None,
                    help="m/s (default " + " ".join(f"{v:g}" for v in PAPER_SPEEDS) + ")")
     g.add_argument("--duration", type=positive, default=None,
@@ -138,15 +139,19 @@ def _check_paths(args, cfg) -> int:
 # ---- trained policies ---------------------------------------------------------------------------------------
 
 def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
-    """{run folder name: {stage: actor file}} of the stages each run has; a run with neither is refused."""
+    """{run folder name: {stage: actor file}} of the stages each run has (a shipped folder's stage<N>_actor.pt are
+    its run's final actors); a run with neither stage is refused."""
     from cyberdog.evaluation.cli import UsageError
 
     actors = {}
     for run in runs:
-        stages = {s: run / f"stage{s}_{actor}_actor.pt" for s in (1, 2)}
-        stages = {s: f for s, f in stages.items() if f.is_file()}
+        names = [f"stage{{}}_{actor}_actor.pt"] + (["stage{}_actor.pt"] if actor == "final" else [])
+        stages = {s: next((run / n.format(s) for n in names if (run / n.format(s)).is_file()), None) for s in (1, 2)}
+        stages = {s: f for s, f in stages.items() if f is not None}
         if not stages:
             raise UsageError(f"--runs {run}: no stage1_{actor}_actor.pt or stage2_{actor}_actor.pt")
+        if run.name in actors:
+            raise UsageError(f"--runs: two runs named {run.name} (a walk's label is its run folder's name)")
         actors[run.name] = stages
     return actors
 
