@@ -120,7 +120,7 @@ def test_figures_redraw_from_a_saved_folder(reduced_run, tmp_path):
 
 
 def test_missing_learned_trajectory_is_a_clear_error(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(learned_module, "DEFAULT_LEARNED", tmp_path / "results" / "learned")
+    monkeypatch.setattr(learned_module, "DEFAULT_LEARNED", tmp_path / "results" / "table5" / "paths")
     assert evaluate.main(["--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "results/table5/paths does not exist" in err and "extract --sweep" in err

@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from cyberdog import config as C
+from cyberdog.metrics_csv import run_name
 from cyberdog.analysis.extract import CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows
 from cyberdog.analysis.extract_measured import extract_from_rollout
 from cyberdog.analysis.replay_check import ReplayCheck, check_settings, replay_check
@@ -412,11 +413,11 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
         missing = [m for m in metrics if not m.is_file()]
         if missing:
             raise UsageError(f"--metrics file(s) do not exist: {', '.join(map(str, missing))}")
-        return dict(zip(unique_labels([m.parent.name or m.stem for m in metrics]), metrics))
+        return dict(zip(unique_labels([run_name(m) for m in metrics]), metrics))
     found = [p.parent / "metrics.csv" for p in policies if (p.parent / "metrics.csv").is_file()]
     if not found and DEFAULT_METRICS.is_file():
         found = [DEFAULT_METRICS]
-    return dict(zip(unique_labels([m.parent.name for m in found]), found))
+    return dict(zip(unique_labels([run_name(m) for m in found]), found))
 
 
 __all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
