@@ -159,3 +159,42 @@ def test_a_bad_pd_scale_is_one_line(tmp_path, capsys):
     assert evaluate.main(["stiffness", "--pd-scales", "1", "1", "--out", str(tmp_path / "s")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--pd-scales" in err[0] and "distinct" in err[0]
+
+
+def test_the_hardware_like_robot_is_set_on_the_command_line_as_in_training():
+    """`evaluate.py ... --set hardware.FIELD=V` changes the prototype's hardware-like robot (HARDWARE_LIKE by
+    default) and nothing else; a wrong field is one clear error naming the allowed ones."""
+    from cyberdog import config as C
+    from cyberdog.evaluation.cli import parse_args
+    from cyberdog.evaluation.commands import UsageError, walk_config
+
+    args = parse_args(["prototype", "--set", "hardware.latency_s=0.005", "hardware.mass_uncertainty=0.1",
+                       "gait.lift_height=0.12"])
+    cfg = walk_config(args)
+    assert args.hardware == C.replace(C.HARDWARE_LIKE, latency_s=0.005, mass_uncertainty=0.1)
+    assert cfg.gait.lift_height == 0.12 and cfg == C.override(C.WalkConfig(), ["gait.lift_height=0.12"])
+    plain = parse_args(["prototype"])
+    walk_config(plain)
+    assert plain.hardware == C.HARDWARE_LIKE
+    with pytest.raises(UsageError, match="no field 'latency'.*latency_s"):
+        walk_config(parse_args(["prototype", "--set", "hardware.latency=0.005"]))
+
+
+def test_the_command_line_robot_reaches_the_prototype_walks(monkeypatch, tmp_path):
+    """cmd_prototype hands `--set hardware.*`'s robot to run_prototype (which builds each draw from it)."""
+    from cyberdog import config as C
+    from cyberdog.analysis import prototype
+    from cyberdog.evaluation import commands
+    from cyberdog.evaluation.cli import parse_args
+
+    seen = {}
+
+    def fake_run_prototype(trajectories, **kwargs):
+        seen.update(kwargs)
+        raise KeyboardInterrupt  # stop before any walk: the arguments are what is checked
+
+    monkeypatch.setattr(prototype, "run_prototype", fake_run_prototype)
+    args = parse_args(["prototype", "--speeds", "1.0", "--set", "hardware.latency_s=0.005", "--out",
+                       str(tmp_path / "out")])
+    assert commands.run(args, []) == 130
+    assert seen["hardware"] == C.replace(C.HARDWARE_LIKE, latency_s=0.005)

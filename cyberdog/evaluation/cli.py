@@ -25,6 +25,9 @@ DEFAULT_PROTOTYPE_DISTANCE, DEFAULT_PROTOTYPE_DRAWS, DEFAULT_PROTOTYPE_RUN_UP = 
                                                                             PROTOTYPE_RUN_UP_S)
 DEFAULT_COMMAND = "all"
 DEFAULT_CANDIDATES = 1  # paths that replay, per speed, of which extraction keeps the cheapest on the check robots
+# extract's settings a preset may choose (its `extract:`), with their defaults here; an option given on the command
+# line wins over the preset's
+EXTRACT_DEFAULTS = {"cycle": "mean", "rollout_duration": 10.0, "replay_attempts": 3, "candidates": DEFAULT_CANDIDATES}
 
 
 class UsageError(Exception):
@@ -135,7 +138,11 @@ def _output_options() -> argparse.ArgumentParser:
     g.add_argument("--config", type=Path, default=None,
                    help="YAML walk config (WalkConfig sections: robot, actuator, sim, gait, pid, controller, "
                         "energy); default: the built-in defaults (paper lift height 0.15 m)")
-    add_override_option(g, "gait.lift_height=0.1 --set gait.straight_shape=trapezoid")
+    add_override_option(g, "gait.lift_height=0.1 --set gait.straight_shape=trapezoid",
+                        "; hardware.FIELD sets the hardware-like robot of the prototype and stiffness walks, as "
+                        "training's env.hardware (HardwareConfig: friction, latency_s, joint_angle_noise_std, "
+                        "joint_velocity_noise_std, estimated_velocity, imu_noise, mass_uncertainty, ...), e.g. "
+                        "--set hardware.latency_s=0.005")
     g.add_argument("--no-recorded-trot", action="store_true",
                    help="walk under the config's trot controller even where the learned paths (or the policies "
                         "extracted) were recorded under another; by default every trajectory of a comparison walks "
@@ -201,9 +208,9 @@ def _extraction_options() -> argparse.ArgumentParser:
                    help="'commanded' (the foot targets the policy commanded: trot path + its per-leg shift), "
                         "'measured' (the paper's: forward kinematics of the joint angles, one leg), or 'auto' "
                         "(default): commanded for foot-mode policies, else measured")
-    g.add_argument("--cycle", default="mean", choices=CYCLE_CHOICES,
+    g.add_argument("--cycle", default=EXTRACT_DEFAULTS["cycle"], choices=CYCLE_CHOICES,
                    help="commanded path: average the settled in-band cycles (default) or take the cheapest")
-    g.add_argument("--rollout-duration", type=positive, default=10.0,
+    g.add_argument("--rollout-duration", type=positive, default=EXTRACT_DEFAULTS["rollout_duration"],
                    help="s of each extraction rollout (default 10)")
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--no-replay-check", dest="replay_check", action="store_false",
@@ -212,10 +219,10 @@ def _extraction_options() -> argparse.ArgumentParser:
                         "hardware-like robots with the PD at 1, 0.7 and 1.4x, or in the prototype's 20 m walk on "
                         "eight more at each of 0.7 and 1.4x, none of them a prototype robot, is rejected for the "
                         "next candidate: the other --cycle choice, then the rollout of the next env seed)")
-    g.add_argument("--replay-attempts", type=positive_int, default=3, metavar="N",
+    g.add_argument("--replay-attempts", type=positive_int, default=EXTRACT_DEFAULTS["replay_attempts"], metavar="N",
                    help="extraction rollouts (env seeds --rollout-seed, +1, ...) tried per speed before giving up "
                         "(default 3)")
-    g.add_argument("--candidates", type=positive_int, default=DEFAULT_CANDIDATES, metavar="N",
+    g.add_argument("--candidates", type=positive_int, default=EXTRACT_DEFAULTS["candidates"], metavar="N",
                    help="commanded path: keep the first N candidates that replay (one per rollout) and extract "
                         "the one with the least electrical energy per metre on the replay check's hardware-like "
                         f"robots, which the prototype never walks (default {DEFAULT_CANDIDATES}: the first that "

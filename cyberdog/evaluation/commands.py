@@ -70,9 +70,16 @@ def new_out() -> Path:
 
 
 def walk_config(args) -> C.WalkConfig:
+    """The walk config of --config and --set; --set's `hardware.*` settings change the hardware-like robot the
+    prototype and stiffness walks use instead (`args.hardware`, HARDWARE_LIKE by default), as training's
+    env.hardware does: e.g. --set hardware.latency_s=0.005 hardware.mass_uncertainty=0.1."""
+    sets = list(getattr(args, "overrides", []))
+    robot = [s.split("=", 1)[0].strip().removeprefix("hardware.") + "=" + s.split("=", 1)[1]
+             for s in sets if s.strip().startswith("hardware.") and "=" in s]
     try:
+        args.hardware = C.override(C.HARDWARE_LIKE, robot)
         cfg = C.load(C.WalkConfig, args.config) if args.config else C.WalkConfig()
-        return C.override(cfg, args.overrides)
+        return C.override(cfg, [s for s in sets if not s.strip().startswith("hardware.")])
     except (ValueError, OSError) as err:
         raise UsageError(f"config error: {err}") from None
 
@@ -118,6 +125,7 @@ def cmd_extract(args, cfg: C.WalkConfig) -> int:
 
     if not (args.policies or args.sweep):
         raise UsageError("extract needs --policy PATH (actor file or run folder), --policies ... or --sweep DIR")
+    L.take_recipe_extraction(args)
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
     L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)  # extracted and saved in run.out/learned/
@@ -149,7 +157,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
-                       policies=L.closed_loop_policies(args, learned))
+                       policies=L.closed_loop_policies(args, learned), hardware=args.hardware)
     return run.finish()
 
 
@@ -169,7 +177,8 @@ def cmd_stiffness(args, cfg: C.WalkConfig) -> int:
     rows = run_stiffness(scales, trajectories=trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
                          modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, learned=learned,
                          draws=args.prototype_draws, run_up_s=args.prototype_run_up,
-                         policies=L.closed_loop_policies(args, learned), pd_matched=args.pd_matched)
+                         policies=L.closed_loop_policies(args, learned), pd_matched=args.pd_matched,
+                         hardware=args.hardware)
     print("\n" + write_stiffness(rows, run.out))
     return run.finish()
 
@@ -198,7 +207,8 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
         note_searched_trot(proto_reference, proto_cfg)  # the searched row compares shapes under one trot
         run_prototype_part(proto_cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
                            args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference,
-                           run_up_s=args.prototype_run_up, policies=L.closed_loop_policies(args, proto_learned))
+                           run_up_s=args.prototype_run_up, policies=L.closed_loop_policies(args, proto_learned),
+                           hardware=args.hardware)
     run_figures(args.draw_figures, run.out, metrics=metrics)  # drawn from the files just written
     if args.video:
         run_video(table5_cfg, learned, args, run.out)
