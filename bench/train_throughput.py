@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Training throughput: env steps/s of this pipeline at one update per env step, against Stable-Baselines3 TD3.
 
-Both learn on the same CyberDog-v0 (the environment of `--config`, by default configs/quick_speeds.yaml's, the
-shipped policies': foot mode, 62 observations; the stage-1 reward) in this process, on the same machine, with the
-same number of torch threads:
+Both learn on the same CyberDog-v0 (the environment of `--config`, by default configs/table5.yaml's, the
+shipped Table 5 policies': foot mode, 62 observations; the stage-1 reward) in this process, on the same machine,
+with the same number of torch threads:
 
-  ours   the real training path, `cyberdog.rl.Trainer` (TorchRL TD3Loss, replay buffer, collector, logging),
-         with updates_per_frame=1, batch 256, actor and critics of 3x128, no initial random actions,
-         frames_per_batch 200; once per collection mode asked for (--collection sync async) and per number of
-         env processes (train.num_envs: 1 and each of --num-envs, default 2; "ours sync x2" is sync with two)
+  ours   the real training path, `cyberdog.rl.Trainer` (the TD3 update of `cyberdog.rl.td3`, TorchRL's replay
+         buffer and collector, logging), with updates_per_frame=1, batch 256, actor and critics of 3x128, no
+         initial random actions, frames_per_batch 200; once per collection mode asked for (--collection sync
+         async) and per number of env processes (train.num_envs: 1 and each of --num-envs, default 2; "ours
+         sync x2" is sync with two)
   SB3    `stable_baselines3.TD3("MlpPolicy")` with net_arch [128, 128, 128], batch_size 256, train_freq 1,
          gradient_steps 1, Gaussian exploration noise 0.1
 
@@ -79,8 +80,6 @@ def experiment(args, collection: str, steps: int, num_envs: int = 1) -> C.Experi
         sets.append(f"train.collection={collection}")
     if num_envs != 1:  # (the same)
         sets.append(f"train.num_envs={num_envs}")
-    if args.torchrl_update:
-        sets.append("agent.fast_update=false")
     return C.override(C.ExperimentConfig(env=env), sets)
 
 
@@ -243,10 +242,11 @@ def main() -> None:
     p.add_argument("--learning-starts", type=int, default=256,
                    help="env steps without updates before the timed window (default 256 = the batch size)")
     p.add_argument("--frames-per-batch", type=int, default=200,
-                   help="our env steps per collection batch (default 200, as configs/quick_residual.yaml)")
+                   help="our env steps per collection batch (default 200)")
     p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("--config", default="configs/quick_speeds.yaml",
-                   help="the preset whose env both learn on (default configs/quick_speeds.yaml, the shipped policies')")
+    p.add_argument("--config", default="configs/table5.yaml",
+                   help="the preset whose env both learn on (default configs/table5.yaml, the shipped Table 5 "
+                        "policies')")
     p.add_argument("--threads", type=int, default=1, help="torch threads of the updates, ours and SB3 (default 1)")
     p.add_argument("--collection", nargs="+", default=["sync", "async"], choices=C.COLLECTION_MODES
                    if hasattr(C, "COLLECTION_MODES") else ["sync"], help="our collection modes to run")
@@ -258,8 +258,6 @@ def main() -> None:
     p.add_argument("--env-steps", type=int, default=400, help="steps of the env-only measurement (0: skip)")
     p.add_argument("--no-sb3", action="store_true", help="skip Stable-Baselines3")
     p.add_argument("--bare-only", action="store_true", help="only the bare update rates")
-    p.add_argument("--torchrl-update", action="store_true",
-                   help="our updates through TorchRL's TD3Loss (agent.fast_update=false) instead of the direct losses")
     args = p.parse_args()
     if any(n < 1 for n in args.num_envs):
         p.error(f"--num-envs must be integers >= 1, got {args.num_envs}")

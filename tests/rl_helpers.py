@@ -23,8 +23,8 @@ def batch(n: int = 16, reward: float | None = None) -> TensorDict:
 
 
 def snapshot(agent) -> dict[str, torch.Tensor]:
-    """A copy of every weight of `agent`'s loss module (actor, critics and their targets)."""
-    return {k: v.detach().clone() for k, v in agent.loss.state_dict().items()}
+    """A copy of every weight of `agent`'s networks (actor, critics and their targets), by checkpoint name."""
+    return {k: v.clone() for k, v in agent.network_state().items()}
 
 
 def changed(before: dict, after: dict, prefix: str) -> bool:

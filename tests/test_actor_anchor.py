@@ -10,6 +10,7 @@ from rl_helpers import batch as _batch
 from cyberdog import config as C
 from cyberdog.rl.agent import Agent
 from cyberdog.rl.checkpoint import load_checkpoint, load_torch_file
+from cyberdog.rl.td3 import StageSettings, with_penalties
 from cyberdog.rl.trainer import Trainer
 
 
@@ -25,15 +26,14 @@ def test_the_anchor_term_is_the_distance_to_the_frozen_actor():
     start = _actions(agent, b["observation"])
     agent.set_anchor()
     with torch.no_grad():  # the actor moves on; the anchor does not
-        for p in agent.actor_params:
+        for p in agent.actor_net.parameters():
             p.add_(0.05 * torch.randn_like(p))
     now = _actions(agent, b["observation"])
     assert not torch.allclose(now, start)
-    agent.actor_anchor = 3.0
-    got = agent._with_penalties(torch.tensor(1.5), now, None, b)
+    anchored = StageSettings.of(agent.cfg).replace(actor_anchor=3.0)
+    got = with_penalties(agent, anchored, torch.tensor(1.5), b, now)
     assert float(got) == pytest.approx(1.5 + 3.0 * float(((now - start) ** 2).mean()), rel=1e-6)
-    agent.actor_anchor = 0.0
-    assert float(agent._with_penalties(torch.tensor(1.5), now, None, b)) == pytest.approx(1.5)
+    assert float(with_penalties(agent, StageSettings.of(agent.cfg), torch.tensor(1.5), b, now)) == pytest.approx(1.5)
 
 
 @pytest.mark.parametrize("anchor", [0.0, 1000.0])
@@ -43,9 +43,9 @@ def test_a_strong_anchor_holds_the_actor_where_it_started(anchor):
     b = _batch(32)
     start = _actions(agent, b["observation"])
     agent.set_anchor()
-    agent.actor_anchor = anchor
+    settings = StageSettings.of(agent.cfg).replace(actor_anchor=anchor)
     for _ in range(200):
-        agent.update(b)
+        agent.update(b, settings)
     moved = float((_actions(agent, b["observation"]) - start).abs().mean())
     assert (moved < 0.02) if anchor else (moved > 0.1)
 
@@ -54,14 +54,14 @@ def test_the_anchor_is_saved_with_the_agent_and_restored():
     torch.manual_seed(0)
     agent = Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
     agent.set_anchor()
-    frozen = agent.anchor.clone()
+    frozen = {k: v.clone() for k, v in agent.anchor.named().items()}
     with torch.no_grad():
-        for p in agent.actor_params:
+        for p in agent.actor_net.parameters():
             p.add_(1.0)
     other = Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
     other.load_state_dict(agent.state_dict())
     assert other.anchor is not None
-    assert all(torch.equal(a, b) for a, b in zip(other.anchor.flatten_keys().values(), frozen.flatten_keys().values()))
+    assert all(torch.equal(v, frozen[k]) for k, v in other.anchor.named().items())
     assert Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12).anchor is None  # none until a stage asks for one
 
 
@@ -74,7 +74,7 @@ def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
     random_start = C.override(cfg, ["train.stage2.max_env_steps=200", "train.init_random_frames=100"])
     fresh = Trainer(random_start, tmp_path / "fresh", stages=(2,), init_from=actor_file, progress=False)
     try:
-        mine = fresh.agent.loss.state_dict()
+        mine = fresh.agent.network_state()
         for k, v in start.items():
             assert torch.equal(mine["actor_network_params." + k], v)
             assert torch.equal(mine["target_actor_network_params." + k], v)
@@ -88,10 +88,10 @@ def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
     t = Trainer(cont, tmp_path / "b", stages=(2,), init_from=actor_file, progress=False)
     assert not t.agent.load_actor(start) and t.agent.actor_from_file  # the same inputs: nothing widened
     t.run()
-    anchor = t.agent.anchor.flatten_keys()
-    assert t.agent.actor_anchor == 5.0 and t.agent.actor_updates > 0
+    anchor = t.agent.anchor.named()
+    assert t.agent.actor_updates > 0
     assert all(torch.equal(anchor[k], v) for k, v in start.items())  # the actor the stage started from
-    moved = t.agent.loss.actor_network_params.flatten_keys()
+    moved = t.agent.actor_net.named()
     assert any(not torch.equal(moved[k], v) for k, v in start.items())  # while the actor itself learned
     with pytest.raises(ValueError, match="actor_anchor"):
         C.StageConfig(actor_anchor=-1.0)
@@ -107,7 +107,7 @@ def test_an_observed_stiffness_is_the_drivers_kp_over_the_default():
         walk = C.WalkConfig()
         cfg = C.EnvConfig(action_mode="foot", observe_last_action=True, observe_pd_stiffness=True,
                           walk=C.WalkConfig(**{**walk.__dict__, "pid": walk.pid.stiffness_scaled(scale)}))
-        env = CyberDogEnv(config=cfg)
+        env = CyberDogEnv(config=cfg, reward="stage1")
         try:
             obs, _ = env.reset(seed=0)
             assert obs.shape == (63,) and obs[-1] == pytest.approx(scale, rel=1e-6)

@@ -31,7 +31,8 @@ def counters(run_dir: Path) -> dict:
 def uninterrupted(tmp_path_factory) -> dict:
     run_dir = tmp_path_factory.mktemp("whole") / "run"
     proc = train(run_dir, "--set", *SETS)
-    assert proc.wait(timeout=600) == 0, proc.stdout.read()
+    out = proc.communicate(timeout=600)[0]  # (and closes its pipe)
+    assert proc.returncode == 0, out
     return counters(run_dir)
 
 

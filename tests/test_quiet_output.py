@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from cyberdog.sim.quiet import quiet_pybullet
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,17 +61,21 @@ def test_an_evaluation_with_walk_workers_prints_no_pybullet_lines_and_ends_with_
     assert proc.stdout.rstrip().splitlines()[-1] == f"output folder: {out}/"
 
 
-def test_a_training_log_file_has_no_colour_codes_and_ends_with_the_run_folder(tmp_path):
-    """As a sweep writes train.log: train.py's stdout and stderr into a file, not a terminal."""
+@pytest.mark.parametrize("torchrl_level", [None, "INFO"])
+def test_a_training_log_file_has_no_colour_codes_and_ends_with_the_run_folder(tmp_path, torchrl_level):
+    """As a sweep writes train.log: train.py's stdout and stderr into a file, not a terminal. TorchRL's INFO lines
+    (a replay buffer's allocation) are left out unless its RL_LOGGING_LEVEL asks for them, and then in plain text."""
     run_dir = tmp_path / "run"
     log = tmp_path / "train.log"
+    env = {k: v for k, v in os.environ.items() if k != "RL_LOGGING_LEVEL"}
     with open(log, "w") as f:
         proc = subprocess.run([sys.executable, str(ROOT / "train.py"), "--config", str(ROOT / "configs/tiny.yaml"),
                                "--stage", "1", "--run-dir", str(run_dir), "--no-progress"], cwd=ROOT, stdout=f,
-                              stderr=subprocess.STDOUT, timeout=600)
+                              stderr=subprocess.STDOUT, timeout=600,
+                              env=env if torchrl_level is None else {**env, "RL_LOGGING_LEVEL": torchrl_level})
     text = log.read_text()
     assert proc.returncode == 0, text[-2000:]
-    assert "[torchrl][INFO]" in text  # TorchRL logged, in plain text
+    assert ("[torchrl][INFO]" in text) == (torchrl_level == "INFO")
     assert "\x1b[" not in text
     assert not any(noise in text for noise in NOISE)
     assert text.rstrip().splitlines()[-1] == f"run folder: {run_dir}/"

@@ -12,13 +12,13 @@ from rl_helpers import batch, changed, snapshot, tiny_config
 
 
 def test_relabel_adds_the_weight_changes_to_each_stored_reward():
-    rb = make_replay_buffer(10, 2)
+    rb = make_replay_buffer(10)
     data = batch(6, reward=1.0)
     data["next", "energy_J"] = torch.arange(6.0).reshape(6, 1)
     rb.extend(data)
     relabel_rewards(rb, -0.5, 0.25)
     assert torch.allclose(rb[:6]["next", "reward"].reshape(-1), 1.25 - 0.5 * torch.arange(6.0))
-    relabel_rewards(make_replay_buffer(10, 2), -0.5)  # an empty buffer is left as it is
+    relabel_rewards(make_replay_buffer(10), -0.5)  # an empty buffer is left as it is
 
 
 def test_relabelled_buffer_carries_stage1_experience_with_stage2_rewards(tmp_path):

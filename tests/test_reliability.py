@@ -228,7 +228,7 @@ def test_stage_final_file_of_the_quick_preset_is_small_and_serves_init_from_and_
                  progress=False)
     try:
         assert t2.agent.updates == 100
-        mine, saved = t2.agent.loss.state_dict(), state["agent"]["loss"]
+        mine, saved = t2.agent.network_state(), state["agent"]["loss"]
         assert all(torch.equal(mine[k], saved[k]) for k in saved)
     finally:
         t2.close()
@@ -236,7 +236,7 @@ def test_stage_final_file_of_the_quick_preset_is_small_and_serves_init_from_and_
     gaussian = C.override(cfg, ["train.stage2.max_env_steps=200", "agent.exploration=gaussian"])
     t3 = Trainer(gaussian, tmp_path / "s2g", stages=(2,), init_from=final, progress=False)
     try:
-        mine = t3.agent.loss.state_dict()
+        mine = t3.agent.network_state()
         assert all(torch.equal(mine[k], saved[k]) for k in saved)
         assert "sigma" in t3.agent.policy[-1].state_dict() and "eps" not in t3.agent.policy[-1].state_dict()
     finally:

@@ -5,13 +5,12 @@ import pytest
 import torch
 from tensordict import TensorDict
 
-from torchrl.objectives import SoftUpdate
-
 from cyberdog import config as C
-from cyberdog.rl.agent import Agent, ForeachSoftUpdate, NonFiniteError, make_loss, metrics_to_float
+from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector
-from cyberdog.rl.networks import TanhActor, make_actor, make_critic
+from cyberdog.rl.networks import Net, QCritic, TanhActor, critic_forward, make_actor, make_critics
+from cyberdog.rl.td3 import StageSettings
 from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, sample_batches
 from cyberdog.rl.trainer import Trainer
 from rl_helpers import ACT, OBS, batch, changed, snapshot, tiny_config
@@ -38,7 +37,7 @@ def test_update_schedule_changes_the_right_weights(algorithm):
 
 def test_td3_has_twin_critics():
     agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
-    w = agent.loss.qvalue_network_params["module", "net", "0", "weight"]
+    w = agent.critic.layers[0][0]
     assert w.shape[0] == 2 and not torch.equal(w[0], w[1])
 
 
@@ -57,22 +56,28 @@ def test_non_finite_loss_raises():
 
 
 def test_replay_buffer_round_trip_keeps_order_and_cursor(tmp_path):
-    rb = make_replay_buffer(10, 4)
+    rb = make_replay_buffer(10)
     data = batch(13)
     rb.extend(data[:7])
-    rb.extend(data[7:])
-    save_checkpoint({"replay": buffer_state(rb)}, tmp_path / "c.pt")
-    rb2 = make_replay_buffer(10, 4)
+    rb.extend(data[7:])  # wrapped: the next transition goes to slot 3
+    state = buffer_state(rb)
+    assert (state["size"], state["cursor"]) == (10, 3)
+    save_checkpoint({"replay": state}, tmp_path / "c.pt")
+    rb2 = make_replay_buffer(10)
     load_buffer_state(rb2, load_checkpoint(tmp_path / "c.pt")["replay"])
+    assert torch.equal(rb[:10]["observation"], rb2[:10]["observation"])
     rb.extend(data[:2])
     rb2.extend(data[:2])
-    assert torch.equal(rb._storage[:10]["observation"], rb2._storage[:10]["observation"])
+    assert torch.equal(rb[:10]["observation"], rb2[:10]["observation"])
+    part = make_replay_buffer(10)  # not yet full: the cursor is its size
+    part.extend(data[:4])
+    assert (buffer_state(part)["size"], buffer_state(part)["cursor"]) == (4, 4)
     with pytest.raises(ValueError, match="capacity"):
-        load_buffer_state(make_replay_buffer(20, 4), buffer_state(rb))
+        load_buffer_state(make_replay_buffer(20), buffer_state(rb))
     old_format = buffer_state(rb)  # written before the step energy was stored
     del old_format["data"]["next"]["energy_J"]
     with pytest.raises(ValueError, match=r"lack \[\('next', 'energy_J'\)\]"):
-        load_buffer_state(make_replay_buffer(10, 4), old_format)
+        load_buffer_state(make_replay_buffer(10), old_format)
 
 
 def test_config_validation_names_the_field():
@@ -127,7 +132,7 @@ def test_non_finite_update_stops_training_with_a_diagnostic_checkpoint(tmp_path,
     cfg = C.override(tiny_config(), ["train.init_random_frames=0", "train.stage1.max_env_steps=100"])
     trainer = Trainer(cfg, tmp_path, stages=(1,), progress=False)
 
-    def broken_update(batch, actor=True, targets=None):
+    def broken_update(*args, **kwargs):
         raise NonFiniteError("Q-value is not finite (NaN or inf); training stopped")
 
     monkeypatch.setattr(trainer.agent, "update", broken_update)
@@ -137,46 +142,34 @@ def test_non_finite_update_stops_training_with_a_diagnostic_checkpoint(tmp_path,
     assert state["counters"]["env_steps"] == 50 and state["replay"]["size"] == 50
 
 
-# ---- speed-ups must not change any number ----------------------------------------------------------------
-def test_foreach_soft_update_is_torchrl_soft_update_bit_for_bit():
-    cfg = C.AgentConfig(hidden_sizes=(16, 16))
+# ---- the functional forwards must give the plain modules' numbers ----------------------------------------
+def test_networks_give_the_outputs_of_plain_modules():
     torch.manual_seed(0)
-    _, ours, fast = make_loss(cfg, OBS, ACT)
-    plain = SoftUpdate(ours, tau=cfg.tau)  # same loss: plain first, on a copy of the state
-    assert isinstance(fast, ForeachSoftUpdate) and isinstance(fast, SoftUpdate)
-    with torch.no_grad():
-        for p in ours.actor_network_params.flatten_keys().values():
-            p.add_(torch.randn_like(p))
-        for p in ours.qvalue_network_params.flatten_keys().values():
-            p.add_(torch.randn_like(p))
-    start = {k: v.clone() for k, v in ours.state_dict().items()}
-    plain.step()
-    plain.step()
-    expected = {k: v.clone() for k, v in ours.state_dict().items()}
-    ours.load_state_dict(start)
-    fast.step()
-    fast.step()
-    got = ours.state_dict()
-    targets = [k for k in expected if k.startswith("target_")]
-    assert targets and any(not torch.equal(start[k], expected[k]) for k in targets)
-    assert all(torch.equal(expected[k], got[k]) for k in expected)
-
-
-def test_networks_write_the_same_outputs_as_plain_modules():
-    torch.manual_seed(0)
-    actor, critic = make_actor(OBS, ACT, (16, 16)), make_critic(OBS, ACT, (16, 16))
+    actor = make_actor(OBS, ACT, (16, 16))
     b = batch(8)
-    out = critic(actor(b.select("observation")))
+    out = actor(b.select("observation"))
     assert torch.equal(out["action"], torch.tanh(actor.module.net(b["observation"])))
-    assert torch.equal(out["state_action_value"],
-                       critic.module.net(torch.cat([b["observation"], out["action"]], -1)))
     net = TanhActor(OBS, ACT, (16, 16))  # the module rollouts load actors into
     net.load_state_dict(actor.module.state_dict())
     assert torch.equal(net(b["observation"]), out["action"])
+    scale = torch.linspace(0.5, 2.0, OBS)
+    for n in (1, 2):  # DDPG's one critic, TD3's two stacked: each Q_i(s, a) is a plain QCritic's
+        critics = make_critics(OBS, ACT, (16, 16), scale, n)
+        q = critic_forward(critics, b["observation"], out["action"])
+        assert q.shape == (n, 8)
+        for i in range(n):
+            one = QCritic(OBS, ACT, (16, 16), scale)
+            layers = critics.layers if n == 1 else [(w[i], bias[i]) for w, bias in critics.layers]
+            with torch.no_grad():
+                for linear, (w, bias) in zip(one.net[::2], layers):
+                    linear.weight.copy_(w)
+                    linear.bias.copy_(bias)
+            assert torch.allclose(q[i], one(b["observation"], out["action"]).squeeze(-1), atol=1e-6)
+    assert isinstance(Net.of(net), Net)
 
 
 def test_sample_batches_draws_independent_batches_from_the_buffer():
-    rb = make_replay_buffer(1000, 4)
+    rb = make_replay_buffer(1000)
     data = batch(100)
     data["observation"][:, 0] = torch.arange(100.0)
     rb.extend(data)
@@ -256,11 +249,11 @@ def test_a_stage_can_set_its_own_action_penalty(tmp_path):
     seen = []
     update = trainer.agent.update
 
-    def recording_update(batch, actor=True, targets=None):
+    def recording_update(batch, settings, stage_update):
         opt = trainer.agent.actor_optimizer
-        seen.append((trainer.c["stage"], trainer.agent.action_l2, opt.param_groups[0]["lr"],
+        seen.append((trainer.c["stage"], settings.action_l2, settings.actor_lr,
                      max((int(st["step"]) for st in opt.state.values()), default=0)))
-        return update(batch, actor, targets)
+        return update(batch, settings, stage_update)
 
     trainer.agent.update = recording_update
     trainer.run()
@@ -279,7 +272,7 @@ def test_update_without_actor_trains_the_critics_only():
     torch.manual_seed(0)
     agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1), OBS, ACT)
     before = snapshot(agent)
-    agent.update(batch(), actor=False)
+    agent.update(batch(), StageSettings.of(agent.cfg).replace(critic_warmup_updates=1), stage_update=0)
     after = snapshot(agent)
     assert changed(before, after, "qvalue_network_params")
     assert not changed(before, after, "actor_network_params")
@@ -287,12 +280,19 @@ def test_update_without_actor_trains_the_critics_only():
     assert agent.updates == 1 and agent.actor_updates == 0
 
 
+def without_critic_gradient(agent: Agent) -> None:
+    """Critics whose output layer is zero (and that barely learn: critic_lr 1e-12) give the actor no gradient."""
+    with torch.no_grad():
+        for w in agent.critic.layers[-1]:
+            w.zero_()
+
+
 def test_action_smoothness_pulls_consecutive_actions_together():
     """CAPS's temporal term: with only it in the actor loss (critic gradient removed), μ(s') − μ(s) shrinks."""
     torch.manual_seed(0)
     agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_smoothness=10.0,
-                                actor_lr=1e-2), OBS, ACT)
-    agent._actor_loss = lambda b: (torch.zeros(()), {})  # the penalty alone drives the actor
+                                actor_lr=1e-2, critic_lr=1e-12), OBS, ACT)
+    without_critic_gradient(agent)  # the penalty alone drives the actor
     b = batch(64)
     gap = lambda: (agent.actor(b["next"].select("observation").clone())["action"]  # noqa: E731
                    - agent.actor(b.select("observation").clone())["action"]).pow(2).mean().item()
@@ -318,9 +318,8 @@ def test_spatial_smoothness_makes_the_policy_react_less_to_the_state():
     b = batch(64)
     torch.manual_seed(0)
     agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_spatial_smoothness=10.0,
-                                spatial_smoothness_sigma=0.05, actor_lr=1e-2), OBS, ACT)
-    agent._actor_loss = lambda _: (torch.zeros(()), {})  # the penalty alone drives the actor
-    agent._fast = None
+                                spatial_smoothness_sigma=0.05, actor_lr=1e-2, critic_lr=1e-12), OBS, ACT)
+    without_critic_gradient(agent)  # the penalty alone drives the actor
     before = sensitivity(agent, b)
     for _ in range(50):
         agent.update(b)

@@ -21,6 +21,7 @@ from cyberdog.rl.agent import Agent
 from cyberdog.rl.checkpoint import load_checkpoint
 from cyberdog.rl.logger import COLUMNS, EpisodeLogger
 from cyberdog.rl.rollout import load_actor, rollout
+from cyberdog.rl.td3 import StageSettings, with_penalties
 from cyberdog.rl.trainer import Trainer
 
 TORQUE = dict(action_mode="torque", control_dt=0.01)  # 4 controller periods per agent step: quick tests
@@ -187,7 +188,8 @@ def test_a_metrics_file_of_an_older_version_gains_the_new_columns_on_resume(tmp_
         for i in range(3):
             w.writerow({k: i for k in old})
     EpisodeLogger(tmp_path, rows=2, purge_step=0, tensorboard=False).close()
-    rows = list(csv.DictReader(open(tmp_path / "metrics.csv")))
+    with open(tmp_path / "metrics.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
     assert list(rows[0]) == list(COLUMNS) and len(rows) == 2
     assert rows[1]["episode"] == "1" and rows[1]["fell"] == "" and rows[1]["prior_weight"] == ""
 
@@ -207,11 +209,11 @@ def _batch(n: int = 8, reference=None) -> TensorDict:
 
 def test_the_imitation_term_is_the_distance_to_the_share_the_prior_no_longer_gives():
     agent = Agent(C.AgentConfig(hidden_sizes=(16,), trot_imitation=2.0), 50, 12)
-    agent.imitation_scale = 0.25  # a prior at 0.75
+    settings = StageSettings.of(agent.cfg, imitation_scale=0.25)  # a prior at 0.75
     b = _batch()
     b["next", "trot_action"][3] = float("nan")  # no reference for this transition (e.g. a reset): left out
     now = torch.rand(8, 12) * 2 - 1
-    got = agent._with_penalties(torch.tensor(1.5), now, None, b)
+    got = with_penalties(agent, settings, torch.tensor(1.5), b, now)
     keep = [i for i in range(8) if i != 3]
     expected = 1.5 + 2.0 * ((now[keep] - 0.25 * b["next", "trot_action"][keep]) ** 2).mean()
     assert float(got) == pytest.approx(float(expected), rel=1e-6)
@@ -233,9 +235,10 @@ def test_a_strong_pull_makes_the_actor_output_the_trot_torque():
 def test_a_warm_up_with_targets_evaluates_the_actor_as_it_is(targets):
     torch.manual_seed(0)
     agent = Agent(C.AgentConfig(hidden_sizes=(16,), policy_delay=1), 50, 12)
-    before = {k: v.clone() for k, v in agent.loss.state_dict().items()}
-    agent.update(_batch(), actor=False, targets=targets)
-    after = agent.loss.state_dict()
+    before = {k: v.clone() for k, v in agent.network_state().items()}
+    warmup = StageSettings.of(agent.cfg).replace(critic_warmup_updates=1, critic_warmup_targets=targets)
+    agent.update(_batch(), warmup, stage_update=0)
+    after = agent.network_state()
     moved = {prefix: any(not torch.equal(before[k], after[k]) for k in before if k.startswith(prefix))
              for prefix in ("actor_network_params", "qvalue_network_params", "target_qvalue_network_params")}
     assert moved == {"actor_network_params": False, "qvalue_network_params": True,

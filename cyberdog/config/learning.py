@@ -44,8 +44,6 @@ class AgentConfig:
     ou_theta: float = 0.15  # OU mean reversion rate (per OU step)
     ou_dt: float = 0.025  # OU time step (s); the agent step Ts
     max_grad_norm: float = 0.0  # gradient-norm clip of each optimizer step; 0 = off
-    fast_update: bool = True  # TD3: losses computed directly over the loss's parameters (cyberdog.rl.fast_td3,
-    #                           checked against TorchRL's TD3Loss); False = TD3Loss's own (vmap over tensordicts)
     action_l2: float = 0.0  # actor loss += action_l2 · mean(μ(s)²): keeps a residual policy near the trot controller
     action_smoothness: float = 0.0  # actor loss += action_smoothness · mean((μ(s') − μ(s))²), the temporal
     #                                 smoothness term of CAPS (Mysore et al. 2021): a foot-mode policy that

@@ -1,4 +1,4 @@
-"""Reinforcement learning layer: TorchRL networks, TD3/DDPG agent, replay, checkpoints and the trainer.
+"""Reinforcement learning layer: networks, the TD3/DDPG update, agent, replay, checkpoints and the trainer.
 
 Imports torch, torchrl and the environment layer; nothing below it imports this package.
 """

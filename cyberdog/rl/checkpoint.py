@@ -17,8 +17,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from cyberdog import config as C
+
 FORMAT = "cyberdog-rl-checkpoint"
 VERSION = 1
+RETIRED_AGENT_FIELDS = ("fast_update",)  # AgentConfig fields that earlier versions recorded and this one no longer
+#                                          has (the update has one loss since): a saved config is read without them
 
 
 class CheckpointError(RuntimeError):
@@ -92,6 +96,15 @@ def load_torch_file(path: str | Path, what: str):
     except Exception as e:  # not a torch file, truncated, or holding more than tensors and containers
         raise CheckpointError(f"{what} {path} is corrupt, truncated, or not a file written by train.py "
                               f"(torch.load failed: {type(e).__name__})") from e
+
+
+def saved_config(config: dict | None) -> C.ExperimentConfig:
+    """The experiment config that a checkpoint or actor file recorded (its plain dict), read without the retired
+    agent fields of earlier versions (`RETIRED_AGENT_FIELDS`)."""
+    config = dict(config or {})
+    if isinstance(config.get("agent"), dict):
+        config["agent"] = {k: v for k, v in config["agent"].items() if k not in RETIRED_AGENT_FIELDS}
+    return C.from_dict(C.ExperimentConfig, config)
 
 
 def load_checkpoint(path: str | Path, actor_file: bool = False) -> dict:

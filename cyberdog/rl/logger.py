@@ -39,17 +39,23 @@ class _ColourOnTerminal(logging.Formatter):
         return text if terminal else ANSI_ESCAPE.sub("", text)
 
 
-def plain_torchrl_log_off_terminal() -> None:
-    """Wrap the formatter of TorchRL's console handler (installed when torchrl is imported; it colours every
-    line with ANSI codes whatever the stream) in `_ColourOnTerminal`. Idempotent."""
+def quiet_plain_torchrl_log() -> None:
+    """TorchRL's log as a training run prints it. TorchRL logs at INFO to stdout (e.g. each replay buffer's storage
+    allocation), which the run's own progress lines need not carry: its logger says warnings only, unless
+    TorchRL's own variable RL_LOGGING_LEVEL asks for more. And the formatter of its console handler (installed
+    when torchrl is imported; it colours every line with ANSI codes whatever the stream) is wrapped in
+    `_ColourOnTerminal`. Idempotent."""
     import torchrl  # noqa: F401  the "torchrl" logger and its handler are created by this import
 
-    for handler in logging.getLogger("torchrl").handlers:
+    log = logging.getLogger("torchrl")
+    if "RL_LOGGING_LEVEL" not in os.environ:
+        log.setLevel(logging.WARNING)
+    for handler in log.handlers:
         if handler.formatter is not None and not isinstance(handler.formatter, _ColourOnTerminal):
             handler.setFormatter(_ColourOnTerminal(handler.formatter, getattr(handler, "stream", None)))
 
 
-plain_torchrl_log_off_terminal()  # every training process (train.py, a sweep's seed) imports this module
+quiet_plain_torchrl_log()  # every training process (train.py, a sweep's seed) imports this module
 
 
 class EpisodeLogger:

@@ -1,29 +1,32 @@
 """Actor and critic networks (paper Section 3: three fully connected hidden layers of 128 ReLU units).
 
-The actor maps the observation to an action in [−1, 1]^12 (tanh output, scaled later by the environment's
-`action_scale`); the critic maps (observation, action) to one Q-value. Both are `TensorDictModule`s reading
-the keys "observation" (and "action") so that TorchRL's losses, collectors and exploration modules use them.
+The actor μ(s) maps the observation to an action in [−1, 1]^12 (tanh output, scaled later by the environment's
+`action_scale`); a critic Q(s, a) maps (observation, action) to one value. Inputs are divided by a fixed typical
+magnitude per observation entry (from the environment's layout), so that joint speeds of 10 rad/s and body
+heights of 0.3 m reach the first layer on the same scale (+inf hides an entry from the actor). The actor's output
+layer starts near zero (uniform ±3e-3, as in Lillicrap et al. 2016, DDPG): in residual mode the untrained policy
+then adds almost nothing to the trot controller, and the first episodes walk instead of falling at once.
 
-Inputs are divided by a fixed typical magnitude per observation entry (from the environment's layout), so
-that joint speeds of 10 rad/s and body heights of 0.3 m reach the first layer on the same scale. The actor's
-output layer starts near zero (uniform ±3e-3, as in Lillicrap et al. 2016, DDPG): in residual mode the
-untrained policy then adds almost nothing to the trot controller, and the first episodes walk instead of
-falling at once.
-
-Speed: with 128-unit layers at batch 256 a TD3 update on a CPU spends about half its time in Python around
-the tensor ops, so the networks avoid two per-call costs that change no number: the MLP's forward calls
-`F.linear` on the `nn.Sequential`'s layers instead of calling each layer module, and the tensordict modules
-write their outputs directly (see `_DirectWrite`).
+Two views of the same tensors:
+- `ActorModule` is the actor as a TorchRL module (reads "observation", writes "action") for the collector and
+  the exploration noise; `TanhActor` is its network, what rollouts load an actor file into.
+- `Net` is one network's tensors as the update (`cyberdog.rl.td3`) uses them: (weight, bias) per linear layer
+  and the input scale, with the functional forwards `actor_forward` and `critic_forward`. The critics are
+  `n_critics` MLPs whose tensors are stacked along a leading dimension (TD3: 2), evaluated by one batched matrix
+  product per layer; DDPG's one critic is unstacked.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
 import torch
 import torch.nn.functional as F
-from tensordict.nn import TensorDictModule
+from tensordict import TensorDictBase
+from tensordict.nn import TensorDictModuleBase
 from torch import nn
-from torchrl.modules import ValueOperator
+
+FINAL_LAYER_INIT = 3e-3  # actor output layer weights and biases start in ±this (DDPG paper)
 
 
 def mlp(in_features: int, out_features: int, hidden_sizes: Sequence[int]) -> nn.Sequential:
@@ -37,9 +40,6 @@ def mlp(in_features: int, out_features: int, hidden_sizes: Sequence[int]) -> nn.
     return nn.Sequential(*layers)
 
 
-FINAL_LAYER_INIT = 3e-3  # actor output layer weights and biases start in ±this (DDPG paper)
-
-
 def _scale(observation_size: int, observation_scale) -> torch.Tensor:
     if observation_scale is None:
         return torch.ones(observation_size)
@@ -47,15 +47,6 @@ def _scale(observation_size: int, observation_scale) -> torch.Tensor:
     if scale.numel() != observation_size or not torch.all(scale > 0):
         raise ValueError(f"observation_scale must have {observation_size} positive entries, got {scale.numel()}")
     return scale
-
-
-def mlp_forward(net: nn.Sequential, x: torch.Tensor) -> torch.Tensor:
-    """`net(x)` for an `mlp` (Linear, ReLU, …, Linear), with functional calls instead of one module call per
-    layer (the same ops; each module call costs ~5 µs of Python, ×7 layers ×~10 network calls per update)."""
-    layers = list(net)
-    for linear in layers[:-1:2]:
-        x = torch.relu(F.linear(x, linear.weight, linear.bias))
-    return F.linear(x, layers[-1].weight, layers[-1].bias)
 
 
 class TanhActor(nn.Module):
@@ -70,11 +61,11 @@ class TanhActor(nn.Module):
         self.register_buffer("observation_scale", _scale(observation_size, observation_scale))
 
     def forward(self, observation: torch.Tensor) -> torch.Tensor:
-        return torch.tanh(mlp_forward(self.net, observation / self.observation_scale))
+        return actor_forward(Net.of(self), observation)
 
 
 class QCritic(nn.Module):
-    """State-action value Q(s, a) = MLP([s, a])."""
+    """State-action value Q(s, a) = MLP([s / scale, a]): one critic, as built before `make_critics` stacks them."""
 
     def __init__(self, observation_size: int, action_size: int, hidden_sizes: Sequence[int],
                  observation_scale=None):
@@ -83,44 +74,107 @@ class QCritic(nn.Module):
         self.register_buffer("observation_scale", _scale(observation_size, observation_scale))
 
     def forward(self, observation: torch.Tensor, action: torch.Tensor) -> torch.Tensor:
-        return mlp_forward(self.net, torch.cat([observation / self.observation_scale, action], dim=-1))
+        return self.net(torch.cat([observation / self.observation_scale, action], dim=-1))
 
 
-class _DirectWrite:
-    """Mixin for `TensorDictModule`s: set output tensors in the input tensordict directly.
+class ActorModule(TensorDictModuleBase):
+    """The actor as a TorchRL module: reads "observation", writes "action" (μ(s)) into the same tensordict."""
 
-    `TensorDictModule` passes every output through `TensorDict.from_any`, which returns a plain tensor as it is,
-    but only after `importlib.util.find_spec("pandas")`, a search of `sys.path` on the file system (tensordict
-    0.14): ~0.1-0.3 ms per call, ~5 calls per TD3 update and one per env step. Anything but the plain case
-    (tensor outputs written in place) goes the usual way.
-    """
+    in_keys = ["observation"]
+    out_keys = ["action"]
 
-    def _write_to_tensordict(self, tensordict, tensors, tensordict_out=None, out_keys=None):
-        out_keys = self.out_keys_source if out_keys is None else out_keys
-        if (tensordict_out is not None or self.inplace is not True or len(out_keys) != len(tensors)
-                or not all(isinstance(t, torch.Tensor) for t in tensors)):
-            return super()._write_to_tensordict(tensordict, tensors, tensordict_out, out_keys)
-        for key, tensor in zip(out_keys, tensors):
-            if key != "_":
-                tensordict.set(key, tensor)
-        return tensordict
+    def __init__(self, module: TanhActor):
+        super().__init__()
+        self.module = module
 
-
-class ActorModule(_DirectWrite, TensorDictModule):
-    """`TensorDictModule` reading "observation" and writing "action"."""
-
-
-class CriticModule(_DirectWrite, ValueOperator):
-    """`ValueOperator` reading "observation", "action" and writing "state_action_value"."""
+    def forward(self, tensordict: TensorDictBase) -> TensorDictBase:
+        return tensordict.set("action", self.module(tensordict.get("observation")))
 
 
 def make_actor(observation_size: int, action_size: int, hidden_sizes: Sequence[int],
-               observation_scale=None) -> TensorDictModule:
-    return ActorModule(TanhActor(observation_size, action_size, hidden_sizes, observation_scale),
-                       in_keys=["observation"], out_keys=["action"])
+               observation_scale=None) -> ActorModule:
+    return ActorModule(TanhActor(observation_size, action_size, hidden_sizes, observation_scale))
 
 
-def make_critic(observation_size: int, action_size: int, hidden_sizes: Sequence[int],
-                observation_scale=None) -> ValueOperator:
-    return CriticModule(QCritic(observation_size, action_size, hidden_sizes, observation_scale),
-                        in_keys=["observation", "action"], out_keys=["state_action_value"])
+@dataclass
+class Net:
+    """One network's tensors: (weight, bias) per linear layer, and the input scale (a constant, not trained)."""
+
+    layers: list[tuple[torch.Tensor, torch.Tensor]]
+    scale: torch.Tensor
+
+    @classmethod
+    def of(cls, module: TanhActor | QCritic) -> "Net":
+        """The module's own tensors (not copies: what trains one trains the other)."""
+        return cls([(linear.weight, linear.bias) for linear in module.net[::2]], module.observation_scale)
+
+    def named(self) -> dict[str, torch.Tensor]:
+        """Name → tensor, named as in `TanhActor.state_dict()` under "module." (an actor file's names)."""
+        out = {"module.observation_scale": self.scale}
+        for i, (w, b) in enumerate(self.layers):
+            out[f"module.net.{2 * i}.weight"], out[f"module.net.{2 * i}.bias"] = w, b
+        return out
+
+    def parameters(self) -> list[torch.Tensor]:
+        return [t for wb in self.layers for t in wb]
+
+    def detached_copy(self) -> "Net":
+        """A copy that no gradient reaches: a target network."""
+        return Net([(w.detach().clone(), b.detach().clone()) for w, b in self.layers], self.scale.clone())
+
+    def detached(self) -> "Net":
+        """The same tensors, cut from the graph (the critic as the actor's loss sees it)."""
+        return Net([(w.detach(), b.detach()) for w, b in self.layers], self.scale)
+
+    def first(self) -> "Net":
+        """The first of stacked critics (itself if unstacked)."""
+        if self.scale.dim() == 1:
+            return self
+        return Net([(w[0], b[0]) for w, b in self.layers], self.scale[0])
+
+
+def make_critics(observation_size: int, action_size: int, hidden_sizes: Sequence[int], observation_scale=None,
+                 n_critics: int = 2) -> Net:
+    """`n_critics` critics as one `Net`. One critic is a `QCritic`'s tensors; for more, each tensor of a `QCritic`
+    is stacked `n_critics` times and redrawn uniformly within its own range, one tensor after the other, as
+    TorchRL's `TD3Loss` builds its twin critics (so that a seed gives the critics it gave there)."""
+    critic = QCritic(observation_size, action_size, hidden_sizes, observation_scale)
+    net = Net.of(critic)
+    if n_critics == 1:
+        return Net([(nn.Parameter(w.detach()), nn.Parameter(b.detach())) for w, b in net.layers], net.scale)
+
+    def stacked(t: torch.Tensor) -> nn.Parameter:
+        out = t.detach().expand(n_critics, *t.shape).clone()
+        return nn.Parameter(out.uniform_(out.min().item(), out.max().item()))
+
+    scale = net.scale.expand(n_critics, *net.scale.shape).clone()
+    return Net([(stacked(w), stacked(b)) for w, b in net.layers], scale)
+
+
+def actor_forward(net: Net, observation: torch.Tensor) -> torch.Tensor:
+    """μ(s) = tanh(MLP(s / scale))."""
+    x = observation / net.scale
+    for w, b in net.layers[:-1]:
+        x = torch.relu(F.linear(x, w, b))
+    w, b = net.layers[-1]
+    return torch.tanh(F.linear(x, w, b))
+
+
+def critic_forward(net: Net, observation: torch.Tensor, action: torch.Tensor) -> torch.Tensor:
+    """(n, B) values Q_i(s, a) of the n critics of `net` (n = 1 for one unstacked critic)."""
+    if net.scale.dim() == 1:
+        x = torch.cat([observation / net.scale, action], dim=-1)
+        for w, b in net.layers[:-1]:
+            x = torch.relu(F.linear(x, w, b))
+        w, b = net.layers[-1]
+        return F.linear(x, w, b).squeeze(-1).unsqueeze(0)
+    n = net.scale.shape[0]
+    x = torch.cat([observation.unsqueeze(0) / net.scale.unsqueeze(1), action.unsqueeze(0).expand(n, -1, -1)], dim=-1)
+    for w, b in net.layers[:-1]:
+        x = torch.relu(torch.baddbmm(b.unsqueeze(1), x, w.transpose(1, 2)))
+    w, b = net.layers[-1]
+    return torch.baddbmm(b.unsqueeze(1), x, w.transpose(1, 2)).squeeze(-1)
+
+
+__all__ = ["ActorModule", "Net", "QCritic", "TanhActor", "actor_forward", "critic_forward", "make_actor",
+           "make_critics", "mlp"]

@@ -1,7 +1,6 @@
 """Replay buffer of transitions (`torchrl.data`), whose contents travel in checkpoints as plain tensors."""
 from __future__ import annotations
 
-import warnings
 from typing import Iterator
 
 from tensordict import TensorDict, TensorDictBase
@@ -13,10 +12,10 @@ from torchrl.data.replay_buffers.samplers import RandomSampler
 TRANSITION_KEYS = ("observation", "action", ("next", "observation"), ("next", "reward"), ("next", "done"),
                    ("next", "terminated"), ("next", "energy_J"))
 
-def make_replay_buffer(capacity: int, batch_size: int) -> TensorDictReplayBuffer:
-    """Uniform replay over the last `capacity` transitions (FIFO), sampled with torch's global RNG."""
-    return TensorDictReplayBuffer(storage=LazyTensorStorage(capacity), sampler=RandomSampler(),
-                                  batch_size=batch_size)
+def make_replay_buffer(capacity: int) -> TensorDictReplayBuffer:
+    """Uniform replay over the last `capacity` transitions (FIFO), sampled with torch's global RNG (each
+    `sample` call names its batch size)."""
+    return TensorDictReplayBuffer(storage=LazyTensorStorage(capacity), sampler=RandomSampler())
 
 def relabel_rewards(rb: TensorDictReplayBuffer, delta_energy_weight: float, delta_per_step: float = 0.0) -> None:
     """Add `delta_energy_weight · energy_J + delta_per_step` to every stored reward, in place: the rewards
@@ -25,9 +24,11 @@ def relabel_rewards(rb: TensorDictReplayBuffer, delta_energy_weight: float, delt
     n = len(rb)
     if n == 0 or (delta_energy_weight == 0 and delta_per_step == 0):
         return
-    nxt = rb._storage._storage["next"]
-    reward = nxt["reward"][:n]
-    reward += delta_energy_weight * nxt["energy_J"][:n].reshape(reward.shape) + delta_per_step
+    stored = rb[:n]
+    reward = stored["next", "reward"]
+    stored["next", "reward"] = reward + (delta_energy_weight * stored["next", "energy_J"].reshape(reward.shape)
+                                         + delta_per_step)
+    rb[:n] = stored
 
 
 SAMPLE_CHUNK = 64  # batches drawn per replay-buffer call in `sample_batches` (bounds its memory)
@@ -42,10 +43,7 @@ def sample_batches(rb: TensorDictReplayBuffer, n: int, batch_size: int) -> Itera
     """
     while n > 0:
         k = min(n, SAMPLE_CHUNK)
-        with warnings.catch_warnings():  # "conflicting batch_sizes": the size given here is meant to prevail
-            warnings.filterwarnings("ignore", message="Got conflicting batch_sizes", category=UserWarning)
-            chunk = rb.sample(k * batch_size)
-        yield from chunk.split(batch_size)
+        yield from rb.sample(k * batch_size).split(batch_size)
         n -= k
 
 
@@ -58,30 +56,35 @@ def transitions(batch: TensorDictBase, extra_keys=()) -> TensorDictBase:
     return batch.select(*TRANSITION_KEYS, *extra_keys).reshape(-1)
 
 def buffer_state(rb: TensorDictReplayBuffer) -> dict:
-    """Contents (in storage order) and write cursor, as a plain dict of tensors."""
-    n = len(rb)
-    storage = rb._storage
-    data = storage[:n].to_dict() if n else {}
-    cursor = int(rb._writer._cursor) if n else 0
-    return {"size": n, "cursor": cursor, "capacity": int(storage.max_size), "data": data}
+    """Contents (in storage order) and write cursor (the slot the next transition goes to), as a plain dict of
+    tensors. The buffer is written only by `extend` since it was last emptied, one slot after the other (FIFO),
+    so the cursor is the count of transitions written, modulo the capacity."""
+    n, capacity = len(rb), int(rb.storage.max_size)
+    data = rb[:n].to_dict() if n else {}
+    return {"size": n, "cursor": rb.write_count % capacity if n else 0, "capacity": capacity, "data": data}
 
 def load_buffer_state(rb: TensorDictReplayBuffer, state: dict, extra_keys=()) -> None:
-    """Refill an empty buffer from `buffer_state`; raises ValueError if the capacities differ or a key the run
-    keeps (`TRANSITION_KEYS` and `extra_keys`) is missing."""
-    if int(state["capacity"]) != int(rb._storage.max_size):
+    """Refill a buffer from `buffer_state`, slots and cursor as they were; raises ValueError if the capacities
+    differ or a key the run keeps (`TRANSITION_KEYS` and `extra_keys`) is missing."""
+    capacity = int(rb.storage.max_size)
+    if int(state["capacity"]) != capacity:
         raise ValueError(f"replay buffer capacity in checkpoint ({state['capacity']}) differs from config "
-                         f"(train.buffer_size={rb._storage.max_size})")
+                         f"(train.buffer_size={capacity})")
     rb.empty()
-    n = int(state["size"])
+    n, cursor = int(state["size"]), int(state["cursor"]) % capacity
     if n == 0:
         return
+    if cursor != n % capacity and n != capacity:
+        raise ValueError(f"replay buffer in checkpoint holds {n} of {capacity} transitions with its cursor at "
+                         f"{cursor}: a buffer not yet full is written up to its size")
     data = TensorDict(state["data"], batch_size=[n])
     missing = [k for k in (*TRANSITION_KEYS, *extra_keys) if k not in data.keys(include_nested=True)]
     if missing:
         raise ValueError(f"the stored transitions lack {missing} (a checkpoint of an older version); "
                          f"start a new run, or continue that one with the version that wrote it")
-    rb.extend(data)  # writes slots 0..n-1 in order, as they were stored
-    rb._writer._cursor = int(state["cursor"]) % int(state["capacity"])
+    rb.extend(data)  # writes slots 0..n-1 in order, as they were stored; the cursor is then at n (mod capacity)
+    if cursor != n % capacity:  # a full buffer that had wrapped: the first `cursor` transitions written again, to
+        rb.extend(data[:cursor])  # the same slots, move the cursor to where it stood
     if len(rb) != n:
         raise ValueError(f"replay buffer restored {len(rb)} transitions, checkpoint has {n}")
 

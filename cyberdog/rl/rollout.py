@@ -23,7 +23,7 @@ from cyberdog import config as C
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.envs.cyberdog_env import CyberDogEnv, actor_observation_scale
 from cyberdog.loop.result import WalkResult, walk_result
-from cyberdog.rl.checkpoint import CheckpointError, check_shapes, load_torch_file
+from cyberdog.rl.checkpoint import CheckpointError, check_shapes, load_torch_file, saved_config
 from cyberdog.rl.networks import TanhActor
 
 
@@ -48,7 +48,7 @@ def load_actor(path: str | Path) -> LoadedActor:
     state = load_torch_file(path, "actor file")
     if not isinstance(state, dict) or "actor" not in state or "config" not in state:
         raise CheckpointError(f"{path} is not an actor file (expected keys 'actor' and 'config')")
-    cfg = C.from_dict(C.ExperimentConfig, state["config"])
+    cfg = saved_config(state["config"])
     # TensorDictModule wraps TanhActor: its parameters are stored under "module."
     weights = {k.removeprefix("module."): v for k, v in state["actor"].items()}
     scale = actor_observation_scale(cfg.env, cfg.agent.actor_observation)  # the saved buffer is loaded below
@@ -58,6 +58,39 @@ def load_actor(path: str | Path) -> LoadedActor:
     module.eval()
     meta = {k: state[k] for k in ("stage", "episode", "env_steps", "score") if k in state}
     return LoadedActor(module, cfg, meta)
+
+
+def _check_walk(speed: float, duration: float, distance: float | None, run_up: float) -> None:
+    """`rollout`'s walk, or a ValueError naming the argument and its allowed range."""
+    if not (np.isfinite(speed) and speed >= 0):
+        raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
+    if not duration > 0:
+        raise ValueError(f"duration must be > 0 s, got {duration!r}")
+    if distance is not None and not (np.isfinite(distance) and distance > 0):
+        raise ValueError(f"distance must be None or > 0 m and finite, got {distance!r}")
+    if not (0.0 <= run_up < duration):
+        raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
+
+
+def _handover(cfg: C.EnvConfig, then_path: tuple[float, FootOffsetPath] | None,
+              duration: float) -> tuple[int | None, FootOffsetPath | None]:
+    """(agent step at which the walk is handed to the path, the path's offsets) of `rollout`'s `then_path`, or
+    (None, None) without one; a ValueError (TypeError) names what does not fit."""
+    if then_path is None:
+        return None, None
+    t_hand, path_offsets = then_path
+    if cfg.action_mode != "foot":
+        raise ValueError(f"then_path hands the walk to a foot path: the policy must act on foot targets, "
+                         f"not {cfg.action_mode!r}")
+    if not isinstance(path_offsets, FootOffsetPath):
+        raise TypeError(f"then_path's offsets must be a FootOffsetPath, got {type(path_offsets).__name__}")
+    if not (np.isfinite(t_hand) and 0.0 < t_hand < duration):
+        raise ValueError(f"then_path's time must be > 0 s and before the end ({duration!r} s), got {t_hand!r}")
+    handover_step = int(round(t_hand / cfg.control_dt))
+    if abs(handover_step * cfg.control_dt - t_hand) > 1e-9:
+        raise ValueError(f"then_path's time {t_hand!r} s is not a multiple of the agent step "
+                         f"({cfg.control_dt:g} s)")
+    return handover_step, path_offsets
 
 
 def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed: int = 0,
@@ -77,29 +110,9 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     fixed commanded path: from then on the actions are zero (the policy's shift ramps out over one agent step)
     and the trot controller shifts its targets by `offsets` (a `FootOffsetPath`, as a replayed path does).
     Whether a fixed path holds the gait the policy walked, started on it: `notebook/tools/replay_orbit.py`."""
-    if not (np.isfinite(speed) and speed >= 0):
-        raise ValueError(f"speed must be >= 0 m/s, got {speed!r}")
-    if not duration > 0:
-        raise ValueError(f"duration must be > 0 s, got {duration!r}")
-    if distance is not None and not (np.isfinite(distance) and distance > 0):
-        raise ValueError(f"distance must be None or > 0 m and finite, got {distance!r}")
-    if not (0.0 <= run_up < duration):
-        raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
+    _check_walk(speed, duration, distance, run_up)
     cfg = env_config or actor.config.env
-    handover_step, path_offsets = None, None
-    if then_path is not None:
-        t_hand, path_offsets = then_path
-        if cfg.action_mode != "foot":
-            raise ValueError(f"then_path hands the walk to a foot path: the policy must act on foot targets, "
-                             f"not {cfg.action_mode!r}")
-        if not isinstance(path_offsets, FootOffsetPath):
-            raise TypeError(f"then_path's offsets must be a FootOffsetPath, got {type(path_offsets).__name__}")
-        if not (np.isfinite(t_hand) and 0.0 < t_hand < duration):
-            raise ValueError(f"then_path's time must be > 0 s and before the end ({duration!r} s), got {t_hand!r}")
-        handover_step = int(round(t_hand / cfg.control_dt))
-        if abs(handover_step * cfg.control_dt - t_hand) > 1e-9:
-            raise ValueError(f"then_path's time {t_hand!r} s is not a multiple of the agent step "
-                             f"({cfg.control_dt:g} s)")
+    handover_step, path_offsets = _handover(cfg, then_path, duration)
     # the policy alone: a torque policy trained with the trot prior (EnvConfig.prior_weight) is judged without it,
     # and without the trot's torque computed as an imitation reference (EnvConfig.trot_reference): no trot
     # controller runs at all (the reference never drove the robot: the walk is the same to the last bit)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from cyberdog import config as C
 from cyberdog.rl.checkpoint import (CheckpointError, budget_change, check_shapes, rng_state, save_atomic,
-                                    save_checkpoint, set_rng_state)
+                                    save_checkpoint, saved_config, set_rng_state)
 from cyberdog.rl.replay import buffer_state, load_buffer_state
 
 
@@ -44,7 +44,8 @@ class RunState:
             raise CheckpointError(f"{path} holds no agent; --init-from needs checkpoint.pt, stage<N>_final.pt of a "
                                   f"run or an actor file")
         agent = state["agent"]
-        check_shapes(agent["loss"], self.agent.loss.state_dict(), "the agent", path)
+        networks = {k: v for k, v in agent["loss"].items() if "_params." in k}  # not an earlier loss's constants
+        check_shapes(networks, self.agent.network_state(), "the agent", path)
         if "actor_optimizer" in agent:  # checkpoint.pt: the whole agent
             self.agent.load_state_dict(agent)
         else:  # stage<N>_final.pt: networks, targets, exploration and counters; new Adam moments
@@ -71,7 +72,7 @@ class RunState:
 
     def _restore(self, state: dict, path) -> None:
         try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
-            saved = C.to_dict(C.from_dict(C.ExperimentConfig, state.get("config")))
+            saved = C.to_dict(saved_config(state.get("config")))
         except (ValueError, TypeError) as e:
             raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
         counters = state["counters"]

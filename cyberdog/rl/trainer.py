@@ -50,13 +50,14 @@ from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
 from cyberdog.envs.observation import actor_observation_scale, observation_typical_magnitude
-from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
+from cyberdog.rl.agent import Agent
 from cyberdog.rl.checkpoint import load_checkpoint, remove_stale_temporaries, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import TROT_ACTION_KEY, make_replay_buffer, relabel_rewards, sample_batches, transitions
 from cyberdog.rl.run_state import RunState
 from cyberdog.rl.stop import StopSignals, TrainingInterrupted
+from cyberdog.rl.td3 import NonFiniteError, StageSettings, metrics_to_float
 from cyberdog.runlock import RunFolderError, RunLock
 
 ACTION_SIZE = 12  # joint torques or foot offsets (Table 3); the observation's size is the env config's
@@ -110,7 +111,7 @@ class Trainer(RunState):
         self.observation_size = len(obs_scale)
         self.agent = Agent(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale,
                            actor_observation_scale(cfg.env, cfg.agent.actor_observation))
-        self.rb = make_replay_buffer(tc.buffer_size, tc.batch_size)
+        self.rb = make_replay_buffer(tc.buffer_size)
         self.stages = list(stages)
         self.c = dict(stage=self.stages[0], env_steps=0, stage_env_steps=0, episodes=0, stage_episodes=0,
                       stage_updates=0, update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
@@ -227,13 +228,8 @@ class Trainer(RunState):
             return
         c = self.c
         seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
-        self.agent.action_l2 = self.cfg.agent.action_l2 if sc.action_l2 is None else sc.action_l2
-        self.agent.trot_imitation = self.cfg.agent.trot_imitation if sc.trot_imitation is None else sc.trot_imitation
-        self.agent.actor_anchor = sc.actor_anchor
-        if sc.actor_anchor > 0 and c["stage_env_steps"] == 0:  # the actor this stage starts from (a resume keeps it)
-            self.agent.set_anchor()
-        self.agent.set_actor_lr(self.cfg.agent.actor_lr if sc.actor_lr is None else sc.actor_lr,
-                                fresh=sc.fresh_actor_optimizer and c["stage_env_steps"] == 0)
+        if c["stage_env_steps"] == 0:  # the stage starts (a resume keeps the anchor and the Adam moments it set)
+            self.agent.begin_stage(anchor=sc.actor_anchor > 0, fresh_actor_optimizer=sc.fresh_actor_optimizer)
         threads = torch.get_num_threads()  # closing a ParallelEnv raises them by its worker count: restored below
         collector = self._collector(reward, seed, self._random_frames_left(stage))
         budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
@@ -334,17 +330,15 @@ class Trainer(RunState):
                              self.c["stage_env_steps"]):
             return 0
         n, self.c["update_credit"] = C.update_credit(self.c["update_credit"], frames, tc.updates_per_frame)
-        sc = getattr(tc, f"stage{self.c['stage']}")
-        warmup = sc.critic_warmup_updates
+        settings = StageSettings.of(self.cfg.agent, getattr(tc, f"stage{self.c['stage']}"),
+                                    imitation_scale=1.0 - self.prior_weight)
         metrics = []
-        self.agent.imitation_scale = 1.0 - self.prior_weight
         for done, b in enumerate(sample_batches(self.rb, n, tc.batch_size)):
             if self._stop.signum is not None:  # a stop signal: the round's other updates are owed, not lost
                 self.c["update_credit"] += n - done
                 n = done
                 break
-            warm = self.c["stage_updates"] >= warmup
-            metrics.append(self.agent.update(b, actor=warm, targets=warm or sc.critic_warmup_targets))
+            metrics.append(self.agent.update(b, settings, self.c["stage_updates"]))
             self.c["stage_updates"] += 1
         if n:  # tensors until here: one conversion per round of updates, not four per update
             self.last = metrics_to_float(metrics)
