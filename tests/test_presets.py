@@ -161,3 +161,18 @@ def test_extraction_takes_the_recipe_settings_unless_given(tmp_path):
     L.take_recipe_extraction(given)
     assert (given.replay_attempts, given.candidates) == (16, 4)
     assert C.final_run(sweep / "seed5") == sweep / "seed5" / "band"
+
+
+def test_an_earlier_files_stage_and_agent_read_as_today():
+    """Run folders and actor files written before a stage's reward was a RewardConfig (and while the agent had
+    fast_update) read as the same settings, so that they resume and load."""
+    old = {"agent": {"fast_update": True, "actor_lr": 1e-4},
+           "train": {"stage2": {"reward": "stage2", "energy_weight": -0.05, "keep_moving_weight": 300.0,
+                                "energy_model": "electrical", "speed_deadband": 0.015}}}
+    cfg = C.from_dict(C.ExperimentConfig, old)
+    assert cfg.agent.actor_lr == 1e-4
+    assert cfg.train.stage2.reward == C.replace(C.STAGE2_REWARD, energy=-0.05, keep_moving=300.0,
+                                                energy_model="electrical", speed_deadband=0.015)
+    assert cfg.train.stage1.reward == C.STAGE1_REWARD
+    with pytest.raises(ValueError, match="no field 'energy_weight'"):  # today's --set uses the reward's names
+        C.override(cfg, ["train.stage2.energy_weight=-0.1"])

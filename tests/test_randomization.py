@@ -10,7 +10,7 @@ from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.sim.hardware import RobotDraw, draw_robot
 
 ROOT = Path(__file__).resolve().parents[1]
-BATTERY = ROOT / "configs/quick_speeds_battery.yaml"
+BATTERY = ROOT / "notebook/configs/quick_speeds_battery.yaml"
 WIDE = C.RandomizationConfig(joint_friction_scale=(0.5, 1.5), latency_periods=(0, 2), mass_scale=(0.9, 1.1),
                              motor_strength=(0.9, 1.1), kp_factor=(0.8, 1.2), kd_factor=(0.7, 1.3),
                              ground_friction_scale=(0.7, 1.3))

@@ -171,12 +171,12 @@ def test_figures_into_their_own_folder_add_to_it_and_say_whose_files_are_whose(t
 
 # ---- a stage that would make no gradient update ----------------------------------------------------------------
 def test_a_stage_without_updates_is_refused_before_any_work(tmp_path):
-    quick = C.load(C.ExperimentConfig, ROOT / "configs" / "quick.yaml")
+    quick = C.load(C.ExperimentConfig, ROOT / "notebook" / "configs" / "quick.yaml")
     cfg = C.override(quick, ["train.stage1.max_env_steps=800", "train.stage2.max_env_steps=800"])
     with pytest.raises(ValueError, match="train.stage1 would make no gradient update.*learning_starts=2000"):
         Trainer(cfg, tmp_path / "r", progress=False)
     assert not (tmp_path / "r").exists()
-    proc = run([ROOT / "train.py", "--config", ROOT / "configs" / "quick.yaml", "--set",
+    proc = run([ROOT / "train.py", "--config", ROOT / "notebook" / "configs" / "quick.yaml", "--set",
                 "train.stage1.max_env_steps=800", "--set", "train.stage2.max_env_steps=800", "--run-dir",
                 tmp_path / "r", "--no-progress"])
     assert_one_clear_line(proc, "no gradient update", "learning_starts")
@@ -206,7 +206,7 @@ def test_the_update_plan_matches_the_trainer_and_an_untrained_stage_is_not_final
 def test_stage_final_file_of_the_quick_preset_is_small_and_serves_init_from_and_evaluation(tmp_path):
     from cyberdog.rl.rollout import load_actor
 
-    quick = C.load(C.ExperimentConfig, ROOT / "configs" / "quick.yaml")
+    quick = C.load(C.ExperimentConfig, ROOT / "notebook" / "configs" / "quick.yaml")
     # the quick preset's networks and buffer capacity, on a budget of one batch with updates
     cfg = C.override(quick, ["train.learning_starts=0", "train.stage1.max_env_steps=200", "train.batch_size=64",
                              "env.episode_time=0.5"])

@@ -161,12 +161,13 @@ def load(cls: type, path: str | Path) -> Any:
         except yaml.YAMLError as e:
             raise ValueError(f"config {path} is not valid YAML: {' '.join(str(e).split())}") from None
     if isinstance(data, dict) and {"base", "summary", "phases", "extract"} & set(data):  # a preset file
+        from cyberdog.config.learning import ExperimentConfig
         from cyberdog.config.preset import load_preset
 
-        preset = load_preset(path)
-        if not isinstance(preset.config, cls):
-            raise ValueError(f"{path} is a training preset, not a {cls.__name__}")
-        return preset.config
+        if cls is not ExperimentConfig:
+            raise ValueError(f"{path} is a training preset (train.py --config), not a {cls.__name__} file; allowed "
+                             f"in one: {', '.join(f.name for f in fields(cls))}")
+        return load_preset(path).config
     try:
         return from_dict(cls, data)
     except ValueError as e:

@@ -21,6 +21,7 @@ EXPLORATION_NOISES = ("gaussian", "ou")
 DEVICES = ("cpu", "cuda", "auto")
 BUFFER_POLICIES = ("clear", "keep", "relabel")
 COLLECTION_MODES = ("sync", "async")
+RETIRED_AGENT_FIELDS = ("fast_update",)  # AgentConfig fields earlier files recorded (one loss since): dropped
 RELABELLED_TERMS = ("energy", "keep_moving")  # the reward terms a relabel recomputes at the start of stage 2
 
 
@@ -61,6 +62,12 @@ class AgentConfig:
     #                                          critics always see the whole observation. An actor that sees
     #                                          only the command and the gait phase is a foot trajectory per
     #                                          speed by construction: what it learns is what extraction replays
+
+    @staticmethod
+    def upgrade_fields(data: dict) -> dict:
+        """Read by `from_dict` before the fields: an earlier file's agent without the fields this version no
+        longer has (`RETIRED_AGENT_FIELDS`), so that old runs resume and old actor files load."""
+        return {k: v for k, v in data.items() if k not in RETIRED_AGENT_FIELDS} if isinstance(data, dict) else data
 
     def __post_init__(self) -> None:
         _check(all(isinstance(g, str) and g for g in self.actor_observation)

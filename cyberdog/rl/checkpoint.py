@@ -21,8 +21,6 @@ from cyberdog import config as C
 
 FORMAT = "cyberdog-rl-checkpoint"
 VERSION = 1
-RETIRED_AGENT_FIELDS = ("fast_update",)  # AgentConfig fields that earlier versions recorded and this one no longer
-#                                          has (the update has one loss since): a saved config is read without them
 
 
 class CheckpointError(RuntimeError):
@@ -99,12 +97,9 @@ def load_torch_file(path: str | Path, what: str):
 
 
 def saved_config(config: dict | None) -> C.ExperimentConfig:
-    """The experiment config that a checkpoint or actor file recorded (its plain dict), read without the retired
-    agent fields of earlier versions (`RETIRED_AGENT_FIELDS`)."""
-    config = dict(config or {})
-    if isinstance(config.get("agent"), dict):
-        config["agent"] = {k: v for k, v in config["agent"].items() if k not in RETIRED_AGENT_FIELDS}
-    return C.from_dict(C.ExperimentConfig, config)
+    """The experiment config that a checkpoint or actor file recorded (its plain dict; an earlier version's form
+    is read as the config layer reads earlier files)."""
+    return C.from_dict(C.ExperimentConfig, dict(config or {}))
 
 
 def load_checkpoint(path: str | Path, actor_file: bool = False) -> dict:
