@@ -53,7 +53,7 @@ from tensordict import TensorDict
 
 import cyberdog.rl.trainer as trainer_module
 from cyberdog import config as C
-from cyberdog.rl.env import make_gym_env
+from cyberdog.rl.torchrl_env import make_gym_env
 from cyberdog.envs.cyberdog_env import observation_size
 from cyberdog.rl.trainer import ACTION_SIZE, Trainer
 

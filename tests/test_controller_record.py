@@ -9,7 +9,7 @@ from cyberdog import config as C
 from cyberdog.analysis.extract import rollout_provenance
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
 from cyberdog.core.trajectories import SampledTrajectory
-from cyberdog.evaluation.trot import (controller_note, note_controllers, note_searched_trot, recorded_trot,
+from cyberdog.evaluation.recorded_trot import (controller_note, note_controllers, note_searched_trot, recorded_trot,
                                       searched_trot, walk_under_recorded_trot, with_trot)
 
 PLACED = dataclasses.replace(C.ControllerConfig(), sagittal_placement_gain=0.1)

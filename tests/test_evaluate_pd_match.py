@@ -12,7 +12,7 @@ import evaluate
 from cyberdog import config as C
 from cyberdog.analysis.walk import walk
 from cyberdog.core.learned_set import LearnedSet
-from cyberdog.evaluation.trot import with_trot
+from cyberdog.evaluation.recorded_trot import with_trot
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "results/battery/paths/seed0_1.4mps.json"

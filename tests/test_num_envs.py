@@ -11,7 +11,7 @@ import torch
 
 from cyberdog import config as C
 from cyberdog.rl.checkpoint import load_checkpoint
-from cyberdog.rl.env import worker_seed
+from cyberdog.rl.torchrl_env import worker_seed
 from cyberdog.rl.trainer import Trainer
 from conftest import metrics_rows, stop_after, tiny
 

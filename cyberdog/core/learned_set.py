@@ -21,7 +21,7 @@ A path is recorded under one trot controller (the policy's: `ControllerConfig`, 
 foot placement), and a path learned under one controller need not walk the same under another. Extraction
 writes the controller into the provenance (`recorded_controller`), so that an evaluation walks every trajectory
 of a comparison under the paths' own by default, and says so where it walks them under another
-(`cyberdog.evaluation.trot`).
+(`cyberdog.evaluation.recorded_trot`).
 """
 from __future__ import annotations
 

@@ -103,7 +103,7 @@ def _check_paths(args, cfg) -> int:
     from cyberdog.core.learned_set import LearnedSet, learned_files
     from cyberdog.evaluation.cli import UsageError
     from cyberdog.evaluation.commands import open_run
-    from cyberdog.evaluation.trot import trot_for
+    from cyberdog.evaluation.recorded_trot import trot_for
 
     given = [o for o, v in (("--speeds", args.speeds), ("--duration", args.duration), ("--actor", args.actor),
                             ("--trot", args.trot)) if v]

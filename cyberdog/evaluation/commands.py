@@ -13,7 +13,7 @@ from cyberdog.evaluation.check import cmd_check
 from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
 from cyberdog.evaluation.pd_match import cmd_pd_match
-from cyberdog.evaluation.trot import note_searched_trot, walk_under_recorded_trot
+from cyberdog.evaluation.recorded_trot import note_searched_trot, walk_under_recorded_trot
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",

@@ -18,7 +18,7 @@ from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
-from cyberdog.evaluation.trot import trot_for
+from cyberdog.evaluation.recorded_trot import trot_for
 from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -55,7 +55,7 @@ def cmd_pd_match(args, cfg) -> int:
     from cyberdog.core.learned_set import LearnedSet, learned_files
     from cyberdog.evaluation.cli import UsageError
     from cyberdog.evaluation.commands import new_out, open_run
-    from cyberdog.evaluation.trot import trot_for
+    from cyberdog.evaluation.recorded_trot import trot_for
 
     if args.kd is not None and args.kp is None:
         raise UsageError("--kd goes with --kp (--pd-scale scales kd by itself)")

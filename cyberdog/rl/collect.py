@@ -15,7 +15,7 @@ actions) from the env seed it is given, so a resumed run is reproducible from it
 not draw the same numbers as a synchronous run.
 
 **Several envs** (`train.num_envs` = N > 1): the env becomes TorchRL's `ParallelEnv` of N copies, one process
-each (`cyberdog.rl.env.make_batched_env`), inside the same single-process `Collector`; in the async mode that
+each (`cyberdog.rl.torchrl_env.make_batched_env`), inside the same single-process `Collector`; in the async mode that
 collector, and so the `ParallelEnv`, lives in the worker process. A batch of `frames_per_batch` env steps is
 then `frames_per_batch / N` steps of each env, shape [N, frames_per_batch / N]. Why this and not TorchRL's
 multi-process collectors: `MultiaSyncDataCollector` hands over batches in the order the workers finish them,
@@ -39,7 +39,7 @@ from tensordict import TensorDictBase
 from torchrl.collectors import Collector
 
 from cyberdog.config import AgentConfig, EnvConfig, RewardConfig
-from cyberdog.rl.env import make_batched_env, make_env
+from cyberdog.rl.torchrl_env import make_batched_env, make_env
 from cyberdog.rl.stop import ignore_stop_signals
 
 WORKER_START_TIMEOUT_S = 300.0  # first batch: the worker imports torch, builds the env and collects
