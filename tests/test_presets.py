@@ -176,3 +176,21 @@ def test_an_earlier_files_stage_and_agent_read_as_today():
     assert cfg.train.stage1.reward == C.STAGE1_REWARD
     with pytest.raises(ValueError, match="no field 'energy_weight'"):  # today's --set uses the reward's names
         C.override(cfg, ["train.stage2.energy_weight=-0.1"])
+
+
+def test_a_recipe_sweep_runs_every_phase_of_every_seed_and_extraction_finds_the_last(tmp_path):
+    """`train.py --config <recipe> --seeds 0-1`: one lineage per seed (one process each, the sweep's retries and
+    status), aggregated on the last phase; `evaluate.py extract --sweep` takes each seed's last phase's actor."""
+    from cyberdog.evaluation.learned import policy_paths
+
+    preset = _write(tmp_path / "two.yaml", {"base": str(ROOT / "configs/tiny.yaml"), "summary": "two phases",
+                                           "phases": [{"name": "first", "stage": 1}, {"name": "second", "stage": 2}]})
+    sweep = tmp_path / "sweep"
+    out = _train("--config", preset, "--seeds", "0-1", "--run-dir", sweep, "--eval-duration", 0)
+    assert out.returncode == 0, out.stderr
+    for seed in (0, 1):
+        phases, _ = C.read_phases(sweep / f"seed{seed}")
+        assert [p.config.train.seed for p in phases] == [seed, seed]
+        assert (sweep / f"seed{seed}" / "second" / "stage2_final_actor.pt").is_file()
+    assert policy_paths(None, sweep) == [sweep / f"seed{s}" / "second" / "stage2_final_actor.pt" for s in (0, 1)]
+    assert "| 1 | 200 |" in (sweep / "aggregate.md").read_text()  # the last phase's stage-2 steps per seed
