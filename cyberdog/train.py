@@ -11,17 +11,17 @@ Examples:
   python train.py --show configs/battery.yaml     # its resolved settings per phase, as changes from the defaults
   python train.py --config configs/tiny.yaml --run-dir runs/tiny              # stage 1 then stage 2
   python train.py --config configs/paper.yaml --stage 1 --seed 3 --run-dir runs/paper_s3
-  python train.py --config configs/quick.yaml --set agent.algorithm=ddpg --set train.batch_size=128
-  python train.py --resume runs/quick                                         # continue a killed run
-  python train.py --resume runs/quick --set train.stage2.max_env_steps=160000 # train its last stage longer (or end it sooner)
-  python train.py --config configs/quick.yaml --stage 2 --init-from runs/quick/stage1_final.pt --run-dir runs/q2
+  python train.py --config configs/table5.yaml --set agent.algorithm=ddpg --set train.batch_size=128
+  python train.py --resume runs/table5                                         # continue a killed run
+  python train.py --resume runs/table5 --set train.stage2.max_env_steps=320000 # train its last stage longer (or end it sooner)
+  python train.py --config configs/table5.yaml --stage 2 --init-from runs/table5/stage1_final.pt --run-dir runs/t2
 
 Seeds at scale (one run per seed in RUN_DIR/seed<N>/, retried from its checkpoint if it fails, then aggregated):
-  python train.py --config configs/quick.yaml --seeds 0-9 --run-dir runs/sweep_quick       # local processes
-  python train.py --config configs/quick.yaml --seeds 0,3,7 --backend ray --workers 3      # local Ray instance
+  python train.py --config configs/table5.yaml --seeds 0-9 --run-dir runs/sweep_table5       # local processes
+  python train.py --config configs/table5.yaml --seeds 0,3,7 --backend ray --workers 3      # local Ray instance
   python train.py --config configs/paper.yaml --seeds 0-9 --backend ray --ray-address auto # existing cluster
-  python train.py --resume runs/sweep_quick                  # finish a killed or failed sweep
-  python train.py --aggregate runs/sweep_quick               # (re)write curves, evaluation and tables
+  python train.py --resume runs/sweep_table5                  # finish a killed or failed sweep
+  python train.py --aggregate runs/sweep_table5               # (re)write curves, evaluation and tables
 
 Outputs in the run folder: config.yaml (resolved), metrics.csv (one row per episode), tb/ (TensorBoard),
 checkpoint.pt (resume point: agent, optimizers, RNG states and the replay buffer, about 0.5 kB per stored

@@ -67,7 +67,7 @@ def test_a_partial_section_in_a_file_changes_only_the_fields_it_names(tmp_path):
     assert cfg.env.walk.gait == default.env.walk.gait
     assert cfg.env.walk.gait.lift_height == 0.10
     assert cfg.train.stage2.max_env_steps == 5
-    assert (cfg.train.stage2.reward, cfg.train.stage2.stop_score) == ("stage2", default.train.stage2.stop_score)
+    assert (cfg.train.stage2.reward, cfg.train.stage2.stop_score) == (C.STAGE2_REWARD, default.train.stage2.stop_score)
     # and the same as --set on the defaults
     assert cfg == C.override(default, ["env.walk.controller.sagittal_placement_gain=0.1",
                                        "train.stage2.max_env_steps=5"])

@@ -116,7 +116,7 @@ class RandomizationConfig:
     `mass_uncertainty` draw and `latency_s`, and a range that is set replaces them and must contain them
     (`EnvConfig` refuses one that does not, naming both fields).
 
-    [G] marks a guess for this robot; every range of `configs/quick_speeds_battery.yaml` contains the
+    [G] marks a guess for this robot; every range of `configs/battery.yaml` contains the
     prototype's hardware-like robot (`HARDWARE_LIKE`: scales 1, one period of latency, mass within ±5 %).
     """
 

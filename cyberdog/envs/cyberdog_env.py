@@ -25,7 +25,7 @@ PAPER_REWARD_WARNING = (
     "CyberDog-v0 with the paper's stage-2 reward (Eq. 11: keep-moving bonus D = 25, energy E = -0.2 per J; the "
     "default) has no fall penalty, and with it falling early scores higher than walking: a policy trained on it "
     "learns to fall. Train with reward='stage1' first, or with a larger keep-moving bonus (RewardConfig("
-    "keep_moving=300), as configs/quick*.yaml's stage 2); see docs/environment.md")
+    "keep_moving=300), as configs/table5.yaml's stage 2); see docs/environment.md")
 
 class CyberDogEnv(gym.Env):
     """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
@@ -122,7 +122,7 @@ class CyberDogEnv(gym.Env):
     **Domain randomisation** (`randomization`, a `RandomizationConfig`, off by default): each episode's robot
     is drawn from ranges of joint friction, actuation latency, link masses, motor strength, PID gains and
     ground friction, from the env's generator (same seed, same robots; `info["robot_draw"]` of `reset` says
-    which). `configs/quick_speeds_battery.yaml` switches it on around the hardware-like robot.
+    which). `configs/battery.yaml` switches it on around the hardware-like robot.
 
     **Hardware model** (`hardware`, a `HardwareConfig`, all off by default): joint friction, actuation
     latency, encoder noise, Kalman speed feedback (simulated IMU + leg odometry) and a mass draw, the same model

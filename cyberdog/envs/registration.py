@@ -1,6 +1,6 @@
 """The tasks `import cyberdog` registers with gymnasium: the one the shipped agents learn, and the paper's MDP.
 
-- `CyberDog-v0`, the shipped agents' task (`configs/quick_speeds.yaml`'s stage 2): the action shifts the trot
+- `CyberDog-v0`, the shipped agents' task (`configs/table5.yaml`'s stage 2): the action shifts the trot
   controller's foot targets (foot mode, ±3 cm per axis), the observation appends the previous action (62),
   the commanded speed is drawn per episode from 1.0–1.4 m/s, and the reward is Eq. 10 with the presets'
   keep-moving bonus D = 300 and Eq. 11's energy weight E = −0.2 per J: walking scores above falling.

@@ -23,10 +23,8 @@ from cyberdog.provenance import portable_path
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "table5" / "paths"  # the shipped learned paths: one JSON per seed and speed
-# the prototype run's default: the battery paths of the deadband preset (configs/quick_speeds_battery_band.yaml,
-# recorded under the trot with foot placement and a speed loop bounded at +-10 %), where shipped; the stride preset's
-# (notebook/results/learned_battery_stride/) and the battery preset's earlier paths (configs/quick_speeds_battery.yaml,
-# default trot: notebook/results/learned_battery/) stay beside them. Table 5 keeps the paper's Eq. 7 preset (DEFAULT_LEARNED)
+# the prototype run's default: the battery recipe's paths (configs/battery.yaml, recorded under the trot with foot
+# placement and a speed loop bounded at +-10 %); Table 5 keeps the Eq. 7 recipe's (DEFAULT_LEARNED)
 DEFAULT_LEARNED_BATTERY = ROOT / "results" / "battery" / "paths"
 DEFAULT_METRICS = ROOT / "results" / "table5" / "policy" / "seed0" / "metrics.csv"  # the shipped policy's training log
 # the reference row of the matched-lift table: the direct search's shape at the shipped paths' mean lift height
