@@ -4,9 +4,10 @@
 Both run in this process on the same machine, timed in CPU time (time.process_time: on a shared machine the
 wall clock counts the time other processes held the CPU) and in wall-clock time:
 
-  env    CyberDog-v0 as configs/quick_speeds.yaml builds it (foot mode, 62 observations, stage-2 reward), at
+  env    CyberDog-v0 as configs/table5.yaml builds it (foot mode, 62 observations, stage-2 reward), at
          the config's controller rate; zero action, episodes restarted where they end. Its joint controller
-         runs every `walk.sim.controller_dt` and PyBullet's solver steps `walk.sim.physics_dt` underneath.
+         runs every `walk.sim.controller_dt`; the motor drivers close their PD at every physics step
+         (`walk.sim.physics_dt`), one stepSimulation each.
   floor  raw PyBullet at 1 kHz, as a controller at the physics rate would drive it: the project's URDF in the
          same world, and at every 1 ms physics step the state reads a controller needs (getJointStates,
          getBasePositionAndOrientation, getBaseVelocity), one torque write (setJointMotorControlArray) and
@@ -19,7 +20,7 @@ The ratio env / floor above 1 means that the env, with its controller, hardware 
 observation, runs faster than bare PyBullet can be stepped from Python at 1 kHz. Several repetitions; the
 medians are printed.
 
-    python bench/env_throughput.py [--steps 400] [--repeats 5] [--config configs/quick_speeds.yaml]
+    python bench/env_throughput.py [--steps 400] [--repeats 5] [--config configs/table5.yaml]
                                    [--set env.walk.sim.controller_dt=0.001 env.walk.sim.physics_dt=0.001]
 """
 from __future__ import annotations
@@ -31,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 import pybullet
-import yaml
 
 from cyberdog import config as C
+from cyberdog.config.preset import load_preset
 from cyberdog.core.kinematics import standing_joint_angles
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.sim.robot import Robot
@@ -45,9 +46,8 @@ PD_GAINS = (60.0, 2.0)  # N·m/rad, N·m·s/rad: the trot's PID gains (PIDConfig
 
 
 def env_config(path: str, sets: list[str]) -> C.EnvConfig:
-    with open(ROOT / path if not Path(path).is_absolute() else path) as f:
-        env = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
-    return C.override(C.ExperimentConfig(env=env), sets).env if sets else env
+    """The env of a preset (its `base:` resolved), with `--set` overrides."""
+    return load_preset(ROOT / path if not Path(path).is_absolute() else path, sets).config.env
 
 
 def time_env(env: CyberDogEnv, steps: int, seed: int) -> tuple[float, float]:
@@ -86,8 +86,8 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--steps", type=int, default=400, help="env steps per repetition (default 400 = one episode)")
     p.add_argument("--repeats", type=int, default=5, help="repetitions (default 5)")
-    p.add_argument("--config", default="configs/quick_speeds.yaml", help="the preset whose env is timed "
-                   "(default configs/quick_speeds.yaml, the shipped policies')")
+    p.add_argument("--config", default="configs/table5.yaml", help="the preset whose env is timed "
+                   "(default configs/table5.yaml, the shipped policies')")
     p.add_argument("--set", nargs="+", default=[], metavar="SECTION.FIELD=VALUE",
                    help="overrides of the preset, e.g. env.walk.sim.controller_dt=0.001 (default: none)")
     args = p.parse_args()

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Physics steps per second of the scripted walk (`cyberdog.analysis.walk.walk`): trot controller + Robot.
+"""Controller periods per second of the scripted walk (`cyberdog.analysis.walk.walk`): trot controller + motor
+drivers + Robot (each period: the controller once, the drivers at each of its physics steps).
 
 Walks the composite cycloid at 1.0 m/s (default config) on one reused robot, several repetitions, and prints
 each repetition's rate and the best (the machine is shared, so the best is the least disturbed number), by
@@ -37,11 +38,12 @@ def main() -> None:
             elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
             steps = round(result.duration / cfg.sim.controller_dt)
             rates.append((steps / elapsed, steps / cpu))
-            print(f"rep {i}: {rates[-1][0]:8.0f} physics steps/s (CPU time: {rates[-1][1]:8.0f})  ({steps} steps "
-                  f"in {elapsed:.2f} s, E = {result.energy:.3f} J, v = {result.mean_speed:.4f} m/s)", flush=True)
+            print(f"rep {i}: {rates[-1][0]:8.0f} controller periods/s (CPU time: {rates[-1][1]:8.0f}; "
+                  f"{cfg.sim.physics_substeps} physics steps each)  ({steps} periods in {elapsed:.2f} s, "
+                  f"E = {result.energy:.3f} J, v = {result.mean_speed:.4f} m/s)", flush=True)
     finally:
         robot.close()
-    print(f"best: {max(r[0] for r in rates):.0f} physics steps/s, by CPU time {max(r[1] for r in rates):.0f} "
+    print(f"best: {max(r[0] for r in rates):.0f} controller periods/s, by CPU time {max(r[1] for r in rates):.0f} "
           f"({args.trajectory}, {args.speed} m/s)")
 
 

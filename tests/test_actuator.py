@@ -87,10 +87,10 @@ def robot():
 def test_robot_step_rejects_non_finite(robot, bad):
     cmd = np.zeros(12)
     cmd[4] = bad
-    steps = robot.step_count
+    steps = robot.physics_steps
     with pytest.raises(ValueError, match="finite"):
         robot.step(cmd)
-    assert robot.step_count == steps  # nothing was simulated
+    assert robot.physics_steps == steps  # nothing was simulated
 
 
 def test_robot_step_rejects_wrong_shape(robot):

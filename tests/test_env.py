@@ -188,10 +188,13 @@ def _score(task: str, action, **options) -> tuple[float, bool]:
 @pytest.mark.slow
 def test_the_registered_task_rewards_walking_and_the_papers_rewards_falling():
     """What the registration says: on CyberDog-v0 the trot (zero foot shift) walks and scores above a walk that
-    falls (every foot shifted back by the most); on CyberDogPaper-v0 (Eq. 11) a robot thrown over by full torque
-    scores above one that walks (the trot controller's torque held over each step, the drivers' damping on)."""
+    falls (every foot shifted to the right by the most); on CyberDogPaper-v0 (Eq. 11) a robot thrown over by
+    full torque scores above one that walks (the trot controller's torque held over each step, the drivers'
+    damping on)."""
     walked, fell_walking = _score("CyberDog-v0", np.zeros(12, dtype=np.float32))
-    fallen, fell = _score("CyberDog-v0", np.full(12, -1.0, dtype=np.float32))
+    # (with the drivers' PD at the physics rate the trot no longer falls with every foot shifted back: 3 cm to
+    # the right does, at step 286)
+    fallen, fell = _score("CyberDog-v0", np.tile(np.array([0.0, -1.0, 0.0], dtype=np.float32), 4))
     assert not fell_walking and fell and walked > fallen, (walked, fallen)
     trot = C.EnvConfig(action_mode="torque", prior_weight=1.0, joint_damping=3.0)
     walked, fell_walking = _score("CyberDogPaper-v0", np.zeros(12, dtype=np.float32), config=trot, reward="stage2")

@@ -34,26 +34,32 @@ def test_env_with_zero_foot_offsets_walks_exactly_the_scripted_walk():
 
 
 def test_walker_energy_is_eq7_of_its_own_torques_and_joint_displacements():
-    """Over a controller period of constant torque the joint's work is τ·Δq: Eq. (7) is Σ|τ·Δq| per joint,
-    with Δq read from the recorded joint angles, and the electrical energy takes the same mean speed Δq / dt."""
+    """Over a physics step the drivers' torque is constant and the joint's work is τ·Δq: Eq. (7) is Σ|τ·Δq| per
+    joint over the physics steps, with Δq read from the recorded joint angles, and the electrical energy takes
+    the same mean speed Δq / physics_dt; the per-period traces are the periods' means, their power integrates
+    to the same energy."""
     cfg = C.WalkConfig()
-    dt = cfg.sim.controller_dt
+    dt, h, n = cfg.sim.controller_dt, cfg.sim.physics_dt, cfg.sim.physics_substeps
     with Walker(cfg, record=True) as w:
         for _ in range(300):
             w.step()
-        tr = w.traces()
-        tau, dq, q = tr["tau"], tr["dq"], tr["q"]
-        assert tau.shape == dq.shape == q.shape == (300, 12)
-        q_next = np.vstack([q[1:], w.state.q])  # the angles at the end of each period
-        assert dq == pytest.approx((q_next - q) / dt, rel=1e-9, abs=1e-9)
-        by_hand = float(np.sum(np.abs(tau * (q_next - q))))
+        p, tr = w.physics_traces(), w.traces()
+        tau, q = w.physics_tau.view(), w.physics_q.view()
+        assert tau.shape == (300 * n, 12) and q.shape == (300 * n + 1, 12) and np.array_equal(q[-1], w.state.q)
+        assert np.array_equal(p["tau"], tau) and p["dq"] == pytest.approx((q[1:] - q[:-1]) / h, rel=1e-12)
+        by_hand = float(np.sum(np.abs(tau * (q[1:] - q[:-1]))))
         assert w.energy() == pytest.approx(by_hand, rel=1e-9)
-        assert w.energy(since=100) == pytest.approx(float(np.sum(np.abs(tau[100:] * (q_next - q)[100:]))),
+        assert w.energy(since=100) == pytest.approx(float(np.sum(np.abs(tau[100 * n:] * np.diff(q[100 * n:], axis=0)))),
                                                     rel=1e-9)
         assert w.electrical_energy() == pytest.approx(
-            en.electrical_energy(tau, dq, dt, cfg.actuator, cfg.energy), rel=1e-12)
+            en.electrical_energy(p["tau"], p["dq"], h, cfg.actuator, cfg.energy), rel=1e-12)
+        # per controller period: the mean torque, the mean speed, and a power whose integral is Eq. (7)
+        assert tr["tau"].shape == tr["dq"].shape == tr["q"].shape == tr["power"].shape == (300, 12)
+        assert tr["tau"] == pytest.approx(tau.reshape(300, n, 12).mean(axis=1), rel=1e-12, abs=1e-12)
+        assert tr["dq"] == pytest.approx((q[n::n] - q[:-1:n]) / dt, rel=1e-9, abs=1e-9)
+        assert float(tr["power"].sum()) * dt == pytest.approx(w.energy(), rel=1e-12)
         w.reset()
-        assert w.steps == 0 and len(w.traces()["tau"]) == 0
+        assert w.steps == 0 and len(w.traces()["tau"]) == 0 and len(w.physics_traces()["tau"]) == 0
 
 
 def test_walker_reset_restores_the_same_walk():
@@ -74,15 +80,19 @@ def _calls(tree: ast.AST, attribute: str) -> list[str]:
 
 
 def test_one_place_steps_the_robot_under_the_controller():
-    """Only the walker calls `Robot.step` and the trot controller's `command` and `driver_torque` (its
-    `torque` is the two in one, for callers outside the loop), and nothing replaces a method of the robot at
-    run time."""
-    steppers, torquers, patches = set(), set(), []
+    """Only the walker steps the robot (`Robot.drive`, `step`, `physics_step`) and calls the trot controller's
+    `command` and `driver_torque` (its `torque` is the two in one, for callers outside the loop); only the
+    robot's drivers and the controller's one-instant form apply the drivers' law; and nothing replaces a
+    method of the robot at run time."""
+    steppers, torquers, patches, laws = set(), set(), [], set()
     for path in PACKAGE.rglob("*.py"):
         tree = ast.parse(path.read_text())
         rel = str(path.relative_to(PACKAGE))
-        if any("robot" in c.lower() for c in _calls(tree, "step")):
+        if any("robot" in c.lower() for name in ("step", "physics_step", "drive") for c in _calls(tree, name)):
             steppers.add(rel)
+        if any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "driver_torque"
+               for n in ast.walk(tree)):
+            laws.add(rel)
         if any(c.endswith(("controller.torque", "ctrl.torque", "controller.command", "controller.driver_torque"))
                for name in ("torque", "command", "driver_torque") for c in _calls(tree, name)):
             torquers.add(rel)
@@ -94,20 +104,23 @@ def test_one_place_steps_the_robot_under_the_controller():
                         patches.append(f"{rel}: {ast.unparse(target)}")
     assert steppers == {"loop/walker.py"}
     assert torquers == {"loop/walker.py"}
+    assert laws == {"sim/robot.py", "control/trot.py"}
     assert patches == []
 
 
 
 def test_the_controller_period_is_written_once():
-    """One body of the period: in the walker only `_period` steps the robot and pushes the latency queue, and
-    only it and `trot_torque` (the torque-mode prior, which does not step) ask the controller for a command;
-    `run` and `step` both call it; no float/array twin of a per-period law (`*_list`) is left in the package."""
+    """One body of the period: in the walker only `_period` pushes the latency queue and hands the command to
+    the drivers (`_actuate`, the only caller of `Robot.drive`), and only it and `trot_torque` (the torque-mode
+    prior, which does not step) ask the controller for a command; `run` and `step` both call it; no
+    float/array twin of a per-period law (`*_list`) is left in the package."""
     tree = ast.parse((PACKAGE / "loop" / "walker.py").read_text())
     methods = {n.name: n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)}
-    for name, expected in (("step", {"_period"}), ("push", {"_period"}), ("command", {"_period", "trot_torque"})):
+    for name, expected in (("drive", {"_actuate"}), ("_actuate", {"_period"}), ("push", {"_period"}),
+                           ("command", {"_period", "trot_torque"}), ("step", set()), ("physics_step", set())):
         callers = {m for m, node in methods.items() if any(c.endswith(f".{name}") for c in _calls(node, name))}
         assert callers == expected, (name, callers)
-    assert {m for m, node in methods.items() if _calls(node, "driver_torque")} == {"_driver_torque", "trot_torque"}
+    assert {m for m, node in methods.items() if _calls(node, "driver_torque")} == {"trot_torque"}
     assert "self._period" in ast.unparse(methods["step"]) and "self._period" in ast.unparse(methods["run"])
     twins = [f"{p.relative_to(PACKAGE)}: {n.name}" for p in PACKAGE.rglob("*.py")
              for n in ast.walk(ast.parse(p.read_text())) if isinstance(n, ast.FunctionDef) and n.name.endswith("_list")]

@@ -61,23 +61,24 @@ def test_latency_delays_the_command_and_the_drivers_pd_acts_on_the_state_on_arri
     with pytest.raises(ValueError, match="latency"):
         CommandDelay(-1)
     # in a walk: 7.5 ms at 400 Hz = no command for the first 3 periods; then in period k the drivers apply
-    # the command of period k - 3 with their PD on the joint state of period k
-    dt = CFG.sim.controller_dt
+    # the command of period k - 3 with their PD on the joint state at each physics step of period k
+    dt, n = CFG.sim.controller_dt, CFG.sim.physics_substeps
     with Walker(CFG, hardware=C.HardwareConfig(latency_s=3 * dt)) as late:
         sent, command = [], late.controller.command
-        late.controller.command = lambda *a: sent.append(command(*a)) or sent[-1]
+        late.controller.command = lambda *a, **k: sent.append(command(*a, **k)) or sent[-1]
         assert all(np.all(late.step() == 0) for _ in range(3))
-        for _ in range(37):
+        for _ in range(38):
             late.step()
-        s = late.state
-        applied = late.step()
-        pd = late.controller.driver_torque
+        p, q = late.physics_traces(), late.physics_q.view()
+        pd, actuator = late.controller.driver_torque, late.robot.actuator
 
-        def motor(tau):  # the actuator's torque–speed envelope, as the robot applies it
-            return np.array(late.robot.actuator.joint_torque(list(tau), s.dq.tolist())[0])
+        def applied(k, row):  # the motor torque of the command sent in period k, at physics step `row`
+            dq = p["dq"][row - 1]  # the speed at the step's start: PyBullet's after the step before
+            return np.array(actuator.joint_torque(pd(sent[k], q[row], dq), dq.tolist())[0])
 
-        np.testing.assert_allclose(applied, motor(pd(sent[37], s.q, s.dq)), rtol=1e-12, atol=1e-12)
-        assert not np.allclose(applied, motor(pd(sent[40], s.q, s.dq)), atol=1e-3)  # not the newest command
+        for row in range(40 * n, 41 * n):  # period 40
+            np.testing.assert_allclose(p["tau"][row], applied(37, row), rtol=1e-12, atol=1e-12)
+            assert not np.allclose(p["tau"][row], applied(40, row), atol=1e-3)  # not the newest command
 
 
 def test_latency_on_the_command_costs_little_energy(ideal_walk):

@@ -1,8 +1,8 @@
 """One scripted walk: the trot controller drives the simulated CyberDog; energy and gait metrics are recorded.
 
 This is the experiment behind `evaluate.py baselines` and the trajectory comparison (paper Section 4.1):
-walk `duration` seconds at the commanded speed, integrate Eq. (7) over every controller period, and report speed,
-drift, posture and energy.
+walk `duration` seconds at the commanded speed, integrate Eq. (7) over every physics step (the motor drivers
+close their PD at that rate on the controller's held command), and report speed, drift, posture and energy.
 
 The prototype experiment (Section 4.2, `cyberdog.analysis.prototype`) adds two options: `distance` ends the
 walk after that much forward travel (the paper's 100 m; `duration` is then the time cap), and `hardware`

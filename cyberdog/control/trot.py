@@ -1,8 +1,9 @@
 """Diagonal trot controller (paper Figures 8–9): scheduler + foot trajectory + IK + PID + feedforward.
 
-Pure numpy: it maps time and the measured robot state to 12 joint torque commands, once per controller
-period (`SimConfig.controller_dt`, 400 Hz by default). The simulator applies the actuator model to whatever it
-returns and holds it over the period.
+Pure numpy: once per controller period (`SimConfig.controller_dt`, 400 Hz by default) it maps time and the
+measured robot state to the motor drivers' command (`command`: joint targets and speeds, the PID's gains,
+the feedforward torque; `cyberdog.core.drivers.JointCommand`); the drivers close their PD on it at every
+physics step (`cyberdog.loop.walker.Walker`). `torque` is command and drivers at one instant.
 
 What is added on top of the paper's joint PID, and why (each switchable in `ControllerConfig`; the
 NOTES' measurement on a similar robot found plain PD tracking reached only about half the commanded speed):
@@ -27,12 +28,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
-
 import numpy as np
 
 from cyberdog.config import WalkConfig
 from cyberdog.core import kinematics as kin
+from cyberdog.core.drivers import JointCommand, driver_torque
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.gait import GaitScheduler, diagonal_trot
 from cyberdog.core.pid import JointPID
@@ -63,15 +63,6 @@ class BodyFeedback:
 
 
 _NO_FEEDBACK = BodyFeedback()
-
-
-class JointCommand(NamedTuple):
-    """One controller period's command to the twelve motor drivers (lists of 12 floats, joint order); a named
-    tuple, built at every controller period (half the time of a frozen dataclass)."""
-
-    q_target: list  # rad
-    dq_target: list  # rad/s
-    feedforward: list  # N·m, added to the drivers' PID torque
 
 
 @dataclass
@@ -354,29 +345,35 @@ class TrotController:
         dq = np.asarray(dq, dtype=float)
         if q.shape != (12,) or dq.shape != (12,):
             raise ValueError(f"q and dq must have shape (12,), got {q.shape} and {dq.shape}")
-        return np.array(self.driver_torque(self.command(t, q, body), q, dq))
+        return np.array(self.driver_torque(self.command(t, q, body, dq=dq), q, dq))
 
-    def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None,
-                periods: int = 1) -> JointCommand:
+    def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None, periods: int = 1,
+                dq: np.ndarray | list | None = None) -> JointCommand:
         """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,
-        an array or a list of floats): joint targets and speeds from the trajectory and IK, and the stance
-        feedforward torque. `periods`: the controller periods until the next call (the speed integral's time
-        step): 1 in the walker's loop, 10 for a command held over a 25 ms agent step (the torque-mode prior)."""
+        an array or a list of floats): joint targets and speeds from the trajectory and IK, the stance
+        feedforward torque, the PID's gains and, with integral action, its integral term advanced on (q, dq)
+        (dq, rad/s, is needed then). `periods`: the controller periods until the next call (the speed
+        integral's time step): 1 in the walker's loop, 10 for a command held over a 25 ms agent step (the
+        torque-mode prior)."""
         _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK, periods)
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
             self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(), in_swing)
-        return JointCommand(q_t, dq_t, feedforward)
+        pid, integral = self.pid, None
+        if pid.integrates:
+            if dq is None:
+                raise ValueError("TrotController.command needs the joint speeds dq (rad/s) when the PID has "
+                                 "integral action (PIDConfig.ki > 0)")
+            integral = pid.integral_from_lists(q_t, q, dq_t, dq)
+        return JointCommand(q_t, dq_t, feedforward, pid.kp_list, pid.kd_list, integral)
 
     def driver_torque(self, command: JointCommand, q: np.ndarray | list, dq: np.ndarray | list) -> list:
-        """The motor drivers' law, τ = PID(q_target − q, q̇_target − q̇) + τ_ff, N·m, as 12 floats (the walker's
-        period hands it to `Robot.step` as is), on the joint state (q, q̇: arrays or lists of floats) they read
-        now: as CyberDog's motor command (q_des, qd_des, kp, kd, tau_des; MiRoboticsLab cyberdog_motor_sdk),
-        with the trot's PID gains."""
+        """The motor drivers' law (`cyberdog.core.drivers.driver_torque`), N·m, as 12 floats, on the joint state
+        (q, q̇: arrays or lists of floats) read now, with the PID's clamp: the torque of one instant, for
+        callers outside the loop (the walker's drivers apply it at every physics step)."""
         q = q if type(q) is list else q.tolist()
         dq = dq if type(dq) is list else dq.tolist()
-        tau = self.pid.torque_from_lists(command.q_target, q, command.dq_target, dq)
-        return [a + b for a, b in zip(tau, command.feedforward)]
+        return driver_torque(command, q, dq, self.pid.torque_limit)
 
     def _add_stance_feedforward(self, tau: list[float], q: list[float], in_swing: list[bool]) -> None:
         """The stance legs carry the body: τ += Jᵀ f per stance leg, f = (0, 0, −m g / n_stance), added to tau (12

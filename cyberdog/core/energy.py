@@ -19,9 +19,9 @@ Constants: gear ratio N, K_T, R, b, f_c from ActuatorConfig (Xiaomi's controller
 Cheetah values, low confidence); η, idle power, pack capacity from EnergyConfig (assumptions [G] there).
 
 Integration: the rectangle rule at the sample step dt, E += P_k·dt with τ_k the torque applied during step k
-and ω_k the joint's speed over it. The simulation loop (`cyberdog.loop.walker`) passes the mean speed over the
-controller period, ω̄_k = Δq_k / dt, under a torque held over the period: then τ_k·ω̄_k·dt = τ_k·Δq_k is the
-joint's work exactly, and |·| counts net rather than total rotation only where a joint turns inside a period.
+and ω_k the joint's speed over it. The simulation loop (`cyberdog.loop.walker`) passes every physics step's
+torque, constant over the step, and the joint's mean speed over it, ω̄_k = Δq_k / dt (the speed PyBullet
+reports after the step): then τ_k·ω̄_k·dt = τ_k·Δq_k is the joint's work exactly.
 """
 from __future__ import annotations
 

@@ -1,11 +1,15 @@
 """Joint-space PID (paper Figure 8) over the 12 joints, with anti-windup. Pure numpy.
 
-Joint order leg-major (LF abad, hip, knee, RF abad, …; `cyberdog.config.JOINT_NAMES`). Run once per physics
-step of length dt:
+Joint order leg-major (LF abad, hip, knee, RF abad, …; `cyberdog.config.JOINT_NAMES`). The law, on the errors
+e = q_target − q and ė = dq_target − dq:
 
-    e = q_target − q,  ė = dq_target − dq
     I ← clamp(I + ki·e·dt, ±integral_limit)     (skipped per joint while the output saturates, see below)
     τ = clamp(kp·e + I + kd·ė, ±torque_limit)
+
+On the robot the law is split as CyberDog splits it: the motor drivers close the PD (kp, kd) at every physics
+step on the joint state then (`cyberdog.core.drivers`), and the locomotion controller advances the integral
+once per controller period of dt on the joint state it reads (`integral_from_lists`) and sends I with its
+command. `torque` is the whole law at one instant (the two on the same state).
 
 Anti-windup: the integral term is kept as a torque (N·m) and clamped to ±integral_limit; and a joint does not
 integrate while its output, computed with the previous integral, is at or past ±torque_limit in the
@@ -14,7 +18,6 @@ overshoot once the error shrinks.
 """
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -54,6 +57,7 @@ class JointPID:
         self.dt = float(dt)  # s
         self.torque_limit = float(torque_limit)  # N·m
         self.integral = np.zeros(N_JOINTS)  # N·m, the integral term ki·∫e dt
+        self.integrates = bool(np.count_nonzero(self.ki))  # integral action (ki > 0 for some joint)
         self._nominal = (self.kp, self.kd)
         self.set_gain_factors()
 
@@ -64,10 +68,8 @@ class JointPID:
             raise ValueError(f"gain factors must be > 0 and finite, got {kp_factor!r}, {kd_factor!r}")
         kp, kd = self._nominal
         self.kp, self.kd = kp * kp_factor, kd * kd_factor
-        # the per-period path's view of the gains: (kp, kd) per joint as floats, and whether there is no
-        # integral action (ki = 0: the integral then stays zero, `torque_unchecked` never moves it)
-        self._pd_gains = list(zip(self.kp.tolist(), self.kd.tolist()))
-        self._pd_only = not np.count_nonzero(self.ki)
+        # the drivers' gains as sent with each command (12 floats each, `cyberdog.core.drivers.JointCommand`)
+        self.kp_list, self.kd_list = self.kp.tolist(), self.kd.tolist()
 
     @classmethod
     def from_config(cls, pid_cfg: PIDConfig, dt: float, torque_limit: float) -> "JointPID":
@@ -86,22 +88,14 @@ class JointPID:
                 raise ValueError(f"{name} must have shape ({N_JOINTS},), got {a.shape}")
         return self.torque_unchecked(*arrays)
 
-    def torque_from_lists(self, q_target: list, q: list, dq_target: list, dq: list) -> list:
-        """`torque` for four lists of 12 Python floats, as a list (the trot controller's per-period path).
-
-        Without integral action (ki = 0, the default gains) and with finite errors
-        this is τ = clamp(kp·e + kd·ė) joint by joint in floats, which beats numpy's call overhead at this
-        size; otherwise it is the array update `torque_unchecked`."""
-        if self._pd_only:
-            tau = [kp * (qt - qm) + kd * (dqt - dqm) for (kp, kd), qt, qm, dqt, dqm
-                   in zip(self._pd_gains, q_target, q, dq_target, dq)]
-            if math.isfinite(sum(tau)):  # else a non-finite error: the array update (it stores the NaN)
-                limit = self.torque_limit
-                if -limit <= min(tau) and max(tau) <= limit:
-                    return tau
-                return [limit if t > limit else -limit if t < -limit else t for t in tau]
-        return self.torque_unchecked(np.array(q_target, dtype=float), np.array(q, dtype=float),
-                                     np.array(dq_target, dtype=float), np.array(dq, dtype=float)).tolist()
+    def integral_from_lists(self, q_target: list, q: list, dq_target: list, dq: list) -> list:
+        """The locomotion controller's share of the law, once per controller period: advance the integral on
+        the joint state it reads (four lists of 12 floats, or arrays) and return it, N·m, as 12 floats, for the
+        drivers' clamp (`cyberdog.core.drivers.driver_torque`); the anti-windup test uses the PD output at
+        this state, as `torque` does."""
+        self.torque_unchecked(np.array(q_target, dtype=float), np.array(q, dtype=float),
+                              np.array(dq_target, dtype=float), np.array(dq, dtype=float))
+        return self.integral.tolist()
 
     def torque_unchecked(self, q_target: np.ndarray, q: np.ndarray, dq_target: np.ndarray,
                          dq: np.ndarray) -> np.ndarray:

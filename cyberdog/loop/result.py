@@ -30,8 +30,8 @@ class WalkResult:
     positive_work: float  # J, Σ∫max(τ·ω, 0)dt: the work the motors put in (Eq. 7 also counts braking)
     foot_slip_per_cycle: float  # m, mean distance a foot slides on the ground per gait cycle
     cost_of_transport: float  # E / (m g d); nan when the robot made no forward progress
-    peak_torque: float  # N·m, max |τ| over joints and time
-    peak_joint_speed: float  # rad/s
+    peak_torque: float  # N·m, max |τ| over joints and physics steps
+    peak_joint_speed: float  # rad/s, max |Δq / physics_dt| over joints and physics steps
     non_foot_contacts: list  # link names other than feet that touched the ground
     traces: dict = field(default_factory=dict)  # t, tau, dq, q, power, base_position, contacts
     target_distance: float | None = None  # m, the walk's distance goal (None: a timed walk)
@@ -98,12 +98,12 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
     if not 0 <= since <= len(tr["tau"]) or (since > 0) != (since_x is not None):
         raise ValueError(f"since must be a period in [0, {len(tr['tau'])}] given with since_x (the body's x "
                          f"then, m), got {since!r}, {since_x!r}")
-    tau, dq = tr["tau"][since:], tr["dq"][since:]
+    n = len(tr["tau"]) - since
+    physics = walker.physics_traces(since)  # the torque and speed of every physics step: what Eq. (7) integrates
     body = walker.body.view(since)
     vx, rpy, z = body[:, 0], body[:, 1:4], body[:, 4]
-    n = len(tau)
     start, end = walker.start, walker.state.base_position
-    e_joint = en.joint_energy(tau, dq, dt)
+    e_joint = walker.energy_per_joint(since)
     travelled = float(end[0] - (start[0] if since_x is None else since_x))  # m, forward
     mass = cfg.robot.total_mass * walker.robot.mass_scale  # kg, what the robot weighed in this walk
     cycles = n * dt / cfg.gait.period
@@ -124,11 +124,12 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
         max_roll=float(np.max(np.abs(rpy[:, 0]))) if n else float("nan"),
         max_pitch=float(np.max(np.abs(rpy[:, 1]))) if n else float("nan"),
         distance=travelled, energy=float(e_joint.sum()), energy_per_joint=e_joint,
-        electrical_energy=walker.electrical_energy(since), positive_work=en.positive_work(tau, dq, dt),
+        electrical_energy=walker.electrical_energy(since), positive_work=walker.positive_work(since),
         foot_slip_per_cycle=slip,
         cost_of_transport=(en.cost_of_transport(float(e_joint.sum()), mass, cfg.sim.gravity, travelled)
                            if travelled > 0 else float("nan")),  # undefined without forward travel
-        peak_torque=float(np.max(np.abs(tau))) if n else 0.0, peak_joint_speed=float(np.max(np.abs(dq))) if n else 0.0,
+        peak_torque=float(np.max(np.abs(physics["tau"]))) if n else 0.0,
+        peak_joint_speed=float(np.max(np.abs(physics["dq"]))) if n else 0.0,
         non_foot_contacts=sorted(walker.non_foot_contacts), target_distance=target_distance,
         mass_scale=walker.robot.mass_scale, hardware=walker.hardware, score=score, traces=tr,
         dropped_shifts=int(walker.controller.dropped_shifts))

@@ -8,23 +8,25 @@ joint controller (`SimConfig.controller_dt`, 2.5 ms by default), the same stages
 or absent for this one:
 
 1. the robot's software reads its sensors (the hardware model: encoder noise, Kalman speed; the truth on the
-   ideal robot) and the trot controller computes its torque (trajectory + IK + PID), unless the controller is
-   off (the paper's torque-mode env); an extra torque (a policy's) is added;
+   ideal robot) and the trot controller computes its command to the motor drivers (joint targets and
+   speeds, gains, feedforward; `cyberdog.core.drivers.JointCommand`), unless the controller is off (the
+   paper's torque-mode env); an extra torque (a policy's) is added to it;
 2. the virtual end stop of Table 4's joint range adds its torque, if one is given;
-3. the command waits out the actuation latency, goes through the actuator model and is held constant over
-   the period's `SimConfig.physics_substeps` solver steps (one `stepSimulation`, substeps in C++);
-4. the applied torque τ and the joint angles after the period are kept for Eq. (7) and the electrical energy
-   (the joint's mean speed over the period, ω̄ = Δq / dt, is taken from them when asked: `joint_speeds`),
-   with `body_trace` the body's speed, attitude and height, and with `record` the state, contacts and the
-   controller's foot targets; with `gait_metrics` the non-foot ground contacts and the feet's positions for
-   foot slip are sampled.
+3. the command waits out the actuation latency and is held over the period's `SimConfig.physics_substeps`
+   physics steps; at each, the motor drivers close their PD on the joint state then (and the torque-mode
+   drivers' damping acts on the joint speed then), the actuator model clips and shapes the torque, and
+   PyBullet steps once (`Robot.drive`). The drivers read their own encoders, the true joint state: the
+   hardware model's encoder noise is on what the locomotion controller reads (`HardwareConfig`). A PID's
+   integral term is the controller's, advanced once per period and sent with the command;
+4. the torque applied at each physics step and the joint angles after it are kept for Eq. (7) and the
+   electrical energy, with `body_trace` the body's speed, attitude and height, and with `record` the state,
+   contacts and the controller's foot targets; with `gait_metrics` the non-foot ground contacts and the
+   feet's positions for foot slip are sampled.
 
-Energy. Over a period of constant torque the joint's work is exactly ∫τ·ω dt = τ·Δq, so Eq. (7) is taken as
-Σ_k |τ_k·Δq_k| = Σ_k |τ_k·ω̄_k|·dt per joint. That equals ∫|τ·ω|dt unless ω changes sign inside a period;
-then it counts the net rather than the total rotation, an error of second order in dt (ω is near zero
-where it turns; measured against the physics-rate integral in tests/test_control_rate.py). The electrical
-energy takes the same ω̄: its shaft power τ·ω̄ is exact and its copper loss, (τ/(N·K_T))²·R, is constant
-over the period.
+Energy. Over a physics step the torque is constant, so the joint's work is exactly τ·Δq: Eq. (7) is
+Σ_k |τ_k·Δq_k| = Σ_k |τ_k·ω̄_k|·h per joint over the physics steps k (h = `SimConfig.physics_dt`, ω̄ = Δq / h,
+which is the speed PyBullet reports after the step: tests/test_drivers.py). The electrical energy takes the
+same τ_k and ω̄_k. The per-period rows (`tau`, `traces`) are the periods' means of the physics steps'.
 
 Time is `steps · dt` since the reset.
 """
@@ -37,6 +39,7 @@ from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
 from cyberdog.core import kinematics as kin
+from cyberdog.loop.rows import PeriodEnds, PeriodMean, Rows
 from cyberdog.sim.hardware import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
 from cyberdog.sim.robot import Robot, RobotState
@@ -51,25 +54,9 @@ _NO_TARGET = [(float("nan"),) * 3] * 4
 _NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
 
 
-class _Rows:
-    """A growing (n, *shape) float array, appended one row per controller period."""
-
-    def __init__(self, shape: tuple, dtype=float, capacity: int = 1024) -> None:
-        self.data = np.zeros((capacity, *shape), dtype=dtype)
-        self.n = 0
-
-    def append(self, row) -> None:
-        if self.n == len(self.data):
-            self.data = np.concatenate([self.data, np.zeros_like(self.data)])
-        self.data[self.n] = row
-        self.n += 1
-
-    def view(self, start: int = 0) -> np.ndarray:
-        return self.data[start:self.n]
-
-
 class Walker:
-    """The CyberDog under the trot controller at the controller rate (see the module docstring).
+    """The CyberDog under the trot controller at the controller rate, its drivers at the physics rate (see the
+    module docstring).
 
     cfg: the walk (robot, actuator, sim, gait, PID, controller, energy).
     controller: the trot controller (default: `TrotController(cfg)`); `drive=False` leaves it off (torque mode).
@@ -80,9 +67,9 @@ class Walker:
         contacts and foot slip; body_trace: keep the body's speed, attitude and height at every step (what
         `cyberdog.loop.result.walk_result` reads; the env, which reads none of it, leaves it off).
     fall_height, fall_tilt: m, rad: what `fallen` means.
-    joint_damping: N·m·s/rad, the motor drivers' damping −c·q̇ added at every period on the joint speed read then
-        (the drivers' kd with kp = 0: the torque-mode env's `EnvConfig.joint_damping`); motor torque, so the
-        energy books its work.
+    joint_damping: N·m·s/rad, the motor drivers' damping −c·q̇ added at every physics step on the joint speed
+        then (the drivers' kd with kp = 0: the torque-mode env's `EnvConfig.joint_damping`); motor torque, so
+        the energy books its work.
 
     After each step, `reading` holds the robot's state in floats (`Robot.read`, what the controller's per-period
     path uses) and `state` the same as a `RobotState` of arrays, built when first asked.
@@ -106,10 +93,14 @@ class Walker:
         self.joint_stop, self.drive = joint_stop, drive
         if not (joint_damping >= 0 and np.isfinite(joint_damping)):
             raise ValueError(f"joint_damping must be >= 0 N·m·s/rad and finite, got {joint_damping!r}")
-        self.joint_damping = float(joint_damping)  # N·m·s/rad, the drivers' damping on the joint speed read now
+        self.joint_damping = float(joint_damping)  # N·m·s/rad, the drivers' damping on the joint speed now
         self.record, self.gait_metrics, self.body_trace = record, gait_metrics, body_trace
         self.fall_height, self.fall_tilt = fall_height, fall_tilt
         self.dt = cfg.sim.controller_dt  # s, one `step`
+        if self.robot.dt != self.dt:
+            raise ValueError(f"robot was built with another controller period ({self.robot.dt} s) than the walk's "
+                             f"SimConfig.controller_dt ({self.dt} s)")
+        self.substeps, self.physics_dt = self.robot.substeps, self.robot.physics_dt  # per period; s, one each
         self.contact_check_every = max(1, int(round(CONTACT_CHECK_PERIOD / self.dt)))  # steps
         self.slip_sample_every = max(1, int(round(SLIP_SAMPLE_PERIOD / self.dt)))  # steps
         self.latency_steps = (whole_steps(hardware.latency_s, self.dt, "HardwareConfig.latency_s")
@@ -156,14 +147,16 @@ class Walker:
         self.start = self.state.base_position.copy()
         self._start_y = float(self.start[1])
         self.steps = 0
-        self.tau = _Rows((12,))  # applied motor torque, N·m, per step
-        self.q_rows = _Rows((12,))  # joint angles, rad, at the reset and after each step (`joint_speeds`)
-        self.q_rows.append(self.reading.q)
-        self.body = _Rows((5,))  # body state at the step start: forward speed (m/s), roll, pitch, yaw (rad), z (m)
+        self.physics_tau = Rows((12,))  # motor torque applied over each physics step, N·m
+        self.physics_q = Rows((12,))  # joint angles, rad, at the reset and after each physics step
+        self.physics_q.append(self.reading.q)
+        self.tau = PeriodMean(self.physics_tau, self.substeps)  # per step: its mean applied motor torque, N·m
+        self.q_rows = PeriodEnds(self.physics_q, self.substeps)  # joint angles at the reset and after each step
+        self.body = Rows((5,))  # body state at the step start: forward speed (m/s), roll, pitch, yaw (rad), z (m)
         # with body_trace, the trot's speed integral per driven period after its command: (correction, its bound),
         # m/s: what the speed loop added to the commanded stride and how near its limit it ran (`walk_result`)
-        self.speed_loop = _Rows((2,))
-        self._traces: dict[str, _Rows] = {}
+        self.speed_loop = Rows((2,))
+        self._traces: dict[str, Rows] = {}
         self.non_foot_contacts: set[str] = set()
         self.slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_PERIOD
         self.slip_contacts: list[np.ndarray] = []
@@ -211,31 +204,33 @@ class Walker:
         env's prior, held over an agent step: its speed integral advances by as many)."""
         s = self.state
         q, dq = self.sensed_joints(s)
-        command = self.controller.command(self.time, q, self.body_feedback(s, self.velocity_estimate_world), periods)
+        command = self.controller.command(self.time, q, self.body_feedback(s, self.velocity_estimate_world), periods,
+                                          dq=dq)
         return np.array(self.controller.driver_torque(command, q, dq))
 
     def run(self, periods: int, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
         """`periods` controller periods (≥ 1), each the one period of `step` with the same `extra_torque`;
-        returns the motor torque applied in the last (12,). The env's loop: 10 periods per agent step."""
+        returns the motor torque applied in the last (12,), its mean over the period. The env's loop: 10 periods
+        per agent step."""
         if periods < 1:
             raise ValueError(f"periods must be >= 1, got {periods!r}")
         period = self._period
         for _ in range(periods):
-            applied = period(extra_torque)
-        return np.array(applied)
+            period(extra_torque)
+        return self.tau.view(self.steps - 1)[0]
 
     def step(self, extra_torque: np.ndarray | float | None = None) -> np.ndarray:
-        """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's. Returns the motor
-        torque applied (12,)."""
-        return np.array(self._period(extra_torque))
+        """One controller period; `extra_torque` (N·m, (12,)) is added to the controller's command. Returns the
+        motor torque applied (12,), its mean over the period."""
+        self._period(extra_torque)
+        return self.tau.view(self.steps - 1)[0]
 
-    def _period(self, extra_torque) -> list:
+    def _period(self, extra_torque) -> None:
         """The controller period, written once: sense → command → joint stop → delay → actuate → record (the
         module docstring). What this robot lacks (sensors' noise and filter, controller, end stop, latency,
-        damping, traces) is skipped; the usual period (the truth, the controller alone) stays in floats.
-        Returns the motor torque applied as 12 floats."""
+        damping, traces) is skipped; the usual period (the truth, the controller alone) stays in floats."""
         r, k, sensing = self.reading, self.steps, self.sensing
-        q = dq = command = None
+        command = None
         if self.drive:  # sense, then command (torque mode: no controller, so its sensors are not read)
             if sensing is None:  # the truth, in floats
                 q, dq = r.q, r.dq
@@ -246,21 +241,16 @@ class Walker:
                 s = self.state
                 q, dq, v_world = sensing.read(k, s, self.robot.foot_contacts)
                 feedback = self.body_feedback(s, v_world)
-            command = self.controller.command(k * self.dt, q, feedback)
+            command = self.controller.command(k * self.dt, q, feedback, dq=dq)
             if self.body_trace:
                 self.speed_loop.append((self.controller.speed_correction, self.controller.speed_correction_limit))
         stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
-        # the latency holds the whole command (targets, feedforward, the added torques); the drivers' PD then
-        # acts on the joint state read now (q, dq of this period)
+        # the latency holds the whole command (targets, gains, feedforward, the added torques)
         arrived = (command, extra_torque, stop)
         if self.delay.steps:
             arrived = self.delay.push(arrived)
-        tau = self._driver_torque(arrived, q, dq)
-        if self.joint_damping:  # the drivers' damping acts on the joint speed of this period, after the latency
-            tau = np.asarray(tau, dtype=float) - self.joint_damping * np.asarray(r.dq if dq is None else dq)
         s = self.state if self.body_trace or self.record else None  # this period's start, before the step
-        applied = self.robot.step(tau)
-        self.tau.append(applied)
+        self._actuate(arrived)
         if self.body_trace:
             rpy = s.base_rpy
             self.body.append((s.base_linear_velocity_world[0], rpy[0], rpy[1], rpy[2], s.base_position[2]))
@@ -273,32 +263,30 @@ class Walker:
                 self.slip_xy.append(self.robot.foot_positions_world()[:, :2])
                 self.slip_contacts.append(self.robot.foot_contacts())
         self.steps = k + 1
-        self.reading = reading = self.robot.read()
+        self.reading = self.robot.read()
         self._state = None
-        self.q_rows.append(reading.q)
-        return applied
 
-    def _driver_torque(self, arrived, q, dq) -> np.ndarray | list:
-        """The torque the motor drivers apply for the command that has arrived (None: none yet, zero torque):
-        the controller's PID + feedforward on the joint state (q, dq) read this period, then the added torques
-        (12 floats as a list when nothing is added, else an array)."""
-        if arrived is None:
-            return np.zeros(12)
-        command, extra, stop = arrived
-        tau = self.controller.driver_torque(command, q, dq) if command is not None else None
-        if extra is None and stop is None:
-            return [0.0] * 12 if tau is None else tau
-        if extra is not None:
-            tau = extra if tau is None else extra + np.asarray(tau)
-        if stop is not None:
-            tau = stop if tau is None else tau + stop
-        return tau
+    def _actuate(self, arrived) -> None:
+        """The motor drivers over the period's physics steps (`Robot.drive`), for the command that has arrived
+        (None: none yet, zero torque): at each, their PD + feedforward on the joint state then (the truth: their
+        own encoders), plus the command's added torques (an extra torque, the end stop), minus their damping on
+        the joint speed then; the torque applied over each physics step and the joint angles after it are
+        kept."""
+        command = added = None
+        if arrived is not None:
+            command, extra, stop = arrived
+            if extra is not None or stop is not None:
+                added = np.broadcast_to(0.0 if extra is None else extra, (12,)) + (0.0 if stop is None else stop)
+                added = added.tolist()
+        taus, angles = self.robot.drive(command, added, self.joint_damping)
+        self.physics_tau.extend(taus)
+        self.physics_q.extend(angles)
 
     def _record(self, s) -> None:
         traces = self._traces
         if not traces:
-            traces.update(base_position=_Rows((3,)), contacts=_Rows((4,), bool),
-                          foot_targets=_Rows((4, 3)), foot_offsets=_Rows((4, 3)))
+            traces.update(base_position=Rows((3,)), contacts=Rows((4,), bool),
+                          foot_targets=Rows((4, 3)), foot_offsets=Rows((4, 3)))
         traces["base_position"].append(s.base_position)
         traces["contacts"].append(self.robot.foot_contacts())  # after the step
         c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
@@ -314,26 +302,48 @@ class Walker:
         return bool(s.base_position[2] < self.fall_height or abs(roll) > tilt or abs(pitch) > tilt)
 
     def joint_speeds(self, since: int = 0) -> np.ndarray:
-        """(n, 12) rad/s, each step's mean joint speed ω̄ = Δq / dt from step `since` on (τ·ω̄·dt = τ·Δq exactly);
-        computed from the joint-angle rows when asked (once per agent step, not at every period)."""
+        """(n, 12) rad/s, each step's mean joint speed Δq / dt from step `since` on; computed from the joint-angle
+        rows when asked."""
         q = self.q_rows.view(since)
         return (q[1:] - q[:-1]) * (1.0 / self.dt)
 
+    def physics_traces(self, since: int = 0) -> dict:
+        """Every physics step's t (s since the reset), tau (the motor torque applied over it, N·m) and dq (the
+        joint's mean speed over it, Δq / physics_dt, rad/s), from controller period `since` on: what Eq. (7) and
+        the electrical energy integrate."""
+        n = self.substeps
+        q = self.physics_q.view(since * n)
+        tau = self.physics_tau.view(since * n)
+        return {"t": (np.arange(len(tau)) + since * n) * self.physics_dt, "tau": tau,
+                "dq": (q[1:] - q[:-1]) * (1.0 / self.physics_dt)}
+
+    def energy_per_joint(self, since: int = 0) -> np.ndarray:
+        """(12,) J, Eq. (7) Σ_k |τ_k·Δq_k| per joint over the physics steps from controller period `since` on."""
+        p = self.physics_traces(since)
+        return en.joint_energy(p["tau"], p["dq"], self.physics_dt)
+
     def energy(self, since: int = 0) -> float:
-        """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the controller periods from `since` to now."""
-        return float(en.joint_energy(self.tau.view(since), self.joint_speeds(since), self.dt).sum())
+        """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the physics steps from controller period `since` to now."""
+        return float(self.energy_per_joint(since).sum())
+
+    def positive_work(self, since: int = 0) -> float:
+        """J, Σ∫max(τ·ω, 0)dt over the physics steps from controller period `since` on."""
+        p = self.physics_traces(since)
+        return en.positive_work(p["tau"], p["dq"], self.physics_dt)
 
     def electrical_energy(self, since: int = 0) -> float:
-        """J drawn from the battery over the controller periods from `since` (copper loss, friction, driver)."""
-        c = self.cfg
-        return float(np.sum(en.electrical_power(self.tau.view(since), self.joint_speeds(since), c.actuator,
-                                                c.energy))) * self.dt
+        """J drawn from the battery over the physics steps from controller period `since` (copper loss,
+        friction, driver)."""
+        c, p = self.cfg, self.physics_traces(since)
+        return float(np.sum(en.electrical_power(p["tau"], p["dq"], c.actuator, c.energy))) * self.physics_dt
 
     def traces(self) -> dict:
-        """Every step's t, tau, dq, power Σ|τ·ω| (and with `record`: q, base_position, contacts,
-        foot_targets, foot_offsets), arrays with the step as the first axis."""
-        tau, dq = self.tau.view(), self.joint_speeds()
-        out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": np.abs(tau * dq)}
+        """Every step's t, tau (its mean motor torque), dq (its mean joint speed), power (its mean of |τ·ω| over
+        its physics steps, so that Σ power·dt is Eq. 7) per joint (and with `record`: q, base_position,
+        contacts, foot_targets, foot_offsets), arrays with the step as the first axis."""
+        tau, dq, p = self.tau.view(), self.joint_speeds(), self.physics_traces()
+        power = np.abs(p["tau"] * p["dq"]).reshape(len(tau), self.substeps, 12).mean(axis=1)
+        out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": power}
         if self._traces:  # with `record`: q at each step's start is the joint-angle rows but the last
             out["q"] = self.q_rows.view()[:-1]
         out.update({name: rows.view() for name, rows in self._traces.items()})

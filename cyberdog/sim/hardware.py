@@ -1,13 +1,16 @@
 """The one hardware model: what separates the simulated robot from the real one (beyond the paper).
 
-`HardwareConfig` (cyberdog.config) names the effects; this module applies them at the controller rate, for the
-learning environment and for the scripted walks alike (`cyberdog.loop.walker.Walker` owns one):
+`HardwareConfig` (cyberdog.config) names the effects; this module applies them at the controller rate (joint
+friction and motor strength act in the actuator law, at every physics step), for the learning environment and
+for the scripted walks alike (`cyberdog.loop.walker.Walker` owns one):
 
 - `hardware_walk_config`: the walk config the simulator must be built with (joint friction on or off);
 - `draw_mass_scale`: the mass-scale draw in [1 − u, 1 + u];
 - `CommandDelay`: actuation latency, the controller's command held in a FIFO of whole controller periods;
 - `HardwareSensing`: what the robot's software reads: noisy joint encoders and the Kalman body velocity
-  from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`);
+  from a simulated IMU and leg odometry (the estimator pieces of `cyberdog.core.estimator`). The noise is on
+  what the locomotion controller reads; the motor drivers close their PD on their own encoders, the true
+  joint state, at every physics step (`cyberdog.sim.robot.Robot.drive`);
 - `draw_robot`: one robot from the ranges of a `RandomizationConfig` (domain randomisation), a `RobotDraw`
   that `Walker.reset` applies.
 
@@ -108,10 +111,11 @@ class CommandDelay:
     """Actuation latency: `push(x)` returns what was pushed `steps` calls earlier (None at first: no command
     has arrived yet). With steps = 0 it returns its input.
 
-    The walker pushes the controller's command to the motor drivers (joint targets, target speeds, feedforward
-    and any torque added to it), and the drivers then close their PD on the joint state they read on arrival:
-    the latency sits on the command bus, not inside the PD loop, as on CyberDog, whose drivers take (q_des,
-    qd_des, kp, kd, tau_des) and compute τ from their own encoders (MiRoboticsLab cyberdog_motor_sdk)."""
+    The walker pushes the controller's command to the motor drivers (joint targets, target speeds, gains,
+    feedforward and any torque added to it), and the drivers then close their PD on it at every physics step,
+    on the joint state then: the latency sits on the command bus, not inside the PD loop, as on CyberDog, whose
+    drivers take (q_des, qd_des, kp, kd, tau_des) and compute τ from their own encoders (MiRoboticsLab
+    cyberdog_motor_sdk)."""
 
     def __init__(self, steps: int) -> None:
         self.reset(steps)

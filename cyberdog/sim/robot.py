@@ -1,18 +1,21 @@
 """The CyberDog in its own PyBullet world: loading, joint map, actuator model, torque stepping, state reads.
 
 One `Robot` owns one `BulletClient` (never the global connection), the ground (`urdf/ground.urdf`) and the
-robot: the only place in the project where pybullet is called. Facts it relies on (measured, `shared/robot/NOTES.md`):
+robot: with its state types (`cyberdog.sim.state`), the only place in the project where pybullet is called. Facts it
+relies on (measured, `shared/robot/NOTES.md`):
 
-- TORQUE_CONTROL lasts for ONE stepSimulation, and repeated calls within a step add up: `step` applies the
-  torque exactly once and steps once. The default velocity motors are disabled at load.
-- With numSubSteps = n, one stepSimulation advances fixedTimeStep in n solver steps of fixedTimeStep / n
-  and holds the torque over all of them: the joint states after it equal, bit for bit, n stepSimulation
-  calls of fixedTimeStep / n that each re-apply the same torque (tests/test_control_rate.py). `step` is
-  therefore one controller period (`SimConfig.controller_dt`) under a constant torque, as the robot's motor
-  drivers hold the last command, with the `SimConfig.physics_substeps` solver steps run in C++.
+- TORQUE_CONTROL lasts for ONE stepSimulation, and repeated calls within a step add up: `physics_step`
+  applies the torque exactly once and steps once. The default velocity motors are disabled at load.
+- One stepSimulation is one physics step (`SimConfig.physics_dt`, fixedTimeStep with numSubSteps = 1), so
+  that the motor drivers can set a new torque at every physics step from the joint state then
+  (`cyberdog.loop.walker.Walker`, `cyberdog.core.drivers`): the torque `physics_step` returns is the one the
+  joints received over that step. `step` holds one torque over a controller period (`SimConfig.controller_dt`,
+  `physics_substeps` physics steps; the same joint states, bit for bit, as PyBullet's numSubSteps over the
+  period: tests/test_control_rate.py), for callers without drivers.
 - PyBullet enforces neither the URDF effort nor velocity limits under torque control: the clip and the
   torque–speed envelope are applied by `cyberdog.core.actuator.ActuatorModel`.
-- getJointStates reports no applied torque under TORQUE_CONTROL: `step` returns the motor torque it applied.
+- getJointStates reports no applied torque under TORQUE_CONTROL: `physics_step` and `drive` return the motor torque
+  they applied.
 - The URDF is loaded with URDF_USE_INERTIA_FROM_FILE (otherwise inertia is recomputed from the collision
   shapes) and reset by setting state, not by reloading (0.5 s).
 - PyBullet's "base pose" (get/resetBasePositionAndOrientation, getBaseVelocity) is the pose of the trunk's
@@ -32,18 +35,17 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
-from functools import cached_property
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 
 from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig, SimConfig
 from cyberdog.core.actuator import ActuatorModel
-from cyberdog.core.kinematics import lateral_velocity_body, standing_joint_angles
+from cyberdog.core.drivers import JointCommand, driver_torque
+from cyberdog.core.kinematics import standing_joint_angles
 from cyberdog.sim.display import display_problem
 from cyberdog.sim.quiet import quiet_pybullet
+from cyberdog.sim.state import RobotState, StateReading  # noqa: F401  (the state types, re-exported here)
 
 with quiet_pybullet():  # without pybullet's build banner
     import pybullet
@@ -60,65 +62,6 @@ SPAWN_CLEARANCE = 0.002  # m, default base height above robot.body_height so the
 N_JOINTS = len(LEG_NAMES) * len(JOINT_NAMES)
 
 
-class StateReading(NamedTuple):
-    """One read of the robot's state as PyBullet reports it, in plain floats (`Robot.read`): what the
-    controller's per-period path uses, without building arrays. `RobotState.from_reading` makes the arrays."""
-
-    time: float  # s, simulated time since the last reset
-    q: list  # 12 joint angles, rad
-    dq: list  # 12 joint velocities, rad/s
-    base_position: tuple  # body origin in the world, m
-    base_quaternion: tuple  # x y z w
-    base_rpy: tuple  # roll, pitch, yaw, rad
-    base_linear_velocity_world: tuple  # m/s
-    base_angular_velocity_world: tuple  # rad/s
-
-
-@dataclass(frozen=True)
-class RobotState:
-    """One snapshot of the robot, read after the last controller period.
-
-    The rotation matrix and the body-frame velocities are computed on first access (then kept): most
-    users need at most one of them. The controller's per-period path reads a `StateReading` instead.
-    """
-
-    time: float  # s, simulated time since the last reset
-    q: np.ndarray  # (12,) joint angles, rad
-    dq: np.ndarray  # (12,) joint velocities, rad/s
-    base_position: np.ndarray  # (3,) body origin in the world, m
-    base_quaternion: np.ndarray  # (4,) body orientation, x y z w
-    base_rpy: np.ndarray  # (3,) roll, pitch, yaw, rad (PyBullet's convention)
-    base_linear_velocity_world: np.ndarray  # (3,) m/s
-    base_angular_velocity_world: np.ndarray  # (3,) rad/s
-
-    @cached_property
-    def rotation_matrix(self) -> np.ndarray:
-        """(3, 3) body → world (v_world = R v_body), PyBullet's matrix of `base_quaternion`."""
-        return np.array(pybullet.getMatrixFromQuaternion(self.base_quaternion.tolist())).reshape(3, 3)
-
-    @cached_property
-    def base_linear_velocity_body(self) -> np.ndarray:
-        """(3,) m/s, in the body frame (Rᵀ v)."""
-        return self.base_linear_velocity_world @ self.rotation_matrix
-
-    @property
-    def lateral_velocity_body(self) -> float:
-        """m/s, the body-frame y velocity (= base_linear_velocity_body[1]), in floats (`lateral_velocity_body`)."""
-        return lateral_velocity_body(self.base_quaternion.tolist(), self.base_linear_velocity_world.tolist())
-
-    @classmethod
-    def from_reading(cls, r: StateReading) -> "RobotState":
-        """The snapshot of a `StateReading`, as arrays."""
-        return cls(r.time, np.array(r.q), np.array(r.dq), np.array(r.base_position), np.array(r.base_quaternion),
-                   np.array(r.base_rpy), np.array(r.base_linear_velocity_world),
-                   np.array(r.base_angular_velocity_world))
-
-    @cached_property
-    def base_angular_velocity_body(self) -> np.ndarray:
-        """(3,) rad/s, in the body frame (Rᵀ ω)."""
-        return self.base_angular_velocity_world @ self.rotation_matrix
-
-
 def resolve_path(path: str) -> Path:
     """An absolute path as given. A relative one (the default "urdf/cyberdog.urdf") is the package's shipped
     file of that name if there is one, else relative to the repository root (a checkout's own files)."""
@@ -130,8 +73,7 @@ def resolve_path(path: str) -> Path:
 
 
 class Robot:
-    """CyberDog on a flat plane, driven by joint torques held over each controller period (see the module
-    docstring)."""
+    """CyberDog on a flat plane, driven by joint torques set at every physics step (see the module docstring)."""
 
     def __init__(self, robot: RobotConfig, actuator: ActuatorConfig, sim: SimConfig, gui: bool = False):
         for name, value, cls in (("robot", robot, RobotConfig), ("actuator", actuator, ActuatorConfig),
@@ -146,6 +88,8 @@ class Robot:
         self.robot_config, self.actuator_config, self.sim_config = robot, actuator, sim
         self.actuator = ActuatorModel(actuator)
         self.dt = sim.controller_dt  # s, one `step`
+        self.physics_dt = sim.physics_dt  # s, one `physics_step`
+        self.substeps = sim.physics_substeps  # physics steps per `step`
         if gui:
             problem = display_problem()
             if problem:
@@ -157,7 +101,7 @@ class Robot:
             self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         c = self.client
         c.setGravity(0.0, 0.0, -sim.gravity)
-        c.setPhysicsEngineParameter(fixedTimeStep=sim.controller_dt, numSubSteps=sim.physics_substeps,
+        c.setPhysicsEngineParameter(fixedTimeStep=sim.physics_dt, numSubSteps=1,
                                     numSolverIterations=sim.solver_iterations, deterministicOverlappingPairs=1)
         self.plane_id = c.loadURDF(str(PACKAGE_DIR / "urdf" / GROUND_URDF), useFixedBase=True)
         # what the camera sees of the ground: pybullet_data's plane.urdf, its checkered look, colliding with nothing
@@ -179,7 +123,7 @@ class Robot:
         self._get_euler = c.getEulerFromQuaternion
         self._multiply_transforms = c.multiplyTransforms
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
-        self.step_count = 0
+        self.physics_steps = 0  # since the last reset
         self._closed = False
         self.reset()
 
@@ -244,42 +188,78 @@ class Robot:
         for j, angle in zip(self.joint_ids, q):
             c.resetJointState(self.body_id, j, float(angle), 0.0)
         self._joint_cache = None
-        self.step_count = 0
+        self.physics_steps = 0
 
-    def step(self, torque_command: np.ndarray | list) -> list:
-        """Apply joint torque commands (12,) N·m (an array, or a list of 12 numbers) for one controller period
-        (`dt`, held constant over its physics substeps); return the motor torque applied, as 12 floats.
+    def physics_step(self, torque_command: list) -> list:
+        """Apply joint torque commands (12 numbers, N·m, a list) for one physics step (`physics_dt`) and return
+        the motor torque applied, as 12 floats: what the joints received over the step (with joint friction,
+        if on, added to what reaches them but not to the returned torque).
 
-        The actuator model clips the command and applies the torque–speed envelope at the current joint
-        velocities; joint friction (if on) is added to what reaches the joints but not to the returned torque.
-        The law runs in Python floats: 12 values are too few for numpy's call overhead.
-        """
-        if type(torque_command) is not list:
-            tau = np.asarray(torque_command, dtype=float)
-            if tau.shape != (N_JOINTS,):
-                raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
-            torque_command = tau.tolist()
-        elif len(torque_command) != N_JOINTS:
-            raise ValueError(f"torque_command must hold {N_JOINTS} numbers, got {len(torque_command)}")
+        The actuator model clips the command and applies the torque–speed envelope at the joint velocities
+        now. The law runs in Python floats: 12 values are too few for numpy's call overhead."""
+        if type(torque_command) is not list or len(torque_command) != N_JOINTS:
+            raise ValueError(f"torque_command must be a list of {N_JOINTS} numbers, got {torque_command!r}")
         if not math.isfinite(sum(torque_command)) and not all(map(math.isfinite, torque_command)):
             raise ValueError(f"torque_command must be finite, got {torque_command!r}")
-        motor, joint = self.actuator.joint_torque(torque_command, self._joint_lists()[1])
+        motor, joint = self.actuator.joint_torque(torque_command, self.joint_lists()[1])
         self._set_motors(self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, forces=joint)
         self._step_simulation()
         self._joint_cache = None
-        self.step_count += 1
+        self.physics_steps += 1
         return motor
+
+    def drive(self, command: JointCommand | None, added: list | None = None, damping: float = 0.0) -> tuple:
+        """One controller period under the motor drivers: at each of its `substeps` physics steps, their torque on
+        the joint state then (`cyberdog.core.drivers.driver_torque` of `command`, None: no command yet, zero;
+        plus `added`, 12 floats N·m held over the period; minus `damping` N·m·s/rad × q̇), then `physics_step`'s
+        actuator law and one stepSimulation. Returns (the motor torque applied over each physics step, the
+        joint angles after each): `substeps` lists of 12 floats each. The per-step path, in floats."""
+        limit, act = self.actuator.torque_limit, self.actuator.joint_torque
+        get_states, set_motors, step = self._get_joint_states, self._set_motors, self._step_simulation
+        body, joints, mode, isfinite = self.body_id, self.joint_ids, pybullet.TORQUE_CONTROL, math.isfinite
+        q, dq = self.joint_lists()
+        taus, angles = [], []
+        for _ in range(self.substeps):
+            tau = driver_torque(command, q, dq, limit) if command is not None else [0.0] * N_JOINTS
+            if added is not None:
+                tau = [a + b for a, b in zip(tau, added)]
+            if damping:
+                tau = [t - damping * w for t, w in zip(tau, dq)]
+            if not isfinite(sum(tau)):
+                raise ValueError(f"torque_command must be finite, got {tau!r}")
+            motor, joint = act(tau, dq)
+            set_motors(body, joints, mode, forces=joint)
+            step()
+            taus.append(motor)
+            states = get_states(body, joints)
+            q, dq = [s[0] for s in states], [s[1] for s in states]
+            angles.append(q)
+        self._joint_cache = (q, dq)
+        self.physics_steps += self.substeps
+        return taus, angles
+
+    def step(self, torque_command: np.ndarray | list) -> list:
+        """Hold joint torque commands (12,) N·m (an array, or a list of 12 numbers) over one controller period
+        (`dt`: `substeps` physics steps, the actuator law at each); return the motor torque applied, the
+        period's mean, as 12 floats. For callers that hold a torque; the walker's drivers use `physics_step`."""
+        if type(torque_command) is list and len(torque_command) != N_JOINTS:
+            raise ValueError(f"torque_command must hold {N_JOINTS} numbers, got {len(torque_command)}")
+        tau = np.asarray(torque_command, dtype=float)
+        if tau.shape != (N_JOINTS,):
+            raise ValueError(f"torque_command must have shape ({N_JOINTS},), got {tau.shape}")
+        applied = [self.physics_step(tau.tolist()) for _ in range(self.substeps)]
+        return [sum(column) / self.substeps for column in zip(*applied)]
 
     @property
     def time(self) -> float:
         """Simulated time since the last reset, s."""
-        return self.step_count * self.dt
+        return self.physics_steps * self.physics_dt
 
     # ------------------------------------------------------------------------------------------------------
     # state reads
     # ------------------------------------------------------------------------------------------------------
 
-    def _joint_lists(self) -> tuple[list, list]:
+    def joint_lists(self) -> tuple[list, list]:
         """(q, dq) as 12 floats each from one getJointStates call, cached until the next step or reset (do not
         modify)."""
         if self._joint_cache is None:
@@ -288,10 +268,10 @@ class Robot:
         return self._joint_cache
 
     def joint_angles(self) -> np.ndarray:
-        return np.array(self._joint_lists()[0])
+        return np.array(self.joint_lists()[0])
 
     def joint_velocities(self) -> np.ndarray:
-        return np.array(self._joint_lists()[1])
+        return np.array(self.joint_lists()[1])
 
     def base_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """Position (3,) and quaternion (x y z w) of the trunk's link frame (the body frame) in the world."""
@@ -301,7 +281,7 @@ class Robot:
     def read(self) -> StateReading:
         """Joint and body state in plain floats (the controller's per-period read); body values are of the
         trunk's link frame (see the module docstring)."""
-        q, dq = self._joint_lists()
+        q, dq = self.joint_lists()
         com_pos, com_quat = self._get_base_pose(self.body_id)
         pos, quat = self._multiply_transforms(com_pos, com_quat, *self._inertial_to_link)
         lin_com, ang = self._get_base_velocity(self.body_id)
@@ -309,7 +289,7 @@ class Robot:
         rx, ry, rz = pos[0] - com_pos[0], pos[1] - com_pos[1], pos[2] - com_pos[2]
         wx, wy, wz = ang
         lin = (lin_com[0] + wy * rz - wz * ry, lin_com[1] + wz * rx - wx * rz, lin_com[2] + wx * ry - wy * rx)
-        return StateReading(self.step_count * self.dt, q, dq, pos, quat, self._get_euler(quat), lin, ang)
+        return StateReading(self.physics_steps * self.physics_dt, q, dq, pos, quat, self._get_euler(quat), lin, ang)
 
     def read_state(self) -> RobotState:
         """Joint and body state as arrays (a `RobotState`); body values are of the trunk's link frame."""
@@ -329,17 +309,13 @@ class Robot:
         return np.array([link in touching for link in self.foot_link_ids])
 
     def foot_contact_forces(self) -> np.ndarray:
-        """(4,) normal force of the ground on each foot over the last physics substep, N (0 in the air).
-
-        PyBullet reports a contact's normal force as its impulse divided by fixedTimeStep, which is the whole
-        controller period when the period has substeps; the impulse is of the last substep, so the force is
-        that quotient times the number of substeps (measured: a standing robot's feet then carry m·g)."""
+        """(4,) normal force of the ground on each foot over the last physics step, N (0 in the air): PyBullet's
+        contact impulse divided by fixedTimeStep, the physics step (measured: a standing robot's feet carry m·g)."""
         force = dict.fromkeys(self.foot_link_ids, 0.0)
         for pt in self._ground_contacts():
             if pt[3] in force:
                 force[pt[3]] += pt[9]
-        n = self.sim_config.physics_substeps
-        return np.array([force[link] * n for link in self.foot_link_ids])
+        return np.array([force[link] for link in self.foot_link_ids])
 
     def ground_contact_links(self) -> set[str]:
         """Names of the robot's links touching the ground (in a healthy gait: feet only)."""
