@@ -63,10 +63,11 @@ class ActuatorConfig:
 class SimConfig:
     """PyBullet world and the two rates of the simulated robot.
 
-    The joint controller (trot scheduler, IK, PID, feedforward, the hardware model, the actuator envelope and
-    the energy bookkeeping) runs once every `controller_dt`; its torque is held constant over that period, as
-    the robot's motor drivers hold the last command between two controller cycles. PyBullet's contact solver
-    steps `physics_dt` = `controller_dt / n` underneath, the n substeps in C++ (`numSubSteps`). The real
+    The locomotion controller (trot scheduler, IK, the PID's integral, feedforward, the sensed state) runs once
+    every `controller_dt` and sends the motor drivers a command (targets, target speeds, gains, feed-forward)
+    that they hold over that period; the drivers close their PD on the joint state at every physics step
+    `physics_dt` = `controller_dt / n`, where the actuator envelope applies and the energy is integrated
+    (`cyberdog.core.drivers`; their rate's convergence: docs/design.md). The real
     CyberDog runs its locomotion controller at 500 Hz; 400 Hz is the nearest rate that divides the agent's
     Ts = 25 ms. The defaults were chosen by the convergence study of docs/design.md (control 1000 / 400 /
     200 Hz x physics 0.5 / 1 / 1.25 ms against a 2 kHz reference).
@@ -143,7 +144,8 @@ class GaitConfig:
 
 @dataclass(frozen=True)
 class PIDConfig:
-    """Per-joint PID gains (abad, hip, knee), run at every controller period (SimConfig.controller_dt)."""
+    """Per-joint PID gains (abad, hip, knee): the PD closed by the motor drivers at every physics step, the
+    integral term (ki) by the controller at every controller period (SimConfig), sent with its command."""
 
     kp: Tuple[float, float, float] = (60.0, 60.0, 60.0)  # N·m/rad
     ki: Tuple[float, float, float] = (0.0, 0.0, 0.0)  # N·m/(rad·s)

@@ -31,18 +31,18 @@ class CyberDogEnv(gym.Env):
     """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
     body height, survival and energy.
 
-    **Timing.** The joint controller runs at 400 Hz (`walk.sim.controller_dt`, its torque held over the
-    period as the motor drivers hold it; physics at 800 Hz underneath, `walk.sim.physics_dt`); the agent
-    acts every Ts = 25 ms (`control_dt`, 10 controller periods); an episode lasts Tf = 10 s = 400 steps
-    (registered `max_episode_steps=400`, Table 4). The torque, or the trot controller's PID that produces
-    it, is applied at every controller period, by the project's one simulation loop
+    **Timing.** The joint controller runs at 400 Hz (`walk.sim.controller_dt`): its command (targets, target
+    speeds, gains, feed-forward) is held over the period, and the motor drivers close their PD on the joint
+    state at every physics step (800 Hz, `walk.sim.physics_dt`); the agent acts every Ts = 25 ms
+    (`control_dt`, 10 controller periods); an episode lasts Tf = 10 s = 400 steps (registered
+    `max_episode_steps=400`, Table 4). All of it runs in the project's one simulation loop
     (`cyberdog.loop.walker.Walker`, the same as the scripted walks').
 
     **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
     `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
     - `action_mode="torque"` (the paper's, Table 3): the action is the joint torque, held over the agent step;
       two documented departures can be switched on (both off by default, see docs/torque_agent.md): the
-      drivers' damping `joint_damping` (−c·q̇ at every controller period, motor torque that Eq. 7 books), and a
+      drivers' damping `joint_damping` (−c·q̇ at every physics step, motor torque that Eq. 7 books), and a
       prior from the trot controller whose weight decays to exactly 0 during training (`prior_weight`,
       `prior_decay_steps`; DecAP): τ = 25·a + w·τ_trot, τ_trot computed at the agent step's state and held.
       `info["prior_weight"]` is the weight the step used; with `trot_reference` (or a prior) `info["trot_action"]`
