@@ -194,3 +194,15 @@ def test_a_recipe_sweep_runs_every_phase_of_every_seed_and_extraction_finds_the_
         assert (sweep / f"seed{seed}" / "second" / "stage2_final_actor.pt").is_file()
     assert policy_paths(None, sweep) == [sweep / f"seed{s}" / "second" / "stage2_final_actor.pt" for s in (0, 1)]
     assert "| 1 | 200 |" in (sweep / "aggregate.md").read_text()  # the last phase's stage-2 steps per seed
+
+
+def test_a_recipe_extraction_setting_is_checked_as_the_command_line_checks_it(tmp_path):
+    from cyberdog.analysis.extract import CYCLE_CHOICES
+    from cyberdog.config.preset import EXTRACT_CYCLES
+
+    assert EXTRACT_CYCLES == CYCLE_CHOICES
+    for bad, words in (({"cycle": "best"}, "one of"), ({"replay_attempts": True}, "positive integer"),
+                       ({"rollout_duration": 0}, "positive number")):
+        path = _write(tmp_path / "x.yaml", {"base": str(ROOT / "configs/tiny.yaml"), "extract": bad})
+        with pytest.raises(ValueError, match=words):
+            C.load_preset(path)

@@ -37,6 +37,7 @@ PHASE_KEYS = ("name", "stage", "preset", "set", "from")
 STAGES = ("1", "2", "both")
 # evaluate.py extract's options a preset may set, and what each must be
 EXTRACT_KEYS = {"replay_attempts": int, "candidates": int, "rollout_duration": float, "cycle": str}
+EXTRACT_CYCLES = ("mean", "cheapest")  # extract --cycle's choices (cyberdog.analysis.extract.CYCLE_CHOICES)
 _NAME = re.compile(r"[a-z][a-z0-9_]*")
 
 
@@ -200,9 +201,10 @@ def _extract(spec: Any, where: Path) -> dict:
         kind = EXTRACT_KEYS.get(key)
         if kind is None:
             raise ValueError(f"{where}: extract.{key} is not an extraction setting ({', '.join(EXTRACT_KEYS)})")
-        ok = isinstance(value, kind) and not isinstance(value, bool) or (kind is float and isinstance(value, int))
-        if not ok or (kind is not str and value <= 0):
-            raise ValueError(f"{where}: extract.{key} must be a positive {kind.__name__}, got {value!r}")
+        ok = not isinstance(value, bool) and (isinstance(value, kind) or (kind is float and isinstance(value, int)))
+        if not ok or (kind is not str and value <= 0) or (key == "cycle" and value not in EXTRACT_CYCLES):
+            what = f"one of {EXTRACT_CYCLES}" if key == "cycle" else f"a positive {'integer' if kind is int else 'number'}"
+            raise ValueError(f"{where}: extract.{key} must be {what}, got {value!r}")
         out[key] = kind(value)
     return out
 
