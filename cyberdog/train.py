@@ -30,17 +30,11 @@ and stage<N>_best_actor.pt (the actor for evaluate.py), saved/ (agents above sav
 Outputs in a sweep folder: sweep.json, sweep_config.yaml, sweep_status.json (live, per seed), seed<N>/ (run
 folders, each with train.log), learning_curves.png/.csv, evaluation.json, aggregate.csv/.md.
 
-One process per run folder: every run folder this script writes (a new run, --resume, --init-from, each seed
-of a sweep) is locked by the file RUN_DIR/.train.lock (pid, host, start time and command of the holder) for
-as long as the training runs. A second process on the same folder is refused with a message naming the
-holder; a lock left by a process that died on this machine (killed, crashed) is taken over with a warning.
-On a file system shared by several machines (NFS, a cluster's scratch), a live holder on another machine is
-refused too: through the kernel lock where the file system makes flock coherent across hosts (NFSv4, CephFS,
-Lustre mounted with -o flock), else by the lock file's contents. A dead holder on another machine cannot be
-told from a live one: the lock is refused, naming that host and pid; delete RUN_DIR/.train.lock once you know
-that process is gone (or resume on that host, which can see it). A sweep clears the lock of its own attempts
-when it retries them. Not detected: two processes starting within the same instant on two machines whose
-shared file system has no coherent flock.
+One process per run folder: every run folder this script writes is locked by RUN_DIR/.train.lock (pid, host,
+start time, command) while it trains; a second process is refused with a message naming the holder, and a lock
+left by a dead process on this machine is taken over with a warning. On a file system shared by several machines,
+a holder on another machine is refused too (by the kernel lock where flock is coherent across hosts, else by the
+file's contents); delete the lock once that process is known to be gone. docs/training.md has the details.
 
 A setting that would make a stage end without any gradient update (a budget shorter than learning_starts,
 init_random_frames or batch_size) is refused before anything starts.
@@ -128,7 +122,7 @@ def _flag(name: str) -> str:
 
 def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
     """--seeds, --resume of a sweep folder, --aggregate."""
-    from cyberdog.sweeps import SweepError, create_sweep, parse_seeds, run_sweep
+    from cyberdog.sweeps import SweepError, run_sweep
 
     try:
         if args.aggregate is not None:
@@ -151,25 +145,7 @@ def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
                 if getattr(args, o) is not None:
                     sys.exit(f"--seeds cannot be combined with {_flag(o)}" + (
                         ": resume a sweep with --resume SWEEP_DIR alone" if o == "resume" else ""))
-            seeds = parse_seeds(args.seeds)
-            preset, cfg, name = _resolve_config(args)
-            sweep_dir = args.run_dir or Path("runs") / f"sweep_{name}"
-            if preset.phased:
-                _check_lineage_args(args)
-                _check_phases(preset)
-                create_sweep(sweep_dir, cfg, seeds, "phases", source_config=args.config, overrides=args.overrides)
-                for seed in seeds:
-                    C.write_phases(sweep_dir / f"seed{seed}", preset, seed)
-            else:
-                stage = args.stage or "both"
-                if stage == "2":
-                    sys.exit("--seeds trains --stage both or 1 (stage 2 alone needs a stage-1 agent per seed)")
-                try:
-                    C.check_planned_updates(cfg, (1, 2) if stage == "both" else (int(stage),))
-                except ValueError as e:
-                    sys.exit(f"config error: {e}")
-                create_sweep(sweep_dir, cfg, seeds, stage, source_config=args.config, overrides=args.overrides)
-            print(f"sweep: seeds {seeds} in {sweep_dir}")
+            sweep_dir = _new_sweep(args)
         status = run_sweep(sweep_dir, backend=args.backend or "local", workers=args.workers,
                            max_retries=2 if args.max_retries is None else args.max_retries,
                            ray_address=args.ray_address, progress=not args.no_progress)
@@ -187,6 +163,33 @@ def _sweep_main(args, sweep_dir: Path | None, resume: bool) -> int:
               f"continue with: python train.py --resume {sweep_dir}", file=sys.stderr)
         return 1
     return 0
+
+
+def _new_sweep(args) -> Path:
+    """Create the sweep folder of --seeds: one run folder per seed, or one lineage per seed for a preset with
+    phases (each seed's phases.yaml written now, so a resume continues them as resolved)."""
+    from cyberdog.sweeps import create_sweep, parse_seeds
+
+    seeds = parse_seeds(args.seeds)
+    preset, cfg, name = _resolve_config(args)
+    sweep_dir = args.run_dir or Path("runs") / f"sweep_{name}"
+    if preset.phased:
+        _check_lineage_args(args)
+        _check_phases(preset)
+        create_sweep(sweep_dir, cfg, seeds, "phases", source_config=args.config, overrides=args.overrides)
+        for seed in seeds:
+            C.write_phases(sweep_dir / f"seed{seed}", preset, seed)
+    else:
+        stage = args.stage or "both"
+        if stage == "2":
+            sys.exit("--seeds trains --stage both or 1 (stage 2 alone needs a stage-1 agent per seed)")
+        try:
+            C.check_planned_updates(cfg, (1, 2) if stage == "both" else (int(stage),))
+        except ValueError as e:
+            sys.exit(f"config error: {e}")
+        create_sweep(sweep_dir, cfg, seeds, stage, source_config=args.config, overrides=args.overrides)
+    print(f"sweep: seeds {seeds} in {sweep_dir}")
+    return sweep_dir
 
 
 def _check_eval_args(args) -> None:

@@ -45,7 +45,7 @@ def test_compare_at_a_speed_without_a_learned_path_fails_before_any_walk(tmp_pat
 
 def test_extraction_outside_the_training_speeds_names_policy_speed_and_warns_when_it_is_used():
     from cyberdog.evaluation.cli import UsageError
-    from cyberdog.evaluation.learned import extraction_speeds
+    from cyberdog.evaluation.extraction import extraction_speeds
     env = C.EnvConfig(target_speed_range=(1.0, 1.4))
     with pytest.raises(UsageError, match="--policy-speed"):
         extraction_speeds(env, [0.8, 1.0], None)

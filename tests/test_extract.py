@@ -200,11 +200,11 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     import evaluate
     from cyberdog.analysis.replay_check import ReplayCheck
     from cyberdog.core.commanded_path import CommandedPath
-    from cyberdog.evaluation import learned as learned_module
+    from cyberdog.evaluation import extraction
 
     _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
     checks = iter([ReplayCheck("speed miss (0.911 m/s)"), ReplayCheck("ok", 30.0)])
-    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    monkeypatch.setattr(extraction, "replay_check", lambda *a, **k: next(checks))
     args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
             "--speed-tolerance", "0.3"]
     assert evaluate.main([*args, "--candidates", "1", "--out", str(tmp_path / "ex")]) == 0
@@ -215,7 +215,7 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     assert prov["replay_check"]["spread_seeds"] == list(rc.SPREAD_CHECK_SEEDS)  # what the check walked, recorded
     assert prov["replay_check"]["hardware_like_pd_scales"] == list(rc.HARDWARE_CHECK_PD_SCALES)
     assert "rejected: the mean path of env seed 0 does not replay" in capsys.readouterr().out
-    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: ReplayCheck("fell at 2.50 s"))
+    monkeypatch.setattr(extraction, "replay_check", lambda *a, **k: ReplayCheck("fell at 2.50 s"))
     assert evaluate.main([*args, "--replay-attempts", "2", "--out", str(tmp_path / "none")]) == 2
     err = capsys.readouterr().err
     assert "no candidate path passes the replay check" in err and "cheapest of env seed 1: fell at 2.50 s" in err
@@ -229,11 +229,11 @@ def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys
     import evaluate
     from cyberdog.analysis.replay_check import ReplayCheck
     from cyberdog.core.commanded_path import CommandedPath
-    from cyberdog.evaluation import learned as learned_module
+    from cyberdog.evaluation import extraction
 
     _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
     checks = iter([ReplayCheck("ok", 30.0), ReplayCheck("fell at 2.00 s"), ReplayCheck("fell at 2.00 s")])
-    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    monkeypatch.setattr(extraction, "replay_check", lambda *a, **k: next(checks))
     assert evaluate.main(["extract", "--policy", str(tmp_path), "--speeds", "1.0", "1.2", "--rollout-duration",
                           "3.0", "--speed-tolerance", "0.3", "--replay-attempts", "1", "--candidates", "1",
                           "--out", str(tmp_path / "ex")]) == 2
@@ -275,13 +275,13 @@ def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, c
     import evaluate
     from cyberdog.analysis.replay_check import ReplayCheck
     from cyberdog.core.commanded_path import CommandedPath
-    from cyberdog.evaluation import learned as learned_module
+    from cyberdog.evaluation import extraction
 
     _zero_actor_file(tmp_path / "stage2_actor.pt", action_mode="foot", target_speed_range=(1.0, 1.4))
     # rollout 0: mean replays (31 J/m); rollout 1: mean falls, cheapest replays (27 J/m); rollout 2: mean 29 J/m
     checks = iter([ReplayCheck("ok", 31.0), ReplayCheck("fell at 3.00 s"), ReplayCheck("ok", 27.0),
                    ReplayCheck("ok", 29.0), ReplayCheck("ok", 20.0)])
-    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    monkeypatch.setattr(extraction, "replay_check", lambda *a, **k: next(checks))
     args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "3.0",
             "--speed-tolerance", "0.3", "--replay-attempts", "5"]
     assert evaluate.main([*args, "--candidates", "3", "--out", str(tmp_path / "ex")]) == 0
@@ -293,7 +293,7 @@ def test_extraction_keeps_the_candidate_cheapest_on_the_check_robots(tmp_path, c
     assert "the cheapest of 3 candidates" in capsys.readouterr().out
     checks = iter([ReplayCheck("fell at 1.00 s"), ReplayCheck("ok", 33.0), ReplayCheck("fell at 1.00 s"),
                    ReplayCheck("fell at 1.00 s")])
-    monkeypatch.setattr(learned_module, "replay_check", lambda *a, **k: next(checks))
+    monkeypatch.setattr(extraction, "replay_check", lambda *a, **k: next(checks))
     assert evaluate.main([*args, "--replay-attempts", "2", "--candidates", "3", "--out", str(tmp_path / "few")]) == 0
     prov = CommandedPath.load(tmp_path / "few" / "learned" / "seed0_1mps.json").provenance
     assert (prov["rollout_seed"], prov["cycle"]) == (0, "cheapest")  # the only candidate of two rollouts
@@ -373,7 +373,7 @@ def test_extraction_over_worker_processes_saves_what_extraction_in_turn_saves(tm
     """`extract --workers 2` runs one job per policy and speed in worker processes: the same paths, byte for
     byte, as in turn; a job that fails hands back its error instead of stopping the others."""
     import evaluate
-    from cyberdog.evaluation import learned as learned_module
+    from cyberdog.evaluation import extraction
 
     import torch
 
@@ -398,7 +398,7 @@ def test_extraction_over_worker_processes_saves_what_extraction_in_turn_saves(tm
     from cyberdog.evaluation.cli import build_parser
     args = build_parser().parse_args(["extract", "--policy", str(tmp_path / "s0"), "--rollout-duration", "3.0",
                                       "--speed-tolerance", "0.0001", "--no-replay-check"])
-    result = learned_module._extraction_job((tmp_path / "s0" / "stage2_actor.pt", "commanded", "seed0", 1.0), args,
+    result = extraction._extraction_job((tmp_path / "s0" / "stage2_actor.pt", "commanded", "seed0", 1.0), args,
                                             tmp_path / "failing", None)
     assert isinstance(result, str) and "1 m/s" in result
     assert not list((tmp_path / "failing").glob("learned/*.json"))

@@ -149,7 +149,7 @@ def test_a_failed_phase_names_the_seed_and_the_phase(tmp_path):
 
 
 def test_extraction_takes_the_recipe_settings_unless_given(tmp_path):
-    from cyberdog.evaluation import learned as L
+    from cyberdog.evaluation import extraction as L
     from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
 
     sweep = tmp_path / "sweep"

@@ -26,6 +26,18 @@ from cyberdog.loop.walker import Walker
 from cyberdog.sim.robot import Robot
 
 
+def _check_walk(duration: float, distance: float | None, hardware, run_up: float) -> None:
+    """`walk`'s arguments, refused before the robot is built."""
+    if not (duration > 0 and np.isfinite(duration)):
+        raise ValueError(f"duration must be > 0 s and finite, got {duration!r}")
+    if distance is not None and not (distance > 0 and np.isfinite(distance)):
+        raise ValueError(f"distance must be None or > 0 m and finite, got {distance!r}")
+    if hardware is not None and not isinstance(hardware, HardwareConfig):
+        raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
+    if not (0.0 <= run_up < duration):
+        raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
+
+
 def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | None = None,
          robot: Robot | None = None, record: bool = False, hardware: HardwareConfig | None = None,
          distance: float | None = None, foot_offsets: FootOffsetPath | None = None, run_up: float = 0.0,
@@ -49,14 +61,7 @@ def walk(cfg: WalkConfig, duration: float = 10.0, trajectory: FootTrajectory | N
     The walk ends as a fall when the body falls (`Walker.fallen`) or when the trot asks for a foot target beyond
     the leg's reach (`UnreachableFootTarget`: a robot going down can make it step too far).
     """
-    if not (duration > 0 and np.isfinite(duration)):
-        raise ValueError(f"duration must be > 0 s and finite, got {duration!r}")
-    if distance is not None and not (distance > 0 and np.isfinite(distance)):
-        raise ValueError(f"distance must be None or > 0 m and finite, got {distance!r}")
-    if hardware is not None and not isinstance(hardware, HardwareConfig):
-        raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
-    if not (0.0 <= run_up < duration):
-        raise ValueError(f"run_up must be >= 0 s and shorter than duration ({duration!r} s), got {run_up!r}")
+    _check_walk(duration, distance, hardware, run_up)
     with Walker(cfg, TrotController(cfg, trajectory, foot_offsets), robot=robot, hardware=hardware,
                 record=record, gait_metrics=True) as walker:
         n_steps = int(round(duration / walker.dt))

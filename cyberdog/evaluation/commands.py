@@ -12,6 +12,7 @@ from cyberdog.core.learned_set import LearnedSetError
 from cyberdog.evaluation.check import cmd_check
 from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
+from cyberdog.evaluation.extraction import take_recipe_extraction
 from cyberdog.evaluation.pd_match import cmd_pd_match
 from cyberdog.evaluation.recorded_trot import note_searched_trot, walk_under_recorded_trot
 
@@ -125,7 +126,7 @@ def cmd_extract(args, cfg: C.WalkConfig) -> int:
 
     if not (args.policies or args.sweep):
         raise UsageError("extract needs --policy PATH (actor file or run folder), --policies ... or --sweep DIR")
-    L.take_recipe_extraction(args)
+    take_recipe_extraction(args)
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
     L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)  # extracted and saved in run.out/learned/

@@ -3,23 +3,14 @@ first. Labels are the provenance's seed ("seed3"), else the file or run folder n
 """
 from __future__ import annotations
 
-import dataclasses
-import functools
 import json
-import time
 from pathlib import Path
 
 from cyberdog import config as C
-from cyberdog.metrics_csv import run_name
-from cyberdog.analysis.extract import CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows
-from cyberdog.analysis.extract_measured import extract_from_rollout
-from cyberdog.analysis.replay_check import ReplayCheck, check_settings, replay_check
-from cyberdog.analysis.report import write_rows
-from cyberdog.core.learned_set import LearnedPath, LearnedSet, LearnedSetError
+from cyberdog.core.learned_set import LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.cli import UsageError
-from cyberdog.evaluation.recorded_trot import trot_for
-from cyberdog.provenance import portable_path
+from cyberdog.metrics_csv import run_name
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_LEARNED = ROOT / "results" / "table5" / "paths"  # the shipped learned paths: one JSON per seed and speed
@@ -68,28 +59,6 @@ def policy_paths(policies: list[Path] | None, sweep: Path | None) -> list[Path]:
     return paths
 
 
-def take_recipe_extraction(args) -> dict:
-    """For --sweep of a preset's lineages (train.py --config configs/<recipe>.yaml --seeds ...): the preset's
-    `extract:` settings, for every option left at its default on the command line (one given wins). Returns
-    what was taken."""
-    from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
-
-    sweep = getattr(args, "sweep", None)
-    lineages = sorted(d for d in sweep.iterdir() if C.is_lineage(d)) if sweep is not None and sweep.is_dir() else []
-    if not lineages:
-        return {}
-    try:
-        settings = C.read_phases(lineages[0])[1]
-    except ValueError as e:
-        raise UsageError(f"--sweep {sweep}: {e}") from None
-    taken = {k: v for k, v in settings.items() if getattr(args, k) == EXTRACT_DEFAULTS[k]}
-    for key, value in taken.items():
-        setattr(args, key, value)
-    if taken:
-        print(f"extract: the recipe's settings: {', '.join(f'{k}={v}' for k, v in taken.items())}")
-    return taken
-
-
 def unique_labels(labels: list[str]) -> list[str]:
     out, seen = [], {}
     for lab in labels:
@@ -107,186 +76,6 @@ def load_learned(paths: list[Path]) -> LearnedSet:
         return LearnedSet.load(paths)
     except LearnedSetError as err:
         raise UsageError(str(err)) from None
-
-
-def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float | None, log=print) -> list[float]:
-    """Speeds at which a policy is rolled out for extraction (see --policy-speed)."""
-    if policy_speed is not None:
-        lo, hi = env.target_speed_range or (env.target_speed, env.target_speed)
-        if not lo - 1e-9 <= policy_speed <= hi + 1e-9:
-            log(f"warning: --policy-speed {policy_speed:g} m/s lies outside the speeds the policy was trained at "
-                f"({lo:g}-{hi:g} m/s): its path there is an extrapolation")
-        return [policy_speed]
-    if env.target_speed_range:
-        lo, hi = env.target_speed_range
-        outside = [v for v in speeds if not lo - 1e-9 <= v <= hi + 1e-9]
-        if outside:
-            raise UsageError(f"--speeds {outside} lie outside the policy's training range {lo:g}-{hi:g} m/s; "
-                             f"--policy-speed V rolls it out at one speed anyway (an extrapolation)")
-        return list(speeds)
-    return [env.target_speed]
-
-
-def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, log=print,
-                     cfg: C.WalkConfig | None = None) -> LearnedSet:
-    """Roll out each policy at each of its speeds, extract its learned path (commanded or measured, see
-    --path) and save it under out/learned/ with every cycle in <label>_cycles.csv, each as soon as it is
-    extracted. A commanded path must replay (`_extract_commanded`); `cfg`: the walk config of that replay
-    (default WalkConfig()). One job per policy and speed (a measured path: one per policy, rescaled to every
-    speed). In turn (`args.extract_workers` 1, the default) a failure stops there and keeps what was done; over
-    several worker processes every job runs, each saves its path as it ends, and the failures are reported
-    together at the end."""
-    from cyberdog.rl.rollout import load_actor  # torch: only here, only when asked
-
-    actors, kinds = [load_actor(path) for path in paths], []
-    for path, actor in zip(paths, actors):  # every policy checked before the first rollout
-        env = actor.config.env
-        kind = args.path_kind if args.path_kind != "auto" else ("commanded" if env.action_mode == "foot"
-                                                                  else "measured")
-        if kind == "commanded" and env.action_mode != "foot":
-            raise UsageError(f"{path}: a policy of action_mode {env.action_mode!r} commands no foot path; use "
-                             "--path measured")
-        kinds.append(kind)
-    labels = [f"seed{actor.config.train.seed}" for actor in actors]
-    if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
-        labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
-    jobs, job_actors = [], []  # (policy file, path kind, label, speed), and its loaded actor
-    for path, actor, kind, label in zip(paths, actors, kinds, unique_labels(labels)):
-        job_speeds = extraction_speeds(actor.config.env, speeds, args.policy_speed, log)
-        for v in job_speeds if kind == "commanded" else job_speeds[:1]:
-            jobs.append((path, kind, label, v))
-            job_actors.append(actor)
-    workers = min(getattr(args, "extract_workers", 1) or 1, len(jobs))
-    if workers == 1:
-        learned = LearnedSet()
-        for (path, kind, label, speed), actor in zip(jobs, job_actors):
-            learned.add(_extract_and_save(actor, path, kind, label, speed, args, out, cfg, log)[0])
-        return learned
-    from cyberdog.analysis.parallel import map_in_processes
-
-    log(f"extraction: {len(jobs)} jobs (policy and speed) over {workers} worker processes")
-    done = map_in_processes(functools.partial(_extraction_job, args=args, out=out, cfg=cfg), jobs, workers,
-                            on_result=lambda i, r, n: log(f"extraction job {n} of {len(jobs)} ended: "
-                                                          f"{jobs[i][2]} at {jobs[i][3]:g} m/s"
-                                                          f"{'' if isinstance(r, Path) else ' (failed)'}"))
-    failed = [f"{label} at {speed:g} m/s: {r}" for (_, _, label, speed), r in zip(jobs, done)
-              if not isinstance(r, Path)]
-    if failed:
-        raise UsageError(f"{len(failed)} of {len(jobs)} extraction jobs failed (the others' paths are saved in "
-                         f"{out / 'learned'}): " + "; ".join(failed))
-    return load_learned(done)
-
-
-def _extraction_job(job: tuple, args, out: Path, cfg: C.WalkConfig | None):
-    """One (policy, kind, label, speed) job in a worker process: the saved path's file, or the error's text
-    (a job that fails must not stop the others). Its log lines carry the job's label and speed."""
-    from cyberdog.rl.rollout import load_actor
-
-    path, kind, label, speed = job
-    tag = f"[{label} {speed:g} m/s] "
-    try:
-        return _extract_and_save(load_actor(path), path, kind, label, speed, args, out, cfg,
-                                 lambda m: print(tag + m, flush=True))[1]
-    except UsageError as err:
-        return str(err)
-
-
-def _extract_and_save(actor, path: Path, kind: str, label: str, speed: float, args, out: Path, cfg, log):
-    """Extract `actor`'s path at `speed` and save it and its cycles under out/learned/: (the `LearnedPath`,
-    its file)."""
-    prov = {"policy": portable_path(path), "seed": actor.config.train.seed, "policy_meta": actor.meta}
-    extract = _extract_commanded if kind == "commanded" else _extract_measured
-    ex = extract(actor, path, speed, args, prov, cfg, log)
-    p = LearnedPath(label, ex.path if kind == "commanded" else ex.trajectory)
-    file = p.save(out / "learned")
-    write_rows(cycle_rows(ex), out / "learned", f"{file.stem}_cycles")
-    if kind == "commanded":
-        log(f"{file.stem}: commanded path from {len(ex.used)} of {len(ex.cycles)} cycles "
-            f"({ex.path.provenance.get('cycle', args.cycle)}), "
-            f"{ex.energy:.1f} J per cycle, own H = {p.lift_height:.4f} m -> {file}")
-    else:
-        c = ex.chosen
-        log(f"{file.stem}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
-            f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
-    return p, file
-
-
-def _rollout(actor, path: Path, speed: float, args, rollout_seed: int, log):
-    from cyberdog.rl.rollout import rollout
-
-    t0 = time.perf_counter()
-    r = rollout(actor, speed=speed, duration=args.rollout_duration, seed=rollout_seed, env_config=actor.config.env)
-    dropped = f", {r.dropped_shifts} foot shifts out of reach (dropped)" if r.dropped_shifts else ""
-    log(f"rollout {path} at {speed:g} m/s (env seed {rollout_seed}): {r.duration:.1f} s, mean {r.mean_speed:.3f} "
-        f"m/s, E={r.energy:.0f} J, fell={r.fell}{dropped} ({time.perf_counter() - t0:.0f} s)")
-    return r
-
-
-def _extract_measured(actor, path: Path, speed: float, args, prov: dict, cfg, log):
-    r = _rollout(actor, path, speed, args, args.rollout_seed, log)
-    try:
-        return extract_from_rollout(r, actor.config.env, args.leg, args.speed_tolerance,
-                                    provenance={**prov, "rollout_seed": args.rollout_seed})
-    except ExtractionError as err:
-        raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try --speed-tolerance or "
-                         "--policy-speed)") from None
-
-
-def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, log):
-    """The commanded path kept for `speed`: rollouts with env seeds --rollout-seed, +1, ... (--replay-attempts
-    of them) each give a candidate, the --cycle path, or the other cycle choice if that one does not pass the
-    replay check (`replay_check`: the ideal robot, and hardware-like validation robots at three stiffnesses).
-    The first --candidates paths that pass are kept as candidates, and the one with the least electrical energy
-    per metre on the check's 100 m hardware-like walks (validation robots, never the prototype's) is the path.
-    The candidates and the rejected paths are in its provenance; none passing is an error."""
-    rejected, passed = [], []
-    # the replay check walks the policy's trot, unless the command line chose one (then a note says so)
-    cfg = trot_for(args, cfg or C.WalkConfig(), actor.config.env.walk.controller if args.replay_check else None,
-                   f"the policy {path}", lambda m: log(f"  {m}"), walked="its replay check walks under it")
-    check_controller = cfg.controller
-    for k in range(args.replay_attempts if args.replay_check else 1):
-        r = _rollout(actor, path, speed, args, args.rollout_seed + k, log)
-        for cycle in dict.fromkeys((args.cycle, *CYCLE_CHOICES)):
-            candidate = {"rollout_seed": args.rollout_seed + k, "cycle": cycle}
-            try:
-                ex = commanded_from_rollout(r, actor.config.env, cycle, args.speed_tolerance,
-                                            provenance={**prov, "rollout_seed": args.rollout_seed + k,
-                                                        "rollout_dropped_shifts": r.dropped_shifts})
-            except ExtractionError as err:
-                rejected.append({**candidate, "status": f"no path: {err}"})
-                continue
-            check = (replay_check(LearnedPath("", ex.path), speed, cfg, log=lambda m: log(f"    {m}"))
-                     if args.replay_check else ReplayCheck("not checked"))
-            if check.status in ("ok", "not checked"):
-                if check.electrical_J_per_m is not None:
-                    log(f"  candidate: the {cycle} path of env seed {args.rollout_seed + k} replays, "
-                        f"{check.electrical_J_per_m:.2f} J/m on the check's hardware-like robots")
-                passed.append((ex, check, {**candidate, "electrical_J_per_m": check.electrical_J_per_m}))
-                break  # one candidate per rollout
-            log(f"  rejected: the {cycle} path of env seed {args.rollout_seed + k} does not replay ({check.status})")
-            rejected.append({**candidate, "status": check.status})
-        if len(passed) == (args.candidates if args.replay_check else 1):
-            break
-    if not passed:
-        tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
-        raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path passes the replay check "
-                         f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
-    # the cheapest on the validation robots; with one candidate (or unchecked) the first
-    ex, check, _ = min(passed, key=lambda c: c[1].electrical_J_per_m if c[1].electrical_J_per_m is not None else 0.0)
-    ex.path.provenance["replay_check"] = {
-        "status": check.status, "rejected": rejected, "candidates": [c for _, _, c in passed],
-        "selected_by": "least electrical energy per metre on the hardware-like check robots",
-        "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
-        **check_settings(),
-        "controller": dataclasses.asdict(check_controller)}
-    in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
-    if check.dropped_shifts or in_rollout:
-        log(f"  foot shifts out of reach, dropped (the unshifted target sent): {in_rollout} leg-periods in the "
-            f"rollout, {check.dropped_shifts} in the replay check")
-    if len(passed) > 1:
-        log(f"  kept the {ex.path.provenance.get('cycle', args.cycle)} path of env seed "
-            f"{ex.path.provenance['rollout_seed']}, the cheapest of {len(passed)} candidates")
-    return ex
 
 
 def check_learned_inputs(args) -> None:
@@ -372,6 +161,8 @@ def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C
     paths = policy_paths(args.policies, args.sweep)
     folder = out / "learned"
     if paths:
+        from cyberdog.evaluation.extraction import extract_policies  # rollouts: torch, only when asked
+
         learned = extract_policies(paths, args, speeds, out, log, cfg)
     else:
         files = default_learned(args, for_prototype)
@@ -419,5 +210,5 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
 
 
 __all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
-           "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned", "extract_policies",
+           "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned",
            "learned_trajectories", "load_learned", "metrics_files", "policy_paths", "reference_shape"]
