@@ -160,7 +160,7 @@ def test_a_searched_shape_is_noted_where_it_walks_under_another_trot_than_it_was
     assert len(logged) == 1
 
 
-def test_the_prototype_run_notes_a_searched_shape_of_another_trot(tmp_path, capsys):
+def test_the_prototype_run_walks_a_searched_shape_of_another_trot_under_its_own(tmp_path, capsys):
     import evaluate
 
     _placed_set(0).save(tmp_path / "learned")
@@ -170,5 +170,24 @@ def test_the_prototype_run_notes_a_searched_shape_of_another_trot(tmp_path, caps
                           "--prototype-distance", "0.2", "--prototype-run-up", "0", "--prototype-modes", "ideal",
                           "--prototype-reference", str(reference), "--workers", "1",
                           "--out", str(tmp_path / "proto")]) == 0
-    assert "the searched shape was searched under another trot controller (sagittal_placement_gain 0.0 searched, " \
-           "0.1 here)" in capsys.readouterr().out
+    assert "the searched shape walks under the trot it was searched under (sagittal_placement_gain 0.0" \
+           in capsys.readouterr().out
+
+
+def test_the_searched_shape_walks_the_prototype_under_the_trot_it_was_searched_under():
+    """The prototype's reference is the best a user has of a searched shape: it walks under its own trot, the
+    learned paths and the common trajectories under the paths' (`run_prototype(own_trot=...)`)."""
+    from cyberdog.analysis.prototype import _walk_jobs
+    from cyberdog.analysis.prototype_summary import REFERENCE
+    from cyberdog.evaluation.recorded_trot import searched_controller
+
+    default_searched = _shape(command="python tools/optimize_trajectory.py --lift-height 0.085")
+    logged = []
+    own = searched_controller(default_searched, PLACED, logged.append)
+    assert own == {REFERENCE: C.ControllerConfig()} and "sagittal_placement_gain 0.0" in logged[0]
+    assert searched_controller(default_searched, C.ControllerConfig()) == {}  # the same trot: nothing to change
+    assert searched_controller(_shape(), PLACED) == {}  # nothing recorded: walked under the paths' trot
+    base = dataclasses.replace(C.WalkConfig(), controller=PLACED)
+    jobs = _walk_jobs({"cycloid": None, REFERENCE: default_searched}, (1.0,), base, [("hardware", 0)],
+                      C.HARDWARE_LIKE, 20.0, 3.0, None, None, {}, 1.0, None, own)
+    assert {j.trajectory_name: j.cfg.controller for j in jobs} == {"cycloid": PLACED, REFERENCE: C.ControllerConfig()}

@@ -8,9 +8,8 @@ energy reduction measured in simulation (12 %, Eq. 7 and Eq. 12) and on the robo
 
 Here each walk is one `cyberdog.analysis.walk.walk(..., distance=distance_m)`:
 - "ideal": the Section 4.1 simulation (true states, no joint friction in the physics, nominal mass);
-- "hardware": `HardwareConfig` effects on (by default `HARDWARE_LIKE`: joint friction, 3 ms actuation
-  latency, encoder noise, Kalman-estimated speed feedback with a noisy IMU, one ±5 % mass draw). All
-  hardware rows share the seed, hence the same mass draw: one prototype walks every trajectory, as in the paper.
+- "hardware": `HardwareConfig` effects on (by default `HARDWARE_LIKE`: joint friction, 2.5 ms latency, encoder
+  noise, Kalman speed with a noisy IMU, a ±5 % mass draw); each draw walks every trajectory, as in the paper.
 Both report Eq. (7) mechanical energy and the electrical energy drawn from the pack (copper loss, joint friction,
 driver efficiency; `cyberdog.core.energy`). Battery (EnergyConfig; ASSUMPTION [G] except where noted):
 pack energy `battery_capacity_wh` (default 8 Ah × 25.2 V = 201.6 Wh [G]), charged to 25 V (paper), the walk
@@ -18,8 +17,7 @@ starting at E_f = 95 % (paper), motor drivers 95 % efficient [G], no electronics
 legs only, so ranges are upper bounds). Battery % used = 100·E_el / pack energy (= Eq. 13's E_f − E_n);
 range = distance × 95 / battery % used (the walk's rate until the usable 95 % is spent).
 
-Walks run in parallel processes (spawn; each owns its PyBullet DIRECT client); `evaluate.py prototype` runs
-the experiment and writes CSV/JSON/Markdown.
+Walks run in parallel processes (spawn; each its own PyBullet client); `evaluate.py prototype` writes the tables.
 """
 from __future__ import annotations
 
@@ -162,7 +160,7 @@ def run_prototype(trajectories: dict | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
                   every_walk: bool = True, learned: LearnedSet | None = None, draws: int = PROTOTYPE_DRAWS,
                   run_up_s: float = PROTOTYPE_RUN_UP_S, policies: dict | None = None, pd_scale: float = 1.0,
-                  pd_matched: bool = False) -> list[dict]:
+                  pd_matched: bool = False, own_trot: dict | None = None) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk. The
     defaults (distance, draws, run-up) are the prototype run's, `cyberdog.config.paper`'s, as `evaluate.py`'s.
 
@@ -176,9 +174,8 @@ def run_prototype(trajectories: dict | None = None,
     draws: hardware-like robots per walk: `hardware` with seed `hardware.seed + d` for d < draws (its mass
         draw and sensor noise), the same robots for every trajectory; the ideal robot is walked once.
     modes: any of "ideal" (the Section 4.1 simulation) and "hardware" (`hardware`'s effects on).
-    run_up_s: s each walk walks from its stand before `distance_m` is measured (`walk(run_up=...)`): the start-up
-        (speed ramp, blend into a learned path) is then left out of the battery use, energies and time, as it is
-        of a range on a full charge, where it happens once in kilometres; 0 = the paper's walk from a stand.
+    run_up_s: s walked from the stand before `distance_m` is measured (`walk(run_up=...)`): the start-up is left
+        out, as of a range on a full charge, where it happens once in kilometres; 0 = the paper's walk from a stand.
     policies: {label of `learned`: actor file}: that seed's policy walks too, closed loop, as the row "policy"
         (same robots, PD, run-up and distance as its replayed path; its saving is against the same baselines).
     pd_scale: every walk with the joint PD this many times as stiff as `base_cfg.pid` (kp × s, kd × √s:
@@ -186,10 +183,11 @@ def run_prototype(trajectories: dict | None = None,
     pd_matched: at a `pd_scale` other than 1, every path and trajectory (not a policy) walks with its command
         re-solved for the scaled PD so that it executes the motion it executes under `base_cfg.pid`
         (`cyberdog.analysis.pd_match_recording`); rows carry `pd_matched` (True where a command was re-solved).
+    own_trot: {trajectory name: ControllerConfig}, trajectories that walk under their own trot controller (a
+        searched shape under the one it was searched under) instead of `base_cfg.controller`.
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
-    every_walk: a progress line per walk (False: one per quarter of them).
-    Rows come back in (trajectory, speed, mode) order with the ideal-vs-hardware gaps filled in
-    (`add_gaps`); see the module docstring for the battery assumptions.
+    every_walk: a progress line per walk (False: one per quarter of them). Rows come back in (trajectory, speed,
+    mode) order with the ideal-vs-hardware gaps filled in (`add_gaps`); the battery: the module docstring.
     """
     base_cfg = base_cfg or WalkConfig()
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
@@ -199,7 +197,7 @@ def run_prototype(trajectories: dict | None = None,
     base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = _walk_jobs(trajectories, speeds, base_cfg, robots, hardware, float(distance_m), float(run_up_s), learned,
-                      lift_heights, policies, pd_scale, own_pid)
+                      lift_heights, policies, pd_scale, own_pid, own_trot or {})
 
     def line(row: dict) -> str:
         return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
@@ -214,7 +212,7 @@ def run_prototype(trajectories: dict | None = None,
 
 def _walk_jobs(trajectories: dict, speeds, base_cfg: WalkConfig, robots: list, hardware: HardwareConfig,
                distance_m: float, run_up_s: float, learned, lift_heights, policies: dict, pd_scale: float,
-               own_pid) -> list[_Job]:
+               own_pid, own_trot: dict) -> list[_Job]:
     """`run_prototype`'s walks, per learned label: its paths (and policy) on every robot, then the trajectories."""
     jobs = []
     for label in learned.labels if learned is not None else [""]:
@@ -231,6 +229,8 @@ def _walk_jobs(trajectories: dict, speeds, base_cfg: WalkConfig, robots: list, h
         for name, traj in trajectories.items():
             for v in speeds:
                 cfg = _job_config(base_cfg, name, traj, v)
+                if name in own_trot:
+                    cfg = dataclasses.replace(cfg, controller=own_trot[name])
                 if v in lifts:
                     cfg = dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, lift_height=float(lifts[v])))
                 jobs += [_Job(name, traj, v, mode, cfg, _draw(hardware, d), distance_m, None, label, d, run_up_s,

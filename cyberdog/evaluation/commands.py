@@ -14,7 +14,7 @@ from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
 from cyberdog.evaluation.extraction import take_recipe_extraction
 from cyberdog.evaluation.pd_match import cmd_pd_match
-from cyberdog.evaluation.recorded_trot import note_searched_trot, walk_under_recorded_trot
+from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",
@@ -155,7 +155,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
-    cfg = trot_of(args, run, cfg, learned, reference=reference)
+    cfg = trot_of(args, run, cfg, learned)  # the searched shape walks under its own trot (run_prototype_part)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
                        policies=L.closed_loop_policies(args, learned), hardware=args.hardware)
@@ -173,13 +173,13 @@ def cmd_stiffness(args, cfg: C.WalkConfig) -> int:
     reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
     learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
-    cfg = trot_of(args, run, cfg, learned, reference=reference)
+    cfg = trot_of(args, run, cfg, learned)
     trajectories = {"cycloid": None, "straight": None, **({"searched": reference} if reference is not None else {})}
     rows = run_stiffness(scales, trajectories=trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
                          modes=args.prototype_modes, workers=args.workers, base_cfg=cfg, learned=learned,
                          draws=args.prototype_draws, run_up_s=args.prototype_run_up,
                          policies=L.closed_loop_policies(args, learned), pd_matched=args.pd_matched,
-                         hardware=args.hardware)
+                         hardware=args.hardware, own_trot=searched_controller(reference, cfg.controller))
     print("\n" + write_stiffness(rows, run.out))
     return run.finish()
 
@@ -205,7 +205,6 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
         proto_cfg = table5_cfg if given else walk_under_recorded_trot(args, cfg, proto_learned)
         if proto_cfg != table5_cfg:  # the prototype's paths were recorded under another trot than Table 5's
             C.save(proto_cfg, run.out / "prototype_config.yaml")
-        note_searched_trot(proto_reference, proto_cfg)  # the searched row compares shapes under one trot
         run_prototype_part(proto_cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
                            args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference,
                            run_up_s=args.prototype_run_up, policies=L.closed_loop_policies(args, proto_learned),

@@ -91,12 +91,14 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
                        hardware: C.HardwareConfig = C.HARDWARE_LIKE) -> list[dict]:
     """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
     lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
-    `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched".
+    `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched", under the trot it
+    was searched under.
     `run_up_s`: s walked from the stand before the measured `distance_m` (`run_prototype`).
     `policies`: {label: actor file}, the policies that walk beside their paths, closed loop (row "policy").
     `hardware`: the hardware-like robots' effects (each draw its own seed of them).
     `brief`: a progress line per quarter of the walks and the summary's main numbers only."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
+    from cyberdog.evaluation.recorded_trot import searched_controller
     from cyberdog.analysis.prototype_summary import REFERENCE, summary_rows
 
     trajectories = {"cycloid": None, "straight": None, **({REFERENCE: reference} if reference is not None else {})}
@@ -111,7 +113,8 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
         f"{draws} hardware-like robot{'s' * (draws > 1)})")
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
                          base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws,
-                         run_up_s=run_up_s, policies=policies, hardware=hardware)
+                         run_up_s=run_up_s, policies=policies, hardware=hardware,
+                         own_trot=searched_controller(reference, cfg.controller, log))
     write_prototype(rows, out)
     if not brief:
         print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks after a {run_up_s:g} s "

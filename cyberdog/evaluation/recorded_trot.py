@@ -129,6 +129,20 @@ def searched_trot(reference) -> dict | None:
         return None
 
 
+def searched_controller(reference, walked: C.ControllerConfig, log=print) -> dict:
+    """{"searched": the trot controller the searched shape `reference` was searched under} where that is not
+    `walked`: the prototype's reference row walks each shape under its own trot (the best a user has of it), as
+    `run_prototype(own_trot=...)` takes it; {} where it is the same, or not recorded."""
+    from cyberdog.analysis.prototype_summary import REFERENCE
+
+    own = searched_trot(reference) if reference is not None else None
+    if own is None or C.from_dict(C.ControllerConfig, own) == walked:
+        return {}
+    diff = ", ".join(f"{k} {r}" for k, (r, w) in _differences(own, walked).items())
+    log(f"the searched shape walks under the trot it was searched under ({diff})")
+    return {REFERENCE: C.from_dict(C.ControllerConfig, own)}
+
+
 def note_searched_trot(reference, cfg: C.WalkConfig, log=print) -> str:
     """Log, and return, a note where the searched shape `reference` was searched under another trot controller
     than the one `cfg` walks it under: its row then compares a shape found for another trot ("" otherwise)."""
