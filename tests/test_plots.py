@@ -211,9 +211,14 @@ def shipped_figure13():
 
 
 def test_figure13_each_mark_means_one_thing():
-    """The shipped figure: a hatch is used by one legend entry and only on the paper's-protocol bars of (a); a
-    bar with walks that fell or left the speed band carries the ×, which has its own legend entry."""
-    rows, fig = shipped_figure13()
+    """The shipped figure, one learned walk at 1.4 m/s marked as off the speed band: a hatch is used by one legend
+    entry and only on the paper's-protocol bars of (a); a bar with walks that fell or left the speed band
+    carries the ×, which has its own legend entry."""
+    rows = json.loads((SHIPPED_INPUTS / "comparison.json").read_text())
+    off = next(i for i, r in enumerate(rows) if r["set"] == "paper" and r["trajectory"] == "learned"
+               and r["speed_command_mps"] == 1.4)
+    rows[off] = dict(rows[off], valid=False, speed_ok=False, status="speed miss")
+    fig = figure13.draw(rows, json.loads((SHIPPED_INPUTS / "prototype.json").read_text()))
     legend = fig.legends[0]
     hatches: dict[str, list[str]] = {}
     for handle, text in zip(legend.legend_handles, legend.get_texts()):
@@ -228,7 +233,7 @@ def test_figure13_each_mark_means_one_thing():
     assert not any(p.get_hatch() for ax in fig.axes[1:] for p in ax.patches)
     missed = {r["speed_command_mps"] for r in rows if r["set"] == "paper" and not r["valid"]}
     crosses = [ln for ln in fig.axes[0].get_lines() if ln.get_marker() == figure13.MISS_MARKER]
-    assert missed and len(crosses) == len(missed)  # the learned bar at 1.4 m/s: 2 of 5 seeds missed the band
+    assert missed == {1.4} and len(crosses) == 1  # the learned bar at 1.4 m/s: 1 of 5 seeds off the band
     labels = [t.get_text() for t in legend.get_texts()]
     assert sum(lab.startswith("× k/n") for lab in labels) == 1
     assert not any("cross-hatched" in t for t in (fig.get_suptitle(), *labels))
