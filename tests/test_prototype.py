@@ -13,7 +13,7 @@ from cyberdog.analysis import prototype_summary as summary
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.loop.walker import Walker
-from cyberdog.sim.hardware import CommandDelay, draw_mass_scale, hardware_walk_config
+from cyberdog.sim.hardware_model import CommandDelay, draw_mass_scale, hardware_walk_config
 from cyberdog.analysis.walk import walk
 from cyberdog.core import energy as en
 from cyberdog.sim.robot import Robot

@@ -7,7 +7,7 @@ import pytest
 
 from cyberdog import config as C
 from cyberdog.envs.cyberdog_env import CyberDogEnv
-from cyberdog.sim.hardware import RobotDraw, draw_robot
+from cyberdog.sim.hardware_model import RobotDraw, draw_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 BATTERY = ROOT / "notebook/configs/quick_speeds_battery.yaml"

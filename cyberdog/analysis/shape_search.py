@@ -72,7 +72,7 @@ def walk_cost(job: ShapeWalk) -> dict:
     """Walk one shape at one speed; the window energy and its penalised cost (runs in a worker process)."""
     from cyberdog.analysis.walk import walk  # the simulator only where a walk runs
     from cyberdog.core.energy import electrical_power
-    from cyberdog.sim.hardware import hardware_walk_config
+    from cyberdog.sim.hardware_model import hardware_walk_config
 
     gait = dataclasses.replace(job.base.gait, speed=float(job.speed), lift_height=float(job.lift_height))
     cfg = dataclasses.replace(job.base, gait=gait)

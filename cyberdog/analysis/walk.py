@@ -7,7 +7,7 @@ close their PD at that rate on the controller's held command), and report speed,
 The prototype experiment (Section 4.2, `cyberdog.analysis.prototype`) adds two options: `distance` ends the
 walk after that much forward travel (the paper's 100 m; `duration` is then the time cap), and `hardware`
 (a `HardwareConfig`) makes the robot hardware-like: joint friction, actuation latency, encoder noise,
-Kalman-estimated speed feedback and a mass-scale draw (`cyberdog.sim.hardware`). Without them the walk
+Kalman-estimated speed feedback and a mass-scale draw (`cyberdog.sim.hardware_model`). Without them the walk
 is exactly the ideal one. The stepping itself is `cyberdog.loop.walker.Walker`'s, the same as the env's.
 """
 from __future__ import annotations

@@ -10,7 +10,7 @@ from typing import Optional, Tuple
 from cyberdog.config._validate import _check, _non_negative, _positive
 
 from cyberdog.config.hardware import HardwareConfig, RandomizationConfig
-from cyberdog.config.robot import GaitConfig, WalkConfig
+from cyberdog.config.walk_settings import GaitConfig, WalkConfig
 
 
 REWARD_TERM_NAMES = ("speed", "y_offset", "fuselage", "keep_moving", "energy")  # Eq. (10) order: A … E

@@ -40,7 +40,7 @@ class HardwareConfig:
 
     Used by the prototype experiment in simulation (paper Section 4.2, `cyberdog.analysis.walk.walk(...,
     hardware=...)`) and by the learning environment (`EnvConfig.hardware`, so that training can randomise
-    over it); applied at the physics rate by `cyberdog.sim.hardware` inside `cyberdog.loop.walker.Walker`.
+    over it); applied at the physics rate by `cyberdog.sim.hardware_model` inside `cyberdog.loop.walker.Walker`.
     The defaults are all off: `HardwareConfig()` is the ideal simulated robot of Section 4.1 (true states,
     no friction, no delay, nominal mass). `HARDWARE_LIKE` below turns every effect on. What each does:
 
@@ -109,9 +109,9 @@ class RandomizationConfig:
     PID tracks a path, docs/results.md); drawn anew each episode from ranges around the real robot's
     uncertain values, it must find what works on all of them, as legged_gym and walk-these-ways train
     (their ranges, for robots of similar size, in brackets). Each range is (low, high), drawn uniformly
-    and independently per episode from the env's generator (`cyberdog.sim.hardware.draw_robot`); a range
+    and independently per episode from the env's generator (`cyberdog.sim.hardware_model.draw_robot`); a range
     with low = high is that value, and the defaults are the nominal robot (no randomisation). It acts on top
-    of `HardwareConfig`, which says which effects exist, by one rule (`cyberdog.sim.hardware.resolve_draw`): the
+    of `HardwareConfig`, which says which effects exist, by one rule (`cyberdog.sim.hardware_model.resolve_draw`): the
     friction scale needs `friction` on; a mass or latency range left at its default keeps the hardware's
     `mass_uncertainty` draw and `latency_s`, and a range that is set replaces them and must contain them
     (`EnvConfig` refuses one that does not, naming both fields).

@@ -9,7 +9,7 @@ from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
 from cyberdog.config.env import STAGE1_REWARD, STAGE2_REWARD, EnvConfig, RewardConfig
-from cyberdog.config.robot import GaitConfig, WalkConfig
+from cyberdog.config.walk_settings import GaitConfig, WalkConfig
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -18,7 +18,7 @@ from cyberdog.envs.observation import (DEFAULT_KP, LAST_ACTION_LAYOUT, OBSERVATI
                                       PD_STIFFNESS_LAYOUT, actor_observation_scale, observation_layout,
                                       observation_size, observation_typical_magnitude)
 from cyberdog.loop.walker import Walker
-from cyberdog.sim.hardware import draw_mass_scale, draw_robot, resolve_draw
+from cyberdog.sim.hardware_model import draw_mass_scale, draw_robot, resolve_draw
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
 PAPER_REWARD_WARNING = (

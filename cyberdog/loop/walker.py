@@ -40,7 +40,7 @@ from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
 from cyberdog.core import kinematics as kin
 from cyberdog.loop.rows import PeriodEnds, PeriodMean, Rows
-from cyberdog.sim.hardware import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
+from cyberdog.sim.hardware_model import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
 from cyberdog.sim.robot import Robot, RobotState
 
@@ -117,7 +117,7 @@ class Walker:
 
         mass_scale: the link-mass scale to walk with; None = the hardware's seeded draw (1 on the ideal
             robot). sensor_rng: the sensors' generator; None = the stream seeded by `HardwareConfig.seed`.
-        draw: a robot drawn from a `RandomizationConfig` (`cyberdog.sim.hardware.draw_robot`): its joint
+        draw: a robot drawn from a `RandomizationConfig` (`cyberdog.sim.hardware_model.draw_robot`): its joint
             friction and motor strength, latency, mass (instead of `mass_scale`), PID gains and ground
             friction; None = the configured robot.
         Returns the state (a RobotState)."""
