@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 import evaluate
-from cyberdog import train
+from cyberdog import train_cli as train
 
 
 @pytest.mark.parametrize("out", ["/proc/x", "README.md/sub"])

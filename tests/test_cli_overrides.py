@@ -2,7 +2,7 @@
 --set add up, in order, and none is dropped."""
 import pytest
 
-from cyberdog import train
+from cyberdog import train_cli as train
 from cyberdog import config as C
 from cyberdog.evaluation.cli import parse_args as evaluate_args
 from cyberdog.evaluation.commands import walk_config

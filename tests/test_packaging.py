@@ -75,7 +75,7 @@ def test_the_wheel_holds_every_module_and_the_urdf(tmp_path):
 @pytest.mark.slow
 def test_an_installed_wheel_trains_a_sweep_and_aggregates_it(tmp_path):
     """The package on its own: the wheel installed (not editable) in a fresh virtual environment, run from a
-    folder outside the checkout, trains a two-seed sweep of the tiny preset through `python -m cyberdog.train`
+    folder outside the checkout, trains a two-seed sweep of the tiny preset through `python -m cyberdog.train_cli`
     (each seed a process of that entry point) and aggregates it, with no top-level script or `plots/`."""
     wheel = build_wheel(tmp_path)
     venv = tmp_path / "venv"
@@ -97,15 +97,15 @@ def test_an_installed_wheel_trains_a_sweep_and_aggregates_it(tmp_path):
     where = subprocess.run([py, "-c", "import cyberdog; print(cyberdog.__file__)"], cwd=work, env=env,
                            capture_output=True, text=True, check=True).stdout.strip()
     assert Path(where).is_relative_to(venv) and not Path(where).is_relative_to(ROOT), where
-    sweep = subprocess.run([py, "-m", "cyberdog.train", "--config", "tiny.yaml", "--seeds", "0-1", "--run-dir",
+    sweep = subprocess.run([py, "-m", "cyberdog.train_cli", "--config", "tiny.yaml", "--seeds", "0-1", "--run-dir",
                             "sweep", "--workers", "2", "--no-progress", "--eval-duration", "0.5"], cwd=work, env=env,
                            capture_output=True, text=True, timeout=600)
     assert sweep.returncode == 0, sweep.stdout[-3000:] + sweep.stderr[-3000:]
     for seed in (0, 1):
         log = (work / "sweep" / f"seed{seed}" / "train.log").read_text()
-        assert "-m cyberdog.train" in log and (work / "sweep" / f"seed{seed}" / "stage2_final_actor.pt").is_file()
+        assert "-m cyberdog.train_cli" in log and (work / "sweep" / f"seed{seed}" / "stage2_final_actor.pt").is_file()
     assert (work / "sweep" / "learning_curves.csv").is_file() and (work / "sweep" / "aggregate.md").is_file()
     assert not (work / "sweep" / "learning_curves.png").exists()  # drawn by the checkout's plots/, not here
-    again = subprocess.run([py, "-m", "cyberdog.train", "--aggregate", "sweep", "--eval-duration", "0"], cwd=work,
+    again = subprocess.run([py, "-m", "cyberdog.train_cli", "--aggregate", "sweep", "--eval-duration", "0"], cwd=work,
                            env=env, capture_output=True, text=True, timeout=300)
     assert again.returncode == 0 and "# Sweep sweep: 2 seeds" in again.stdout, again.stdout[-2000:] + again.stderr

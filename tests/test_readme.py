@@ -135,7 +135,7 @@ def test_expensive_next_commands_parse(command):
 
     args = python_args(command)
     if args[0] == "train.py":
-        from cyberdog import train  # train.py's command line
+        from cyberdog import train_cli as train  # train.py's command line
 
         parsed = train.parse_args(args[1:])
         C.load_preset(ROOT / parsed.config, parsed.overrides)

@@ -71,7 +71,7 @@ def kill_after_first_checkpoint(run_dir: Path, still_running, timeout: float = 2
             info = {}
         if info and (run_dir / "checkpoint.pt").is_file():
             cmdline = Path(f"/proc/{info['pid']}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-            assert "-m cyberdog.train" in cmdline and str(run_dir) in cmdline, cmdline
+            assert "-m cyberdog.train_cli" in cmdline and str(run_dir) in cmdline, cmdline
             os.kill(info["pid"], signal.SIGKILL)
             return load_checkpoint(run_dir / "checkpoint.pt")["counters"]["env_steps"]
         time.sleep(0.05)
@@ -348,10 +348,10 @@ def imported_modules(path: Path) -> set[str]:
 
 def test_no_layer_below_sweeps_imports_them():
     """Sweeps are the orchestration on top of the package (DESIGN.md layers): analysis, rl and everything
-    else below never import them; only the training command line (cyberdog/train.py) does."""
+    else below never import them; only the training command line (cyberdog/train_cli.py) does."""
     offenders = {}
     for path in PACKAGE.rglob("*.py"):
-        if (PACKAGE / "sweeps") in path.parents or path == PACKAGE / "train.py":  # the command line: on top
+        if (PACKAGE / "sweeps") in path.parents or path == PACKAGE / "train_cli.py":  # the command line: on top
             continue
         bad = sorted(m for m in imported_modules(path) if m == "cyberdog.sweeps" or m.startswith("cyberdog.sweeps."))
         if bad:

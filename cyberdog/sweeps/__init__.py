@@ -9,8 +9,8 @@ A sweep folder holds
     seed<N>/              an ordinary run folder of `train.py` (+ train.log, sweep_attempt.json)
     aggregate.*, evaluation.json, learning_curves.*   written by `cyberdog.sweeps.aggregate` at the end
 
-Every attempt of a seed is a separate process of the package's entry point, `python -m cyberdog.train --config
-sweep_config.yaml --seed N --run-dir seed<N> --no-progress`, and a retry is `python -m cyberdog.train --resume
+Every attempt of a seed is a separate process of the package's entry point, `python -m cyberdog.train_cli --config
+sweep_config.yaml --seed N --run-dir seed<N> --no-progress`, and a retry is `python -m cyberdog.train_cli --resume
 seed<N>`. Why processes rather than
 calling the trainer in a pool worker: a seed that segfaults in PyBullet, leaks memory or is killed cannot take
 the sweep down with it; a retry starts from a clean interpreter exactly like a user's `--resume`; the two

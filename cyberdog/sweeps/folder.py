@@ -155,7 +155,7 @@ def process_alive(info: dict, run_dir: Path) -> bool:
         cmdline = Path(f"/proc/{int(info['pid'])}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
     except OSError:
         return False
-    return str(run_dir) in cmdline and ("cyberdog.train" in cmdline or "train.py" in cmdline)
+    return str(run_dir) in cmdline and ("cyberdog.train_cli" in cmdline or "train.py" in cmdline)
 
 
 def read_attempt(run_dir: Path) -> dict:

@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 LOG_FILE, ATTEMPT_FILE, SWEEP_FILE = "train.log", "sweep_attempt.json", "sweep.json"
-ENTRY_POINT = "cyberdog.train"  # the package's training command line: `python -m cyberdog.train`
+ENTRY_POINT = "cyberdog.train_cli"  # the package's training command line: `python -m cyberdog.train_cli`
 RAY_MISSING = ("--backend ray needs Ray, which is not installed: pip install -e '.[ray]' (or pip install 'ray>=2.9'),"
                " or use the default --backend local")
 

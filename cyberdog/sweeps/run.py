@@ -35,7 +35,7 @@ def run_sweep(sweep_dir, backend: str = "local", workers: int | None = None, max
     seed's last checkpoint, up to `max_retries` times; then the seed is marked failed and the others go on.
     The status is kept in sweep_status.json (atomically rewritten) and shown as a progress bar, or with
     `progress=False` as a log line every `log_every_s` seconds. Each attempt is a process of the package's
-    entry point, `python -m cyberdog.train` (`entry_point`), importing this same `cyberdog` (its folder leads
+    entry point, `python -m cyberdog.train_cli` (`entry_point`), importing this same `cyberdog` (its folder leads
     PYTHONPATH).
     """
     sweep_dir = Path(sweep_dir)
@@ -50,7 +50,8 @@ def run_sweep(sweep_dir, backend: str = "local", workers: int | None = None, max
         status = SweepStatus(sweep_dir, seed_statuses(sweep_dir, spec), budget, info)
         driver = SweepDriver(sweep_dir, spec, status, max_retries, poll_s, log_every_s, echo)
         with _sigterm_as_interrupt():
-            return driver.run(lambda queued: _make_backend(backend, workers, ray_address, (code_root, entry_point), queued, echo),
+            return driver.run(lambda queued: _make_backend(backend, workers, ray_address, (code_root, entry_point),
+                                                           queued, echo),
                               progress)
 
 

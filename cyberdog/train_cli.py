@@ -1,5 +1,5 @@
 """Train the CyberDog walking agent with TD3 or DDPG in two stages (paper Section 3): the command line of
-`train.py`. `python -m cyberdog.train` is the same command without the sweep's learning-curve figure (drawn
+`train.py`. `python -m cyberdog.train_cli` is the same command without the sweep's learning-curve figure (drawn
 by the checkout's `plots/`); it is what a sweep launches for each seed, and what an installed package has.
 
 A preset (configs/<recipe>.yaml) is a whole recipe: its phases (stage 1, stage 2, continuations) run in order
@@ -13,7 +13,7 @@ Examples:
   python train.py --config configs/paper.yaml --stage 1 --seed 3 --run-dir runs/paper_s3
   python train.py --config configs/table5.yaml --set agent.algorithm=ddpg --set train.batch_size=128
   python train.py --resume runs/table5                                         # continue a killed run
-  python train.py --resume runs/table5 --set train.stage2.max_env_steps=320000 # train its last stage longer (or end it sooner)
+  python train.py --resume runs/table5 --set train.stage2.max_env_steps=320000   # its last stage longer
   python train.py --config configs/table5.yaml --stage 2 --init-from runs/table5/stage1_final.pt --run-dir runs/t2
 
 Seeds at scale (one run per seed in RUN_DIR/seed<N>/, retried from its checkpoint if it fails, then aggregated):
