@@ -229,3 +229,24 @@ def test_the_readme_tables_follow_the_rows_they_are_made_from(tmp_path):
     assert after["prototype"] == before["prototype"]
     with pytest.raises(ValueError, match="table:prototype"):
         replace_blocks("no markers here", {"prototype": after["prototype"]})
+
+
+def test_fresh_seeds_rows_are_those_seeds_walks_as_table5_summarises_them(tmp_path):
+    """With comparison_fresh.json (the recipe's paths of seeds it was never tuned on) Table 5 gains their E and
+    D_t rows, named by their seeds; the same walks relabelled give the shipped rows' numbers."""
+    import json
+    import shutil
+
+    from cyberdog.analysis.readme_tables import make_tables
+    source = ROOT / "results" / "figures_input"
+    for f in source.glob("*.json"):
+        shutil.copy(f, tmp_path / f.name)
+    walks = json.loads((source / "comparison.json").read_text())
+    relabel = {f"seed{k}": f"seed{k + 5}" for k in range(5)}
+    (tmp_path / "comparison_fresh.json").write_text(json.dumps(
+        [dict(w, seed=relabel.get(str(w.get("seed")), w.get("seed"))) for w in walks]))
+    table = make_tables(tmp_path)["table5"].splitlines()
+    row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in table[2:]}
+    fresh = row["**D_t on E, seeds 5–9 (never tuned on)**"]
+    assert [c.split(" (")[0].strip() for c in fresh] == [c.strip() for c in row["**D_t on E, Eq. 12**"]]
+    assert row["E, learned, seeds 5–9 (kJ)"] == row["E, learned (kJ)"]

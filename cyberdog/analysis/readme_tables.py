@@ -46,6 +46,7 @@ HEADLINES = {
 NAMES = ("table5", "prototype", "stiffness", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
+FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths of seeds it was never tuned on
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
 MINUS = "\u2212"  # the README's minus sign
@@ -77,10 +78,11 @@ def _header(first: str, speeds: list[float]) -> list[str]:
 
 
 def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
-                    torque_walks: list[dict] | None = None) -> str:
+                    torque_walks: list[dict] | None = None, fresh_walks: list[dict] | None = None) -> str:
     """The README's Table 5 from the walks of `evaluate.py compare` (its comparison.json); with `torque_walks`
     (the same for the paper's torque agent's paths) its D_t at matched lift as rows of its own, with the
-    number of seeds whose path replays (no fall, ±5 % speed) at each speed."""
+    number of seeds whose path replays (no fall, ±5 % speed) at each speed; with `fresh_walks` (the recipe's
+    paths of seeds it was never tuned on) their E and D_t beside the shipped seeds'."""
     summary = table5.summary_rows(walks)
     same = [r for r in summary if r["set"] == "same_lift"]
     paper = {r["speed_command_mps"]: r for r in summary if r["set"] == "paper"}
@@ -94,6 +96,8 @@ def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
                        [mean_ci(r, "straight_energy_kJ", ".3f") for r in same]))
     lines.append(_line("**D_t on E, Eq. 12**", [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}**" for r in same]))
     lines.append(_line("D_t on the electrical energy", [mean_ci(r, "D_t_electrical_pct", ".1f", " %") for r in same]))
+    if fresh_walks:
+        lines += _fresh_lines(fresh_walks, speeds)
     if torque_walks:
         torque = {r["speed_command_mps"]: r for r in table5.summary_rows(torque_walks) if r["set"] == "same_lift"}
         t = [torque.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
@@ -118,6 +122,18 @@ def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
                         else "" for i in idx]))
     lines.append(_line("*paper: D_t*", [f"{t['decrement_pct'][i]:.0f} %" if i is not None else "" for i in idx]))
     return "\n".join(lines)
+
+
+def _fresh_lines(walks: list[dict], speeds: list[float]) -> list[str]:
+    """Table 5's rows of the fresh seeds' paths (the seeds named in their rows), with the seeds that replay."""
+    fresh = {r["speed_command_mps"]: r for r in table5.summary_rows(walks) if r["set"] == "same_lift"}
+    rows = [fresh.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
+    seeds = sorted({int(str(w["seed"]).removeprefix("seed")) for w in walks if str(w.get("seed", "")).removeprefix(
+        "seed").isdigit()})
+    named = f"seeds {seeds[0]}–{seeds[-1]}" if seeds else "fresh seeds"
+    return [_line(f"E, learned, {named} (kJ)", [mean_ci(r, "learned_energy_kJ", ".3f") for r in rows]),
+            _line(f"**D_t on E, {named} (never tuned on)**",
+                  [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}** ({r['n_valid']} of {r['n_seeds']})" for r in rows])]
 
 
 def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
@@ -202,7 +218,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
                                     "(`python evaluate.py` writes it; results/figures_input/ holds the shipped one)")
     walks = {name: json.loads((results / file).read_text()) for name, file in SOURCES.items()}
     torque = json.loads((results / TORQUE_SOURCE).read_text()) if (results / TORQUE_SOURCE).is_file() else None
-    tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque),
+    fresh = json.loads((results / FRESH_SOURCE).read_text()) if (results / FRESH_SOURCE).is_file() else None
+    tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque, fresh),
               "prototype": prototype_markdown(walks["prototype"])}
     if (results / STIFFNESS_SOURCE).is_file():
         matched = results / STIFFNESS_MATCHED_SOURCE
