@@ -256,9 +256,10 @@ def _prototype_options() -> argparse.ArgumentParser:
                         f"learned seed walks, and the tables give mean ± 95 %% CI across seeds")
     g.add_argument("--prototype-reference", type=Path, default=None, metavar="FILE",
                    help="a shape saved by tools/optimize_trajectory.py walked beside the common trajectories at each "
-                        "learned path's lift as the reference row \"searched\" (default "
-                        "results/searched_shapes/optimized_trajectory_H0.085_electrical_hardware_placed_loop.json: searched for the "
-                        "battery on the hardware-like robot under the trot of the default battery paths)")
+                        "learned path's lift as the reference row \"searched\", under the trot it was searched under "
+                        "(default results/searched_shapes/optimized_trajectory_H0.085_electrical_hardware.json: "
+                        "searched for the battery on the hardware-like robot, the cheapest such shape under any "
+                        "shipped trot)")
     g.add_argument("--no-prototype-reference", action="store_true", help="no reference row in the prototype run")
     g.add_argument("--closed-loop", type=Path, nargs="+", default=None, metavar="ACTOR",
                    help="stage-2 actor files whose policies walk the same protocol themselves, closed loop, as the "
