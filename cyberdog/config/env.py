@@ -111,9 +111,9 @@ class EnvConfig:
     #                                     the hip kp the drivers run now over the robot's default 60 N·m/rad,
     #                                     so that a policy may command a path per stiffness a user sets
     # torque mode only: the motor drivers' damping, τ = τ_action − joint_damping·q̇ at every physics step
-    # (the drivers' kd with kp = 0). 0 = the paper's pure torque. A documented departure (docs/torque_agent.md): a
-    # torque held over Ts = 25 ms cannot damp a light leg, and MathWorks' example, whose settings Table 4 copies,
-    # gives every joint 8 N·m·s/rad of damping. Here it is motor torque, so Eq. 7 books its work
+    # (the drivers' kd with kp = 0). 0 = the paper's pure torque. A documented departure (docs/training.md, the
+    # torque recipe): a torque held over Ts = 25 ms cannot damp a light leg, and MathWorks' example, whose settings
+    # Table 4 copies, gives every joint 8 N·m·s/rad of damping. Here it is motor torque, so Eq. 7 books its work
     joint_damping: float = 0.0  # N·m·s/rad
     # torque mode only: a prior from the trot controller (trajectory + IK + PD at the state of the agent step,
     # held over Ts like the action), added to the action's torque with a weight that decays linearly from

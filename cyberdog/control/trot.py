@@ -19,7 +19,7 @@ NOTES' measurement on a similar robot found plain PD tracking reached only about
   damps the roll/sway that otherwise topples the trot at 1.2–1.4 m/s;
 - sagittal foot placement, off by default (`sagittal_placement_gain`): each touchdown moved ahead by
   k·(v − v_cmd), Raibert's rule for the forward speed; measured as a stabiliser of replayed learned paths
-  (docs/stiffness.md), not part of the paper's trot;
+  (notebook/2026-11-27_stiffness.md), not part of the paper's trot;
 - a start-up ramp of the commanded speed (`speed_ramp_time`, 1 s): stepping from rest to full speed at once
   rolled the body by up to 0.8 rad and toppled the straight-line trot at 1.4 m/s. A learned path's per-leg
   shift (`foot_offset_path`) is blended in over the same ramp, in proportion to the commanded speed.

@@ -41,8 +41,8 @@ class CyberDogEnv(gym.Env):
     **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
     `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
     - `action_mode="torque"` (the paper's, Table 3): the action is the joint torque, held over the agent step;
-      two documented departures can be switched on (both off by default, see docs/torque_agent.md): the
-      drivers' damping `joint_damping` (−c·q̇ at every physics step, motor torque that Eq. 7 books), and a
+      two documented departures can be switched on (both off by default; docs/training.md, the torque recipe):
+      the drivers' damping `joint_damping` (−c·q̇ at every physics step, motor torque that Eq. 7 books), and a
       prior from the trot controller whose weight decays to exactly 0 during training (`prior_weight`,
       `prior_decay_steps`; DecAP): τ = 25·a + w·τ_trot, τ_trot computed at the agent step's state and held.
       `info["prior_weight"]` is the weight the step used; with `trot_reference` (or a prior) `info["trot_action"]`

@@ -7,7 +7,7 @@
 - `CyberDogPaper-v0`, the paper's MDP as written (Section 3, Tables 3–4): the action is the 12 joint torques
   (×25 N·m), the observation Table 3's 50, the reward Eq. 11. Its every term but the keep-moving bonus is a
   penalty, so a robot that falls at once scores above one that walks: trained from scratch, an agent learns
-  to fall (docs/torque_agent.md); `gym.make` says so unless a reward is passed.
+  to fall (docs/training.md, the torque recipe); `gym.make` says so unless a reward is passed.
 
 Both are `CyberDogEnv` (its docstring is the specification), 400 steps of 25 ms (Table 4). A `config` passed to
 `gym.make` is taken as it is (the task's settings then do not apply); keyword options change single fields.
@@ -26,7 +26,7 @@ PAPER_TASK = C.EnvConfig(action_mode="torque", action_scale=25.0)
 PAPER_TASK_WARNING = (
     "CyberDogPaper-v0 is the paper's MDP: with Eq. 11's reward every term but the keep-moving bonus (D = 25) is a "
     "penalty, so a robot that falls at once scores above one that walks, and an agent trained on it from scratch "
-    "learns to fall (docs/torque_agent.md). Pass reward= to choose another (e.g. reward='stage1', or "
+    "learns to fall (docs/training.md, the torque recipe). Pass reward= to choose another (e.g. reward='stage1', or "
     "RewardConfig(keep_moving=...)); CyberDog-v0 is the task the shipped agents learn")
 
 

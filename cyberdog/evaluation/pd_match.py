@@ -4,7 +4,7 @@ A learned path is a command: what the robot does with it depends on the joint PD
 your own, this keeps the gait the path walks under the walk config's PD (default kp 60 N·m/rad, kd 2 N·m·s/rad
 per joint type, the PD the shipped policies trained around) and re-solves its foot shifts for the new gains
 (`cyberdog.analysis.pd_match_recording`: each path walked for `RECORD_S` s on the ideal robot under the trot it
-was recorded with; the method in docs/pd_matching.md). Each re-commanded path is written as
+was recorded with; the method in docs/evaluation.md, "Re-commanded for the PD"). Each re-commanded path is written as
 `<out>/learned/<same file name>` with the PD it is for in its provenance (`pd_matched`). Walk it under that PD:
 
     python evaluate.py pd-match results/battery/paths --kp 84 84 84 --kd 2.4 2.4 2.4 --out runs/my_pd
