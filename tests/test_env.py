@@ -15,7 +15,8 @@ def residual_episode():
     """One full 10 s episode at 1.0 m/s with zero residual action and the estimated, noisy velocity."""
     hardware = C.HardwareConfig(estimated_velocity=True, imu_noise=True, joint_angle_noise_std=0.002,
                                 joint_velocity_noise_std=0.05)
-    env = gym.make("CyberDog-v0", config=C.EnvConfig(hardware=hardware), reward="stage2")  # residual mode
+    env = gym.make("CyberDog-v0", config=C.EnvConfig(action_mode="residual", observe_last_action=False,
+                                                        target_speed_range=(), hardware=hardware), reward="stage2")
     env.reset(seed=0)
     speeds, estimates, rewards, infos = [], [], [], []
     steps, terminated, truncated = 0, False, False
@@ -47,7 +48,7 @@ def test_observe_last_action_appends_the_previous_action():
     env = CyberDogEnv(action_mode="foot", observe_last_action=True, episode_time=0.25)
     assert env.observation_space.shape == (62,) == (observation_size(env.cfg),)
     assert observation_typical_magnitude(env.cfg).shape == (62,) and observation_size() == 50
-    plain = CyberDogEnv(action_mode="foot", episode_time=0.25)
+    plain = CyberDogEnv(action_mode="foot", observe_last_action=False, episode_time=0.25)
     obs, _ = env.reset(seed=1)
     obs_plain, _ = plain.reset(seed=1)
     np.testing.assert_array_equal(obs[50:], 0.0)

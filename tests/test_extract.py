@@ -141,6 +141,7 @@ def _zero_actor_file(path, **env_changes):
     from cyberdog.rl.networks import TanhActor
 
     cfg = C.ExperimentConfig()
+    env_changes = {"action_mode": "residual", "observe_last_action": False, "target_speed_range": (), **env_changes}
     cfg = C.replace(cfg, env=C.replace(cfg.env, **env_changes))
     scale = observation_typical_magnitude(cfg.env)
     actor = TanhActor(len(scale), 12, (8,), scale)

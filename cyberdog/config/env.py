@@ -90,7 +90,14 @@ ACTION_MODES = ("torque", "residual", "foot")
 
 @dataclass(frozen=True)
 class EnvConfig:
-    """`CyberDog-v0`: the paper's MDP. Degrees appear only here, at the edge, and are converted once."""
+    """`CyberDog-v0`: the paper's MDP (Tables 3-4) on the task the shipped agents learn. Degrees appear only
+    here, at the edge, and are converted once.
+
+    The defaults are the registered `CyberDog-v0` task's: the action shifts the trot controller's foot targets
+    (±3 cm per axis), the observation appends the previous action (62), and the command is drawn per episode
+    from the paper's 1.0-1.4 m/s. The paper's own MDP as written (joint torques, Table 3's 50 observations, a
+    fixed command) is `cyberdog.envs.registration.PAPER_TASK` (`CyberDogPaper-v0`, `configs/paper.yaml`).
+    """
 
     # robot, actuator, sim, gait, PID, controller, energy; the lift height is 0.10 m (not the paper's 0.15 m)
     # so that the trot stays inside Table 4's ±45° joint range around the standing pose
@@ -99,12 +106,13 @@ class EnvConfig:
     control_dt: float = 0.025  # s, agent sample time Ts (paper Section 3)
     episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
     # "torque": the paper's, the action is the joint torque; "residual": torque added to the trot controller's;
-    # "foot": offsets of the trot controller's foot targets (the controller's IK + PID then track them)
-    action_mode: str = "residual"
+    # "foot": offsets of the trot controller's foot targets (the controller's IK + PID then track them), the
+    # shipped agents' (Table 5, the battery); the paper's torque agent is configs/torque.yaml
+    action_mode: str = "foot"
     action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
     foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
     foot_offset_scale_z: Optional[float] = None  # m per unit action on the vertical axis; None = foot_offset_scale
-    observe_last_action: bool = False  # append the previous action (12) to Table 3's observation (50 -> 62):
+    observe_last_action: bool = True  # append the previous action (12) to Table 3's observation (50 -> 62):
     #                                    in foot mode it is the offset the next action ramps from, which sets
     #                                    the step's jerk and energy; without it the critics cannot see that cost
     observe_pd_stiffness: bool = False  # append the joint PD's stiffness (1 entry, after the previous action):
@@ -132,8 +140,10 @@ class EnvConfig:
     joint_range_deg: float = 45.0  # ± around the standing pose (Table 4 "joint control range")
     joint_stop_stiffness: float = 200.0  # N·m/rad, virtual end stop beyond the joint range
     joint_stop_damping: float = 2.0  # N·m·s/rad, damping of the virtual end stop (only while beyond it)
-    target_speed: float = 1.0  # m/s, commanded forward speed v_x (fixed unless a range is given)
-    target_speed_range: Tuple[float, ...] = ()  # (low, high) m/s: sample the command per episode; () = fixed
+    target_speed: float = 1.0  # m/s, commanded forward speed v_x (fixed when target_speed_range is ())
+    # (low, high) m/s: the command is drawn per episode and observed, so one policy walks the paper's three
+    # speeds (Table 5); () = target_speed every episode (the paper's MDP)
+    target_speed_range: Tuple[float, ...] = (1.0, 1.4)
     # the robot's hardware effects (joint friction, actuation latency, encoder and IMU noise, Kalman speed
     # feedback, mass draw): the same model as the prototype walks'. In the env the mass is drawn per episode
     # from the env's seed and the sensors are seeded per episode too (`HardwareConfig.seed` is not used)

@@ -117,7 +117,8 @@ class CyberDogEnv(gym.Env):
     **Options** (keyword arguments of `gymnasium.make("CyberDog-v0", ...)`): `config` (an `EnvConfig`),
     `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array", or "human": a PyBullet window;
     on a machine without a display it runs without one, with a warning), and any top-level `EnvConfig` field,
-    e.g. `action_mode="torque"`, `target_speed=1.2`, `hardware=C.HARDWARE_LIKE`.
+    e.g. `action_mode="torque"`, `target_speed=1.2` (a speed given alone fixes the command: the task's drawn
+    1.0–1.4 m/s would otherwise win), `hardware=C.HARDWARE_LIKE`.
 
     **Domain randomisation** (`randomization`, a `RandomizationConfig`, off by default): each episode's robot
     is drawn from ranges of joint friction, actuation latency, link masses, motor strength, PID gains and
@@ -148,6 +149,8 @@ class CyberDogEnv(gym.Env):
         unknown = sorted(set(overrides) - {f.name for f in dataclasses.fields(C.EnvConfig)})
         if unknown:
             raise ValueError(f"unknown CyberDog-v0 option(s) {unknown}")
+        if "target_speed" in overrides:  # a speed given alone fixes the command (the drawn range would win)
+            overrides.setdefault("target_speed_range", ())
         self.cfg = cfg = dataclasses.replace(cfg, **overrides) if overrides else cfg
         if not reward_chosen and cfg.reward == C.STAGE2_REWARD:  # the default, taken without a word
             warnings.warn(PAPER_REWARD_WARNING, UserWarning, stacklevel=2)
