@@ -12,7 +12,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
   paper's own numbers; mean ± 95 % CI over the seeds whose walk is valid (`cyberdog.analysis.table5`).
 - `prototype`: the prototype run on the hardware-like robots (`prototype.json`): battery per 100 m, the
   saving against the cheaper common trajectory, range, electrical energy, the searched shape's battery and the
-  learned paths against it, the paper's range; mean ± 95 % CI across seeds (`cyberdog.analysis.prototype_summary`).
+  learned paths against it, the paper's range; mean ± 95 % CI across seeds (`cyberdog.analysis.prototype_summary`);
+  where `prototype_fresh.json` is shipped, the same run on the recipe's seeds it was never tuned on.
 - `stiffness` (where `stiffness_walks.json` is shipped): the same run with the joint PD at several stiffnesses
   (`evaluate.py stiffness`): the battery saving of the replayed paths, the policies and the searched shape at
   each, falls counted; where `stiffness_matched_walks.json` is shipped too (`evaluate.py stiffness
@@ -32,11 +33,13 @@ from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
 from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
 FRESH_ROW = "**D_t on E, seeds 5–9 (never tuned on)**"  # a headline row only where its walks are shipped
+FRESH_PROTOTYPE_ROW = "**battery saving, seeds 5–9 (never tuned on)**"  # the same, the prototype run's
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
     "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
     "prototype_headline": ("prototype", ("battery % per 100 m: learned",
                                          "**battery saving against the cheaper common trajectory**",
+                                         FRESH_PROTOTYPE_ROW,
                                          "learned against the shape searched for the battery (the best alternative)",
                                          "*paper, 1 m/s: range learned / cycloid*")),
     "stiffness_headline": ("stiffness", ("**replayed learned path, PD 0.7×**", "**replayed learned path, PD 1×**",
@@ -47,6 +50,8 @@ NAMES = ("table5", "prototype", "stiffness", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths of seeds it was never tuned on
+# optional: the prototype run of the battery recipe's paths of seeds it was never tuned on
+PROTOTYPE_FRESH_SOURCE = "prototype_fresh.json"
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
 MINUS = "\u2212"  # the README's minus sign
@@ -128,16 +133,35 @@ def _fresh_lines(walks: list[dict], speeds: list[float]) -> list[str]:
     """Table 5's rows of the fresh seeds' paths (the seeds named in their rows), with the seeds that replay."""
     fresh = {r["speed_command_mps"]: r for r in table5.summary_rows(walks) if r["set"] == "same_lift"}
     rows = [fresh.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
-    seeds = sorted({int(str(w["seed"]).removeprefix("seed")) for w in walks if str(w.get("seed", "")).removeprefix(
-        "seed").isdigit()})
-    named = f"seeds {seeds[0]}–{seeds[-1]}" if seeds else "fresh seeds"
+    named = _seeds_named(walks)
     return [_line(f"E, learned, {named} (kJ)", [mean_ci(r, "learned_energy_kJ", ".3f") for r in rows]),
             _line(f"**D_t on E, {named} (never tuned on)**",
                   [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}** ({r['n_valid']} of {r['n_seeds']})" for r in rows])]
 
 
-def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
-    """The README's prototype table from the walks of `evaluate.py prototype` (its prototype.json)."""
+def _seeds_named(walks: list[dict]) -> str:
+    """"seeds 5–9": the range of the seeds named in the walks' rows ("seedN")."""
+    seeds = sorted({int(str(w["seed"]).removeprefix("seed")) for w in walks if str(w.get("seed", "")).removeprefix(
+        "seed").isdigit()})
+    return f"seeds {seeds[0]}–{seeds[-1]}" if seeds else "fresh seeds"
+
+
+def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -> list[str]:
+    """The prototype table's rows of the fresh seeds' paths: their battery per 100 m and their saving against
+    the cheaper common trajectory (walks that fell or left the band counted, as in the robustness table)."""
+    by = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
+    rows = [by.get(("learned", v)) for v in speeds]
+    named = _seeds_named(walks)
+    return [_line(f"battery % per 100 m: learned, {named}",
+                  ["–" if r is None else mean_ci(r, "battery_pct_per_100m", ".2f") for r in rows]),
+            _line(f"**battery saving, {named} (never tuned on)**",
+                  ["–" if r is None else f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**{_missed(r)}"
+                   for r in rows])]
+
+
+def prototype_markdown(walks: list[dict], robot: str = "hardware", fresh_walks: list[dict] | None = None) -> str:
+    """The README's prototype table from the walks of `evaluate.py prototype` (its prototype.json); with
+    `fresh_walks` (the same run on the recipe's paths of seeds it was never tuned on), their rows too."""
     summary = [r for r in ps.summary_rows(walks) if r["robot"] == robot]
     by = {(r["trajectory"], r["speed_mps"]): r for r in summary}
     speeds = sorted({r["speed_mps"] for r in summary if r["trajectory"] == "learned"})
@@ -151,6 +175,8 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware") -> str:
                         for c, s in zip(cycloid, straight)]))
     lines.append(_line("**battery saving against the cheaper common trajectory**",
                        [f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**" for r in learned]))
+    if fresh_walks:
+        lines += _prototype_fresh_lines(fresh_walks, robot, speeds)
     lines.append(_line("range on a full charge (m): learned / cycloid",
                        [f"{mean_ci(r, 'range_full_charge_m', '.0f')} / {mean_ci(c, 'range_full_charge_m', '.0f')}"
                         for r, c in zip(learned, cycloid)]))
@@ -219,8 +245,10 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     walks = {name: json.loads((results / file).read_text()) for name, file in SOURCES.items()}
     torque = json.loads((results / TORQUE_SOURCE).read_text()) if (results / TORQUE_SOURCE).is_file() else None
     fresh = json.loads((results / FRESH_SOURCE).read_text()) if (results / FRESH_SOURCE).is_file() else None
+    fresh_prototype = (json.loads((results / PROTOTYPE_FRESH_SOURCE).read_text())
+                       if (results / PROTOTYPE_FRESH_SOURCE).is_file() else None)
     tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque, fresh),
-              "prototype": prototype_markdown(walks["prototype"])}
+              "prototype": prototype_markdown(walks["prototype"], fresh_walks=fresh_prototype)}
     if (results / STIFFNESS_SOURCE).is_file():
         matched = results / STIFFNESS_MATCHED_SOURCE
         tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
@@ -234,7 +262,7 @@ def headline(table: str, rows: tuple[str, ...]) -> str:
     not there is an error (a renamed row must not vanish from the README unnoticed)."""
     lines = table.splitlines()
     kept = [ln for ln in lines[2:] if ln.split("|")[1].strip() in rows]
-    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept} - {FRESH_ROW}
+    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept} - {FRESH_ROW, FRESH_PROTOTYPE_ROW}
     if missing:
         raise ValueError(f"headline rows {sorted(missing)} are not in the table")
     return "\n".join(lines[:2] + kept)
