@@ -70,6 +70,43 @@ def test_the_joint_range_end_stop_holds_a_joint_pushed_at_full_torque():
     assert reach[0.0] > np.deg2rad(90.0)
 
 
+def _torque_run(hardware: C.HardwareConfig) -> tuple[np.ndarray, np.ndarray, list]:
+    """Five agent steps of fixed random torques from reset(seed=4): observations, Eq. 7 energies, infos."""
+    env = torque_env(hardware=hardware, observe_last_action=False, target_speed_range=())
+    obs, _ = env.reset(seed=4)
+    observed, energies, infos = [obs], [], []
+    for a in np.random.default_rng(2).uniform(-0.3, 0.3, (5, 12)):
+        obs, _, _, _, info = env.step(a)
+        observed.append(obs)
+        energies.append(info["step_energy_J"])
+        infos.append(info)
+    env.close()
+    return np.array(observed), np.array(energies), infos
+
+
+@pytest.mark.parametrize("effect", ["friction", "latency", "mass", "encoder_noise", "estimated_velocity"])
+def test_each_hardware_effect_reaches_the_torque_envs_step(effect):
+    """The hardware-like robot's effects act on the paper's torque agent as on the trot: friction, the command
+    bus's latency and the mass draw change the physics (the joints' work), encoder noise and the Kalman speed
+    change only what the policy observes (the physics, on the true state, is the ideal robot's)."""
+    hw = {"friction": C.HardwareConfig(friction=True), "latency": C.HardwareConfig(latency_s=0.0025),
+          "mass": C.HardwareConfig(mass_uncertainty=0.05),
+          "encoder_noise": C.HardwareConfig(joint_angle_noise_std=0.002, joint_velocity_noise_std=0.05),
+          "estimated_velocity": C.HardwareConfig(estimated_velocity=True, imu_noise=True)}[effect]
+    obs0, e0, _ = _torque_run(C.HardwareConfig())
+    obs, e, infos = _torque_run(hw)
+    angles, velocity = slice(11, 23), slice(5, 8)  # the observation's joint angles and body linear velocity
+    if effect in ("friction", "latency", "mass"):
+        assert np.abs(e - e0).max() > 1e-3 * e0.max()  # the joints did other work
+    else:
+        np.testing.assert_allclose(e, e0, rtol=1e-12)  # the same physics
+        seen = angles if effect == "encoder_noise" else velocity
+        assert np.abs(obs[1:, seen] - obs0[1:, seen]).max() > 1e-4  # another observation
+    if effect == "estimated_velocity":
+        assert all(i["velocity_estimate"] is not None for i in infos)
+        assert not np.allclose([i["forward_speed_used"] for i in infos], [i["forward_speed"] for i in infos])
+
+
 def test_joint_damping_is_motor_torque_whose_work_eq7_books():
     """The drivers' damping: −c·q̇ on the joint speed at each physics step (the drivers' rate), applied as motor
     torque, so that the damper's work is in the energy (a damper in the joint model instead would hide it)."""
