@@ -8,9 +8,10 @@ import pytest
 from cyberdog import config as C
 from cyberdog.control.trot import TrotController
 from cyberdog.core import energy as en
-from cyberdog.core.drivers import JointCommand, driver_torque
+from cyberdog.core.drivers import (MAX_DAMPING_STEP, MAX_HALVINGS, MAX_STIFFNESS_STEP, JointCommand,
+                                   driver_physics_dt, driver_torque)
 from cyberdog.core.pid import JointPID
-from cyberdog.loop.walker import Walker
+from cyberdog.loop.walker import Walker, driver_rate_config
 from cyberdog.sim.robot import Robot
 
 CFG = C.WalkConfig()
@@ -109,24 +110,27 @@ def _held_drive(robot, command, added=None, damping=0.0):
 
 def _ringing(kd: float, monkeypatch, held: bool = False) -> float:
     """The knees' torque power between 100 and 300 Hz over 2.5 s of a 1.4 m/s cycloid walk (after a 1.5 s
-    start), per kd² (the D term's HF torque grows with its gain even without ringing). A held PD at kd = 4
-    rings at about half the controller rate; above 300 Hz is the pattern of the held command itself."""
+    start), per kd² (the D term's HF torque grows with its gain even without ringing) and per sample² (the
+    walk's physics rate follows its gains). A held PD at kd = 4 rings at about half the controller rate; above
+    300 Hz is the pattern of the held command itself."""
     if held:
         monkeypatch.setattr(Robot, "drive", _held_drive)
     cfg = C.replace(CFG, gait=C.replace(CFG.gait, speed=1.4), pid=C.replace(CFG.pid, kd=(kd,) * 3))
     with Walker(cfg) as w:
         for _ in range(int(round(4.0 / w.dt))):
             w.step()
-        knees = w.physics_tau.view(int(round(1.5 / w.dt)) * N)[:, 2::3]
+        knees = w.physics_tau.view(int(round(1.5 / w.dt)) * w.substeps)[:, 2::3]
+        physics_dt = w.physics_dt  # kd 4: a finer step than the default (driver_rate_config)
     monkeypatch.undo()
     power = (np.abs(np.fft.rfft(knees - knees.mean(axis=0), axis=0)) ** 2).sum(axis=1)
-    f = np.fft.rfftfreq(len(knees), d=cfg.sim.physics_dt)
-    return float(power[(f >= 100.0) & (f < 300.0)].sum()) / kd ** 2
+    f = np.fft.rfftfreq(len(knees), d=physics_dt)
+    return float(power[(f >= 100.0) & (f < 300.0)].sum()) / len(knees) ** 2 / kd ** 2  # (N²: any physics rate)
 
 
 def test_a_kd_4_walk_does_not_ring(monkeypatch):
     """With the drivers at the physics rate, kd = 4 N·m·s/rad puts no more 100–300 Hz torque into the knees,
-    per unit of gain, than kd = 2 (measured: 0.8×); drivers that held the PD over the period rang there (26×)."""
+    per unit of gain, than kd = 2 (measured: 0.5×, at the finer step its gains get); drivers that held the PD
+    over the period rang there (20×)."""
     kd2, kd4 = _ringing(2.0, monkeypatch), _ringing(4.0, monkeypatch)
     assert kd4 < 1.5 * kd2
     assert _ringing(4.0, monkeypatch, held=True) > 5.0 * kd2  # the measure sees a ringing PD
@@ -144,3 +148,44 @@ def test_the_integral_term_is_advanced_once_per_controller_period_and_held_in_th
         assert sent[-1].integral == w.controller.pid.integral.tolist() and np.any(w.controller.pid.integral != 0)
     with pytest.raises(ValueError, match="dq"):
         TrotController(cfg).command(0.0, np.zeros(12))
+
+
+J_ROTOR = CFG.robot.reflected_rotor_inertia
+
+
+@pytest.mark.parametrize("kp, kd", [(60.0, 2.0), (30.0, 1.0), (84.0, 2.37), (120.0, 2.0), (60.0, 4.0),
+                                    (120.0, 4.0), (400.0, 12.0)])
+def test_the_physics_step_is_halved_until_the_drivers_pd_is_within_its_bounds(kp, kd):
+    h0, period = CFG.sim.physics_dt, CFG.sim.controller_dt
+    h = driver_physics_dt(h0, (kp, kp / 2, 0.0), (0.0, kd, kd / 3), J_ROTOR)  # the largest gain of each counts
+    assert kd * h / J_ROTOR <= MAX_DAMPING_STEP and kp * h * h / J_ROTOR <= MAX_STIFFNESS_STEP
+    assert h == h0 or not (kd * 2 * h / J_ROTOR <= MAX_DAMPING_STEP and kp * 4 * h * h / J_ROTOR
+                           <= MAX_STIFFNESS_STEP)  # no finer than needed
+    n = period / h
+    assert abs(n - round(n)) < 1e-9  # a controller period is whole physics steps
+    # the default PD, softer ones and the replay check's 1.4x stiffness keep the configured 800 Hz
+    assert (h == h0) == (kp <= 84.0 and kd <= 2.37)
+
+
+def test_the_driver_rate_rule_refuses_absurd_gains_and_needs_a_rotor():
+    with pytest.raises(ValueError, match="need a physics step"):
+        driver_physics_dt(0.00125, (60.0,), (2.0 * 2 ** (MAX_HALVINGS + 1),), J_ROTOR)
+    assert driver_physics_dt(0.00125, (1e4,), (1e3,), 0.0) == 0.00125  # no rotor: no scale, the step stays
+    with pytest.raises(ValueError, match="joint_inertia"):
+        driver_physics_dt(0.00125, (60.0,), (2.0,), -1.0)
+
+
+def test_a_walk_at_doubled_damping_steps_its_drivers_twice_as_often():
+    cfg = C.replace(CFG, pid=C.replace(CFG.pid, kd=(4.0,) * 3))
+    assert driver_rate_config(CFG) is CFG  # the default gains: the configured step
+    with Walker(cfg) as w:
+        assert w.physics_dt == CFG.sim.physics_dt / 2 and w.substeps == 2 * N
+        assert w.cfg.sim.physics_dt == w.physics_dt and w.dt == CFG.sim.controller_dt
+        w.step()
+        assert len(w.physics_tau.view(0)) == 2 * N  # the energy integrates every one of them
+    coarse = Robot(CFG.robot, CFG.actuator, CFG.sim)
+    try:
+        with pytest.raises(ValueError, match="physics step"):
+            Walker(cfg, robot=coarse)
+    finally:
+        coarse.close()

@@ -16,11 +16,26 @@ sends it with the command; it is None without integral action (ki = 0, the defau
 
 Held over a 2.5 ms period, the PD torque was a discrete loop that rang at kd = 4 N·m·s/rad (kd·dt / J ≈ 1 for
 the knee with its rotor's reflected inertia): Eq. (7) energy of a 1.4 m/s cycloid walk +43 % over kd = 2
-(docs/design.md, "The controller's rate"). At the physics rate it converges (the same section's table).
+(docs/design.md, "The controller's rate"). At the physics rate it converges (the same section's table) when
+the physics step is short beside the joint's own time scales: `driver_physics_dt` halves the configured step
+until it is, for the gains the walk sets.
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
+
+# The drivers' PD is explicit (computed on the joint state at the start of each physics step), so its energy
+# converges in the step h only while h is short beside the joint's time scales, with J the least inertia a
+# joint can have (its rotor's reflected inertia, RobotConfig.reflected_rotor_inertia):
+#   damping    kd·h / J        (the velocity error's decay per step; continuous: e^(−kd·t/J))
+#   stiffness  kp·h² / J       ((ω_n·h)², ω_n = √(kp/J))
+# The bounds are read off the convergence table of docs/design.md ("The drivers' rate"): every gain walked at
+# a step within them costs within 1 % of the same walk at half the step (the default PD, kp 60 N·m/rad and kd
+# 2 N·m·s/rad at 1.25 ms, is 0.013 and 0.35; kd 4 at 1.25 ms, 0.69, was 2.6–5.8 % off).
+MAX_DAMPING_STEP = 0.42  # kd·h / J: kd ≤ 2.42 N·m·s/rad at 800 Hz
+MAX_STIFFNESS_STEP = 0.0183  # kp·h² / J: kp ≤ 84.4 N·m/rad at 800 Hz
+MAX_HALVINGS = 6  # a configured step at most 64 times finer: beyond, the gains are not a robot's (an error)
 
 
 class JointCommand(NamedTuple):
@@ -48,3 +63,24 @@ def driver_torque(command: JointCommand, q: list, dq: list, torque_limit: float)
     return [(hi if (p := kp * (qt - qm) + kd * (dqt - dqm) + i) > hi else lo if p < lo else p) + f
             for kp, kd, qt, qm, dqt, dqm, i, f in zip(c.kp, c.kd, c.q_target, q, c.dq_target, dq, c.integral,
                                                      c.feedforward)]
+
+
+def driver_physics_dt(physics_dt: float, kp, kd, joint_inertia: float) -> float:
+    """s: the physics step at which the drivers' PD with gains `kp`, `kd` (N·m/rad, N·m·s/rad; any numbers)
+    converges: `physics_dt` halved until kd·h/J ≤ MAX_DAMPING_STEP and kp·h²/J ≤ MAX_STIFFNESS_STEP (the
+    module's constants; J = `joint_inertia`, kg·m², the joints' least inertia). Halving keeps a controller
+    period a whole number of physics steps. `joint_inertia` 0 (no rotor modelled) leaves `physics_dt` as it is:
+    the bound has no scale then. ValueError for gains that need more than MAX_HALVINGS halvings."""
+    if not (joint_inertia >= 0 and math.isfinite(joint_inertia)):
+        raise ValueError(f"joint_inertia must be >= 0 kg·m² and finite, got {joint_inertia!r}")
+    if joint_inertia == 0:
+        return physics_dt
+    kp_max, kd_max = max(kp, default=0.0), max(kd, default=0.0)
+    h = physics_dt
+    for _ in range(MAX_HALVINGS + 1):
+        if kd_max * h / joint_inertia <= MAX_DAMPING_STEP and kp_max * h * h / joint_inertia <= MAX_STIFFNESS_STEP:
+            return h
+        h /= 2
+    raise ValueError(f"joint gains kp {kp_max:g} N·m/rad, kd {kd_max:g} N·m·s/rad need a physics step under "
+                     f"{physics_dt / 2 ** MAX_HALVINGS:.3g} s to converge (joint inertia {joint_inertia:g} kg·m²): "
+                     f"not a gain a CyberDog driver runs")

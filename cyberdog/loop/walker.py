@@ -13,7 +13,8 @@ or absent for this one:
    paper's torque-mode env); an extra torque (a policy's) is added to it;
 2. the virtual end stop of Table 4's joint range adds its torque, if one is given;
 3. the command waits out the actuation latency and is held over the period's `SimConfig.physics_substeps`
-   physics steps; at each, the motor drivers close their PD on the joint state then (and the torque-mode
+   physics steps (`SimConfig.physics_dt`, made finer for stiff or strongly damped gains: `driver_rate_config`);
+   at each, the motor drivers close their PD on the joint state then (and the torque-mode
    drivers' damping acts on the joint speed then), the actuator model clips and shapes the torque, and
    PyBullet steps once (`Robot.drive`). The drivers read their own encoders, the true joint state: the
    hardware model's encoder noise is on what the locomotion controller reads (`HardwareConfig`). A PID's
@@ -32,6 +33,8 @@ Time is `steps · dt` since the reset.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
@@ -39,6 +42,7 @@ from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core import energy as en
 from cyberdog.core import kinematics as kin
+from cyberdog.core.drivers import driver_physics_dt
 from cyberdog.loop.rows import PeriodEnds, PeriodMean, Rows
 from cyberdog.sim.hardware_model import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
@@ -49,6 +53,19 @@ FALL_HEIGHT = EnvConfig.fall_height  # m, body centre below this
 FALL_TILT = np.deg2rad(EnvConfig.fall_tilt_deg)  # rad, |roll| or |pitch| above this
 CONTACT_CHECK_PERIOD = 0.010  # s between checks of which links touch the ground
 SLIP_SAMPLE_PERIOD = 0.005  # s between samples of the feet's positions and contacts (foot slip)
+
+
+
+def driver_rate_config(cfg: WalkConfig) -> WalkConfig:
+    """`cfg` with the physics step at which its joint PD converges (`cyberdog.core.drivers.driver_physics_dt`
+    of `cfg.pid`'s gains; unchanged at the default gains): a user who doubles kd gets the energy of the drivers'
+    law, not of the step's size. The gains a robot draw scales at a reset (`RandomizationConfig`) and the
+    torque-mode env's damping (`EnvConfig.joint_damping`) are not counted: the step is the configured robot's."""
+    h = driver_physics_dt(cfg.sim.physics_dt, cfg.pid.kp, cfg.pid.kd, cfg.robot.reflected_rotor_inertia)
+    if h == cfg.sim.physics_dt:
+        return cfg
+    return dataclasses.replace(cfg, sim=dataclasses.replace(cfg.sim, physics_dt=h))
+
 
 _NO_TARGET = [(float("nan"),) * 3] * 4
 _NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
@@ -82,7 +99,7 @@ class Walker:
                  joint_damping: float = 0.0) -> None:
         if hardware is not None and not isinstance(hardware, HardwareConfig):
             raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
-        self.cfg = cfg = hardware_walk_config(cfg, hardware)
+        self.cfg = cfg = driver_rate_config(hardware_walk_config(cfg, hardware))
         if robot is not None and robot.actuator_config != cfg.actuator:
             raise ValueError("robot was built with another ActuatorConfig than the walk needs (friction="
                              f"{cfg.actuator.friction}); build it from hardware_walk_config(cfg, hardware)")
@@ -100,6 +117,9 @@ class Walker:
         if self.robot.dt != self.dt:
             raise ValueError(f"robot was built with another controller period ({self.robot.dt} s) than the walk's "
                              f"SimConfig.controller_dt ({self.dt} s)")
+        if self.robot.physics_dt > cfg.sim.physics_dt * (1 + 1e-9):
+            raise ValueError(f"robot was built with a physics step of {self.robot.physics_dt} s; the walk's gains "
+                             f"need {cfg.sim.physics_dt} s (build it from driver_rate_config(cfg).sim)")
         self.substeps, self.physics_dt = self.robot.substeps, self.robot.physics_dt  # per period; s, one each
         self.contact_check_every = max(1, int(round(CONTACT_CHECK_PERIOD / self.dt)))  # steps
         self.slip_sample_every = max(1, int(round(SLIP_SAMPLE_PERIOD / self.dt)))  # steps
