@@ -163,6 +163,26 @@ def test_extraction_takes_the_recipe_settings_unless_given(tmp_path):
     assert C.final_run(sweep / "seed5") == sweep / "seed5" / "band"
 
 
+def test_table5s_recipe_keeps_each_policys_first_path_unless_the_check_is_asked_for(tmp_path):
+    """configs/table5.yaml's extraction is unchecked (Table 5 walks the ideal robot); the battery recipe, whose
+    base it is, keeps its own checked extraction; --no-replay-check on a checked recipe's sweep stays given."""
+    from cyberdog.evaluation import extraction as L
+    from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
+
+    sweep = tmp_path / "table5"
+    C.write_phases(sweep / "seed5", C.load_preset(ROOT / "configs/table5.yaml"), 5)
+    args = argparse.Namespace(sweep=sweep, **EXTRACT_DEFAULTS)
+    assert L.take_recipe_extraction(args) == {"replay_check": False} and args.replay_check is False
+    battery = tmp_path / "battery"
+    C.write_phases(battery / "seed5", C.load_preset(ROOT / "configs/battery.yaml"), 5)
+    args = argparse.Namespace(sweep=battery, **{**EXTRACT_DEFAULTS, "replay_check": False})
+    L.take_recipe_extraction(args)
+    assert args.replay_check is False and args.replay_attempts == 16
+    args = argparse.Namespace(sweep=battery, **EXTRACT_DEFAULTS)
+    L.take_recipe_extraction(args)
+    assert args.replay_check is True
+
+
 def test_an_earlier_files_stage_and_agent_read_as_today():
     """Run folders and actor files written before a stage's reward was a RewardConfig (and while the agent had
     fast_update) read as the same settings, so that they resume and load."""
@@ -202,7 +222,7 @@ def test_a_recipe_extraction_setting_is_checked_as_the_command_line_checks_it(tm
 
     assert EXTRACT_CYCLES == CYCLE_CHOICES
     for bad, words in (({"cycle": "best"}, "one of"), ({"replay_attempts": True}, "positive integer"),
-                       ({"rollout_duration": 0}, "positive number")):
+                       ({"rollout_duration": 0}, "positive number"), ({"replay_check": "no"}, "true or false")):
         path = _write(tmp_path / "x.yaml", {"base": str(ROOT / "configs/tiny.yaml"), "extract": bad})
         with pytest.raises(ValueError, match=words):
             C.load_preset(path)

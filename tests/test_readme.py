@@ -279,3 +279,9 @@ def test_fresh_seeds_prototype_rows_are_those_seeds_walks_as_the_prototype_summa
     row = {line.split("|")[1].strip(): line.split("|")[2:5]
            for line in make_tables(tmp_path)["prototype"].splitlines()[2:]}
     assert "1 fell" in row[FRESH_PROTOTYPE_ROW][2] and "fell" not in row[FRESH_PROTOTYPE_ROW][0]
+    # a seed whose extraction found no path at 1.4 m/s: that cell says over how many seeds it is
+    fresh = [w for w in fresh if not (w["seed"] == "seed5" and w["speed_mps"] == 1.4)]
+    (tmp_path / "prototype_fresh.json").write_text(json.dumps(fresh))
+    row = {line.split("|")[1].strip(): line.split("|")[2:5]
+           for line in make_tables(tmp_path)["prototype"].splitlines()[2:]}
+    assert "(4 of 5 seeds)" in row[FRESH_PROTOTYPE_ROW][2] and "seeds)" not in row[FRESH_PROTOTYPE_ROW][0]

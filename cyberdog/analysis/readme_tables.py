@@ -152,11 +152,20 @@ def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -
     by = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
     rows = [by.get(("learned", v)) for v in speeds]
     named = _seeds_named(walks)
+    seeds = {str(w["seed"]) for w in walks if w["trajectory"] == "learned" and w["robot"] == robot}
     return [_line(f"battery % per 100 m: learned, {named}",
                   ["–" if r is None else mean_ci(r, "battery_pct_per_100m", ".2f") for r in rows]),
             _line(f"**battery saving, {named} (never tuned on)**",
                   ["–" if r is None else f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**{_missed(r)}"
-                   for r in rows])]
+                   f"{_fewer_seeds(walks, robot, r['speed_mps'], seeds)}" for r in rows])]
+
+
+def _fewer_seeds(walks: list[dict], robot: str, speed: float, seeds: set) -> str:
+    """" (4 of 5 seeds)" where fewer seeds have a learned path at `speed` than the walks name (an extraction
+    that found no path there), "" where all have."""
+    here = {str(w["seed"]) for w in walks if w["trajectory"] == "learned" and w["robot"] == robot
+            and w["speed_mps"] == speed}
+    return f" ({len(here)} of {len(seeds)} seeds)" if len(here) < len(seeds) else ""
 
 
 def prototype_markdown(walks: list[dict], robot: str = "hardware", fresh_walks: list[dict] | None = None) -> str:

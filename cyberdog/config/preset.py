@@ -13,6 +13,7 @@
         set: {train: {stage2: {max_env_steps: 30000}}}    # changes to the settings for this phase only
       - {name: other, stage: 1, from: stage2/stage1_final.pt}  # start from another file of the seed's lineage
     extract: {replay_attempts: 16, candidates: 2}         # evaluate.py extract's settings for this recipe
+                                                          # (replay_check: false keeps each policy's first path)
 
 A phase trains in `<seed folder>/<phase name>/` (an ordinary run folder) and starts from the previous phase's
 last final agent (`<previous>/stage<N>_final.pt`) unless `from:` names another file of the same seed folder; the
@@ -36,7 +37,8 @@ KEYS = ("base", "summary", "phases", "extract") + SECTIONS
 PHASE_KEYS = ("name", "stage", "preset", "set", "from")
 STAGES = ("1", "2", "both")
 # evaluate.py extract's options a preset may set, and what each must be
-EXTRACT_KEYS = {"replay_attempts": int, "candidates": int, "rollout_duration": float, "cycle": str}
+EXTRACT_KEYS = {"replay_attempts": int, "candidates": int, "rollout_duration": float, "cycle": str,
+                "replay_check": bool}
 EXTRACT_CYCLES = ("mean", "cheapest")  # extract --cycle's choices (cyberdog.analysis.extract.CYCLE_CHOICES)
 _NAME = re.compile(r"[a-z][a-z0-9_]*")
 
@@ -201,6 +203,11 @@ def _extract(spec: Any, where: Path) -> dict:
         kind = EXTRACT_KEYS.get(key)
         if kind is None:
             raise ValueError(f"{where}: extract.{key} is not an extraction setting ({', '.join(EXTRACT_KEYS)})")
+        if kind is bool:
+            if not isinstance(value, bool):
+                raise ValueError(f"{where}: extract.{key} must be true or false, got {value!r}")
+            out[key] = value
+            continue
         ok = not isinstance(value, bool) and (isinstance(value, kind) or (kind is float and isinstance(value, int)))
         if not ok or (kind is not str and value <= 0) or (key == "cycle" and value not in EXTRACT_CYCLES):
             what = f"one of {EXTRACT_CYCLES}" if key == "cycle" else f"a positive {'integer' if kind is int else 'number'}"

@@ -67,7 +67,9 @@ class SimConfig:
     every `controller_dt` and sends the motor drivers a command (targets, target speeds, gains, feed-forward)
     that they hold over that period; the drivers close their PD on the joint state at every physics step
     `physics_dt` = `controller_dt / n`, where the actuator envelope applies and the energy is integrated
-    (`cyberdog.core.drivers`; their rate's convergence: docs/design.md). The real
+    (`cyberdog.core.drivers`; their rate's convergence: docs/design.md). A walk whose PD gains are stiffer or
+    more damped than the default halves `physics_dt` until the PD converges (`cyberdog.loop.walker.
+    driver_rate_config`: kd 4 or kp 120 walk at 1.6 kHz); the configured step is the coarsest. The real
     CyberDog runs its locomotion controller at 500 Hz; 400 Hz is the nearest rate that divides the agent's
     Ts = 25 ms. The defaults were chosen by the convergence study of docs/design.md (control 1000 / 400 /
     200 Hz x physics 0.5 / 1 / 1.25 ms against a 2 kHz reference).

@@ -27,7 +27,8 @@ DEFAULT_COMMAND = "all"
 DEFAULT_CANDIDATES = 1  # paths that replay, per speed, of which extraction keeps the cheapest on the check robots
 # extract's settings a preset may choose (its `extract:`), with their defaults here; an option given on the command
 # line wins over the preset's
-EXTRACT_DEFAULTS = {"cycle": "mean", "rollout_duration": 10.0, "replay_attempts": 3, "candidates": DEFAULT_CANDIDATES}
+EXTRACT_DEFAULTS = {"cycle": "mean", "rollout_duration": 10.0, "replay_attempts": 3, "candidates": DEFAULT_CANDIDATES,
+                    "replay_check": True}
 
 
 class UsageError(Exception):
@@ -214,7 +215,9 @@ def _extraction_options() -> argparse.ArgumentParser:
                    help="s of each extraction rollout (default 10)")
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--no-replay-check", dest="replay_check", action="store_false",
-                   help="keep a commanded path without replaying it first (by default a path that falls or misses "
+                   default=EXTRACT_DEFAULTS["replay_check"],
+                   help="keep a commanded path without replaying it first (as --sweep of a recipe whose extract: "
+                        "says replay_check: false does, configs/table5.yaml's; by default a path that falls or misses "
                         "the speed in a 10 s and a 100 m replay on the ideal robot, in 100 m walks on six "
                         "hardware-like robots with the PD at 1, 0.7 and 1.4x, or in the prototype's 20 m walk on "
                         "eight more at each of 0.7 and 1.4x, none of them a prototype robot, is rejected for the "
