@@ -196,6 +196,40 @@ def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_li
         cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.4))
 
 
+def test_the_prototype_walks_a_seed_without_a_path_at_a_speed_nowhere_at_that_speed_when_asked():
+    """An extraction that found no path for one seed at one speed: by default the prototype refuses (the CLI names
+    the seed and speed and the option); with skip_missing that seed walks nothing at that speed, neither its path
+    nor the common trajectories, and the other seeds walk as they would have."""
+    from cyberdog.analysis import prototype as pr
+    from cyberdog.evaluation.commands import UsageError
+
+    full = learned_set(seed0=[commanded(1.0, -0.01, 0), commanded(1.4, -0.01, 0)],
+                       seed1=[commanded(1.0, -0.02, 1), commanded(1.4, -0.02, 1)])
+    partial = learned_set(seed0=[commanded(1.0, -0.01, 0), commanded(1.4, -0.01, 0)],
+                          seed1=[commanded(1.0, -0.02, 1)])
+    args = dict(trajectories={"cycloid": None, "straight": None}, speeds=(1.0, 1.4), distance_m=1.0,
+                modes=("hardware",), hardware=C.HARDWARE_LIKE, draws=1, run_up_s=0.0, policies=None)
+    with pytest.raises(LearnedSetError, match="seed1 has no learned path at 1.4 m/s"):
+        pr._checked_inputs(learned=partial, **args)
+    pr._checked_inputs(learned=partial, skip_missing=True, **args)
+    with pytest.raises(LearnedSetError, match="no learned path at 1.4 m/s"):
+        pr._checked_inputs(learned=learned_set(seed1=[commanded(1.0, -0.02, 1)]), skip_missing=True, **args)
+
+    def jobs(learned):
+        return [(j.trajectory_name, j.seed, j.speed, round(j.lift_height or 0.0, 3))
+                for j in pr._walk_jobs(args["trajectories"], args["speeds"], C.WalkConfig(), [("hardware", 0)],
+                                       C.HARDWARE_LIKE, 1.0, 0.0, learned, None, {}, 1.0, None, {},
+                                       skip_missing=True)]
+    walked = jobs(partial)
+    assert {(name, v) for name, seed, v, _ in walked if seed == "seed1"} == {
+        ("learned", 1.0), ("cycloid", 1.0), ("straight", 1.0)}
+    assert [j for j in jobs(full) if j[1] == "seed0"] == [j for j in walked if j[1] == "seed0"]
+    assert [j for j in jobs(full) if j[1] == "seed1" and j[2] == 1.0] == [j for j in walked if j[1] == "seed1"]
+    with pytest.raises(UsageError, match=r"seed1 at 1.4\).*--skip-missing-paths"):
+        learned_module.check_speeds_covered(partial, [1.0, 1.4], skip_missing=False)
+    learned_module.check_speeds_covered(partial, [1.0, 1.4], skip_missing=True)
+
+
 def two_seeds_at_their_own_lift() -> list[dict]:
     """Two learned walks at 1.0 m/s (H = 0.09 and 0.08 m), the baselines at each of those lifts and at 0.15 m."""
     return [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),

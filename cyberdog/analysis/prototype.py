@@ -37,7 +37,7 @@ from cyberdog.config import (HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, PI
 from cyberdog.config.paper import PAPER_SPEEDS, PROTOTYPE_DISTANCE_M, PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S
 from cyberdog.core import energy as en
 from cyberdog.core.foot_offsets import FootOffsetPath
-from cyberdog.core.learned_set import LearnedSet
+from cyberdog.core.learned_set import LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import FootTrajectory
 
 PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
@@ -160,7 +160,7 @@ def run_prototype(trajectories: dict | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
                   every_walk: bool = True, learned: LearnedSet | None = None, draws: int = PROTOTYPE_DRAWS,
                   run_up_s: float = PROTOTYPE_RUN_UP_S, policies: dict | None = None, pd_scale: float = 1.0,
-                  pd_matched: bool = False, own_trot: dict | None = None) -> list[dict]:
+                  pd_matched: bool = False, own_trot: dict | None = None, skip_missing: bool = False) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk. The
     defaults (distance, draws, run-up) are the prototype run's, `cyberdog.config.paper`'s, as `evaluate.py`'s.
 
@@ -185,6 +185,9 @@ def run_prototype(trajectories: dict | None = None,
         (`cyberdog.analysis.pd_match_recording`); rows carry `pd_matched` (True where a command was re-solved).
     own_trot: {trajectory name: ControllerConfig}, trajectories that walk under their own trot controller (a
         searched shape under the one it was searched under) instead of `base_cfg.controller`.
+    skip_missing: a label of `learned` without a path at a speed (its extraction found none there) walks nothing
+        at that speed, neither its path nor the common trajectories at its lift, so that speed's rows are over
+        the labels that have one; every speed needs at least one. False: every label must have every speed.
     workers: processes (default: one per walk, at most the CPU count); 1 runs in this process.
     every_walk: a progress line per walk (False: one per quarter of them). Rows come back in (trajectory, speed,
     mode) order with the ideal-vs-hardware gaps filled in (`add_gaps`); the battery: the module docstring.
@@ -192,12 +195,12 @@ def run_prototype(trajectories: dict | None = None,
     base_cfg = base_cfg or WalkConfig()
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
     speeds, modes, policies = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws,
-                                              run_up_s, policies)
+                                              run_up_s, policies, skip_missing)
     own_pid = base_cfg.pid if pd_matched and pd_scale != 1.0 else None  # the PD the paths were made under
     base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = _walk_jobs(trajectories, speeds, base_cfg, robots, hardware, float(distance_m), float(run_up_s), learned,
-                      lift_heights, policies, pd_scale, own_pid, own_trot or {})
+                      lift_heights, policies, pd_scale, own_pid, own_trot or {}, skip_missing)
 
     def line(row: dict) -> str:
         return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
@@ -212,11 +215,13 @@ def run_prototype(trajectories: dict | None = None,
 
 def _walk_jobs(trajectories: dict, speeds, base_cfg: WalkConfig, robots: list, hardware: HardwareConfig,
                distance_m: float, run_up_s: float, learned, lift_heights, policies: dict, pd_scale: float,
-               own_pid, own_trot: dict) -> list[_Job]:
-    """`run_prototype`'s walks, per learned label: its paths (and policy) on every robot, then the trajectories."""
+               own_pid, own_trot: dict, skip_missing: bool = False) -> list[_Job]:
+    """`run_prototype`'s walks, per learned label: its paths (and policy) on every robot, then the trajectories
+    (with `skip_missing`, only at the speeds the label has a path at)."""
     jobs = []
     for label in learned.labels if learned is not None else [""]:
-        paths = {v: learned.path(label, v) for v in speeds} if learned is not None else {}
+        paths = ({v: learned.path(label, v) for v in speeds if not skip_missing or learned.has(label, v)}
+                 if learned is not None else {})
         lifts = dict(lift_heights) if lift_heights is not None else {v: p.lift_height for v, p in paths.items()}
         for v, path in paths.items():
             cfg, foot_trajectory, offsets = path.walk_args(base_cfg, v)
@@ -227,7 +232,7 @@ def _walk_jobs(trajectories: dict, speeds, base_cfg: WalkConfig, robots: list, h
                 jobs += [_Job(POLICY, None, v, mode, cfg, _draw(hardware, d), distance_m, None, label, d, run_up_s,
                               policy=str(policies[label]), pd_scale=pd_scale) for mode, d in robots]
         for name, traj in trajectories.items():
-            for v in speeds:
+            for v in (speeds if learned is None else paths):
                 cfg = _job_config(base_cfg, name, traj, v)
                 if name in own_trot:
                     cfg = dataclasses.replace(cfg, controller=own_trot[name])
@@ -244,7 +249,8 @@ def _draw(hardware: HardwareConfig, d: int) -> HardwareConfig:
 
 
 def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardware, learned, draws: int,
-                    run_up_s: float, policies: dict | None) -> tuple[tuple[float, ...], tuple[str, ...], dict]:
+                    run_up_s: float, policies: dict | None, skip_missing: bool = False
+                    ) -> tuple[tuple[float, ...], tuple[str, ...], dict]:
     """(speeds, modes) as tuples and the policies as a dict, after checking every argument of `run_prototype`."""
     if not trajectories and learned is None:
         raise ValueError("trajectories must name at least one trajectory")
@@ -264,7 +270,10 @@ def _checked_inputs(trajectories: dict, speeds, distance_m: float, modes, hardwa
         if not isinstance(learned, LearnedSet) or not learned:
             raise ValueError(f"learned must be a non-empty LearnedSet, got {learned!r}")
         for v in speeds:
-            learned.at(v)  # LearnedSetError now, before any walk, if a speed has no path
+            if not skip_missing:
+                learned.at(v)  # LearnedSetError now, before any walk, if a speed has no path
+            elif not any(learned.has(label, v) for label in learned.labels):
+                raise LearnedSetError(f"no learned path at {v:g} m/s (skip_missing needs one label with a path)")
     for name, traj in trajectories.items():
         if traj is not None and not isinstance(traj, FootTrajectory):
             raise TypeError(f"trajectory {name!r} must be a FootTrajectory or None, got {type(traj).__name__}")

@@ -169,6 +169,10 @@ class LearnedSet:
                                   f"a path serves speeds within ±{100 * SPEED_BAND:g} % of its own)")
         return min(serving, key=lambda p: 0.0 if p.speed is None else abs(p.speed - speed))
 
+    def has(self, label: str, speed: float) -> bool:
+        """Whether `label` has a path at `speed` (m/s), by the module's rule."""
+        return any(p.serves(speed) for p in self._by_label.get(label, ()))
+
     def covers(self, speed: float) -> bool:
         """Whether every label has a path at `speed`."""
         return bool(self) and all(any(p.serves(speed) for p in ps) for ps in self._by_label.values())

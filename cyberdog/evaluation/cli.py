@@ -341,6 +341,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="a shape saved by tools/optimize_trajectory.py, walked at each speed at its own lift "
                             "height (default results/searched_shapes/optimized_trajectory_H0.095.json)")
         g.add_argument("--no-reference", action="store_true", help="no reference row")
+    sub["prototype"].add_argument("--skip-missing-paths", action="store_true",
+                                  help="walk each speed with the seeds that have a learned path there: a seed whose "
+                                       "extraction found none at a speed walks nothing at it, and that speed's rows "
+                                       "are over the other seeds (named in the log; default: every seed must have "
+                                       "every speed)")
     sub["stiffness"].add_argument("--pd-scales", type=positive, nargs="+", default=[0.7, 1.0, 1.4], metavar="S",
                                   help="joint-PD stiffness factors (default 0.7 1.0 1.4; training draws 0.8-1.2 in "
                                        "the battery preset, 0.6-1.6 in its stiffness variant)")

@@ -158,7 +158,8 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     cfg = trot_of(args, run, cfg, learned)  # the searched shape walks under its own trot (run_prototype_part)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
-                       policies=L.closed_loop_policies(args, learned), hardware=args.hardware)
+                       policies=L.closed_loop_policies(args, learned), hardware=args.hardware,
+                       skip_missing=args.skip_missing_paths)
     return run.finish()
 
 

@@ -89,7 +89,7 @@ def check_learned_inputs(args) -> None:
         for_prototype = {"all": (False, True), "prototype": (True,), "stiffness": (True,)}.get(args.command, (False,))
         for files in dict.fromkeys(tuple(default_learned(args, p)) for p in for_prototype):
             learned = load_learned(list(files))
-            check_speeds_covered(learned, getattr(args, "speeds", []))
+            check_speeds_covered(learned, getattr(args, "speeds", []), getattr(args, "skip_missing_paths", None))
         if closed_loop:  # the prototype's paths (the last loaded): each policy walks beside its own seed's
             closed_loop_policies(args, learned)
     from cyberdog.rl.checkpoint import CheckpointError
@@ -134,17 +134,26 @@ def closed_loop_policies(args, learned: LearnedSet) -> dict[str, str]:
     return {label: str(path) for label, path in policies.items()}
 
 
-def check_speeds_covered(learned: LearnedSet, speeds: list[float]) -> None:
+def check_speeds_covered(learned: LearnedSet, speeds: list[float], skip_missing: bool | None = None) -> None:
     """UsageError unless every label of `learned` has a path at every speed of `speeds` (`LearnedSet.at`,
-    the comparison's own rule): a table without its learned row is no Table 5."""
-    missing = [v for v in speeds if not learned.covers(v)]
+    the comparison's own rule): a table without its learned row is no Table 5. `skip_missing` (the prototype's
+    --skip-missing-paths; None where the command has no such option): one label with a path at each speed is
+    enough."""
+    if skip_missing:
+        missing = [v for v in speeds if not any(learned.has(label, v) for label in learned.labels)]
+    else:
+        missing = [v for v in speeds if not learned.covers(v)]
     if missing:
         have = ", ".join(f"{v:g}" for v in learned.speeds())
+        lacking = "; ".join(f"{label} at {v:g}" for v in missing for label in learned.labels
+                            if not learned.has(label, v))
+        hint = (" (or --skip-missing-paths to walk each speed with the seeds that have one)"
+                if skip_missing is False else "")
         raise UsageError(
-            f"no learned path at {', '.join(f'{v:g}' for v in missing)} m/s for every label: the learned paths are "
-            f"at {have} m/s. Ask for those --speeds, or extract paths at the speed from a policy (evaluate.py "
-            f"extract --policies results/table5/policy/seed0 --speeds V; a policy trained at other speeds needs "
-            f"--policy-speed V) and pass them with --learned")
+            f"no learned path at {', '.join(f'{v:g}' for v in missing)} m/s for every label ({lacking}): the learned "
+            f"paths are at {have} m/s. Ask for those --speeds{hint}, or extract paths at the speed from a policy "
+            f"(evaluate.py extract --policies results/table5/policy/seed0 --speeds V; a policy trained at other "
+            f"speeds needs --policy-speed V) and pass them with --learned")
 
 
 def default_learned(args, for_prototype: bool = False) -> list[Path]:

@@ -88,7 +88,7 @@ def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
 def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], distance_m: float,
                        modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False,
                        draws: int = 1, reference=None, run_up_s: float = 0.0, policies: dict | None = None,
-                       hardware: C.HardwareConfig = C.HARDWARE_LIKE) -> list[dict]:
+                       hardware: C.HardwareConfig = C.HARDWARE_LIKE, skip_missing: bool = False) -> list[dict]:
     """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
     lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
     `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched", under the trot it
@@ -96,6 +96,7 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     `run_up_s`: s walked from the stand before the measured `distance_m` (`run_prototype`).
     `policies`: {label: actor file}, the policies that walk beside their paths, closed loop (row "policy").
     `hardware`: the hardware-like robots' effects (each draw its own seed of them).
+    `skip_missing`: a seed without a path at a speed walks nothing there (`run_prototype`), and is named.
     `brief`: a progress line per quarter of the walks and the summary's main numbers only."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
     from cyberdog.evaluation.recorded_trot import searched_controller
@@ -104,7 +105,12 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     trajectories = {"cycloid": None, "straight": None, **({REFERENCE: reference} if reference is not None else {})}
     robots = sum(draws if m == "hardware" else 1 for m in modes)
     policies = dict(policies or {})
-    log(f"prototype: {(len(learned) * (len(trajectories) + 1) + len(policies)) * len(speeds) * robots} walks of "
+    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
+    if skip_missing and missing:
+        log("prototype: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
+            + ": those speeds' rows are over the other seeds")
+    pairs = len(learned) * len(speeds) - (len(missing) if skip_missing else 0)
+    log(f"prototype: {(pairs * (len(trajectories) + 1) + len(policies) * len(speeds)) * robots} walks of "
         f"{distance_m:g} m "
         f"{f'after a {run_up_s:g} s run-up ' if run_up_s > 0 else 'from a stand '}"
         f"({len(learned)} learned seeds, each with the common trajectories"
@@ -114,7 +120,7 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
                          base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws,
                          run_up_s=run_up_s, policies=policies, hardware=hardware,
-                         own_trot=searched_controller(reference, cfg.controller, log))
+                         own_trot=searched_controller(reference, cfg.controller, log), skip_missing=skip_missing)
     write_prototype(rows, out)
     if not brief:
         print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks after a {run_up_s:g} s "
