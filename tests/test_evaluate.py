@@ -230,6 +230,28 @@ def test_the_prototype_walks_a_seed_without_a_path_at_a_speed_nowhere_at_that_sp
     learned_module.check_speeds_covered(partial, [1.0, 1.4], skip_missing=True)
 
 
+def test_the_prototype_re_commands_every_walk_for_a_users_gains_when_asked(monkeypatch):
+    """`run_prototype(pd_matched_from=the default PD)` under a config with kd doubled: the learned path and the
+    common trajectories alike walk with their command re-solved from the default PD to kd 4 (like for like),
+    each under kd 4; without it none is; with pd_scale or pd_matched as well it is refused."""
+    from cyberdog.analysis import prototype as pr
+
+    captured = []
+    monkeypatch.setattr(pr, "map_in_processes", lambda run, jobs, *a, **k: captured.extend(jobs) or [])
+    monkeypatch.setattr(pr, "add_gaps", lambda rows: rows)
+    user = C.replace(C.WalkConfig(), pid=C.replace(C.PIDConfig(), kd=(4.0, 4.0, 4.0)))
+    learned = learned_set(seed0=[commanded(1.0, -0.01, 0)])
+    kwargs = dict(speeds=(1.0,), distance_m=1.0, modes=("hardware",), draws=1, base_cfg=user, learned=learned)
+    pr.run_prototype(pd_matched_from=C.PIDConfig(), **kwargs)
+    assert {j.trajectory_name for j in captured} == {"learned", "cycloid", "straight"}
+    assert all(j.pd_matched_from == C.PIDConfig() and j.cfg.pid.kd == (4.0, 4.0, 4.0) for j in captured)
+    captured.clear()
+    pr.run_prototype(**kwargs)
+    assert captured and all(j.pd_matched_from is None for j in captured)
+    with pytest.raises(ValueError, match="pd_matched_from"):
+        pr.run_prototype(pd_matched_from=C.PIDConfig(), pd_scale=2.0, **kwargs)
+
+
 def two_seeds_at_their_own_lift() -> list[dict]:
     """Two learned walks at 1.0 m/s (H = 0.09 and 0.08 m), the baselines at each of those lifts and at 0.15 m."""
     return [walk_row(0, "learned", 900.0, 0.09, seed="s0"), walk_row(1, "learned", 800.0, 0.08, seed="s1"),

@@ -160,7 +160,8 @@ def run_prototype(trajectories: dict | None = None,
                   base_cfg: WalkConfig | None = None, lift_heights: dict | None = None, log=print,
                   every_walk: bool = True, learned: LearnedSet | None = None, draws: int = PROTOTYPE_DRAWS,
                   run_up_s: float = PROTOTYPE_RUN_UP_S, policies: dict | None = None, pd_scale: float = 1.0,
-                  pd_matched: bool = False, own_trot: dict | None = None, skip_missing: bool = False) -> list[dict]:
+                  pd_matched: bool = False, own_trot: dict | None = None, skip_missing: bool = False,
+                  pd_matched_from: PIDConfig | None = None) -> list[dict]:
     """Walk `distance_m` with every trajectory at every speed on the robots in `modes`; one row per walk. The
     defaults (distance, draws, run-up) are the prototype run's, `cyberdog.config.paper`'s, as `evaluate.py`'s.
 
@@ -185,6 +186,9 @@ def run_prototype(trajectories: dict | None = None,
         (`cyberdog.analysis.pd_match_recording`); rows carry `pd_matched` (True where a command was re-solved).
     own_trot: {trajectory name: ControllerConfig}, trajectories that walk under their own trot controller (a
         searched shape under the one it was searched under) instead of `base_cfg.controller`.
+    pd_matched_from: the PD the paths and trajectories were made under, where `base_cfg.pid` is another (a
+        user's gains): every walk but a policy's has its command re-solved from it to `base_cfg.pid`, as
+        `pd_matched` does for a `pd_scale` (rows carry `pd_matched`); None: each walks its command as it is.
     skip_missing: a label of `learned` without a path at a speed (its extraction found none there) walks nothing
         at that speed, neither its path nor the common trajectories at its lift, so that speed's rows are over
         the labels that have one; every speed needs at least one. False: every label must have every speed.
@@ -196,7 +200,12 @@ def run_prototype(trajectories: dict | None = None,
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
     speeds, modes, policies = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws,
                                               run_up_s, policies, skip_missing)
+    if pd_matched_from is not None and (pd_matched or pd_scale != 1.0):
+        raise ValueError("pd_matched_from re-commands for base_cfg.pid itself: give it with pd_scale 1 and no "
+                         "pd_matched")
     own_pid = base_cfg.pid if pd_matched and pd_scale != 1.0 else None  # the PD the paths were made under
+    if pd_matched_from is not None and pd_matched_from != base_cfg.pid:
+        own_pid = pd_matched_from
     base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
     robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
     jobs = _walk_jobs(trajectories, speeds, base_cfg, robots, hardware, float(distance_m), float(run_up_s), learned,

@@ -346,6 +346,12 @@ def build_parser() -> argparse.ArgumentParser:
                                        "extraction found none at a speed walks nothing at it, and that speed's rows "
                                        "are over the other seeds (named in the log; default: every seed must have "
                                        "every speed)")
+    sub["prototype"].add_argument("--pd-matched-from-default", action="store_true",
+                                  help="with gains set by --set pid.kp=... pid.kd=...: every walk's command (the "
+                                       "learned paths' and the common trajectories' alike, not a policy's) is "
+                                       "re-solved so that those gains execute the motion the default PD executes, "
+                                       "the PD the paths were recorded under (as `stiffness --pd-matched` for a "
+                                       "stiffness factor; default: each walks its command as it is)")
     sub["stiffness"].add_argument("--pd-scales", type=positive, nargs="+", default=[0.7, 1.0, 1.4], metavar="S",
                                   help="joint-PD stiffness factors (default 0.7 1.0 1.4; training draws 0.8-1.2 in "
                                        "the battery preset, 0.6-1.6 in its stiffness variant)")

@@ -159,7 +159,8 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
                        policies=L.closed_loop_policies(args, learned), hardware=args.hardware,
-                       skip_missing=args.skip_missing_paths)
+                       skip_missing=args.skip_missing_paths,
+                       pd_matched_from=C.PIDConfig() if args.pd_matched_from_default else None)
     return run.finish()
 
 

@@ -88,7 +88,8 @@ def _print_brief_table5(summary: list[dict], paper_lift: float) -> None:
 def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], distance_m: float,
                        modes: list[str], workers: int | None, out: Path, log=print, brief: bool = False,
                        draws: int = 1, reference=None, run_up_s: float = 0.0, policies: dict | None = None,
-                       hardware: C.HardwareConfig = C.HARDWARE_LIKE, skip_missing: bool = False) -> list[dict]:
+                       hardware: C.HardwareConfig = C.HARDWARE_LIKE, skip_missing: bool = False,
+                       pd_matched_from: C.PIDConfig | None = None) -> list[dict]:
     """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
     lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
     `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched", under the trot it
@@ -97,6 +98,7 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     `policies`: {label: actor file}, the policies that walk beside their paths, closed loop (row "policy").
     `hardware`: the hardware-like robots' effects (each draw its own seed of them).
     `skip_missing`: a seed without a path at a speed walks nothing there (`run_prototype`), and is named.
+    `pd_matched_from`: the PD the walks' commands are re-solved from, for `cfg.pid` (`run_prototype`).
     `brief`: a progress line per quarter of the walks and the summary's main numbers only."""
     from cyberdog.analysis.prototype import prototype_table, run_prototype, write_prototype
     from cyberdog.evaluation.recorded_trot import searched_controller
@@ -120,7 +122,8 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
                          base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws,
                          run_up_s=run_up_s, policies=policies, hardware=hardware,
-                         own_trot=searched_controller(reference, cfg.controller, log), skip_missing=skip_missing)
+                         own_trot=searched_controller(reference, cfg.controller, log), skip_missing=skip_missing,
+                         pd_matched_from=pd_matched_from)
     write_prototype(rows, out)
     if not brief:
         print(f"\nPrototype experiment (Section 4.2) in simulation: {distance_m:g} m walks after a {run_up_s:g} s "
