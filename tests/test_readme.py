@@ -285,3 +285,55 @@ def test_fresh_seeds_prototype_rows_are_those_seeds_walks_as_the_prototype_summa
     row = {line.split("|")[1].strip(): line.split("|")[2:5]
            for line in make_tables(tmp_path)["prototype"].splitlines()[2:]}
     assert "(4 of 5 seeds)" in row[FRESH_PROTOTYPE_ROW][2] and "seeds)" not in row[FRESH_PROTOTYPE_ROW][0]
+
+
+def test_the_gains_table_rows_are_each_runs_walks_as_the_prototype_summary_gives_them(tmp_path):
+    """gains_walks.json's rows: the default prototype walks relabelled as a gains run give the default row's
+    numbers, as commanded and re-commanded each its own row, kp's first."""
+    import json
+    import shutil
+
+    from cyberdog.analysis.readme_tables import GAINS_DEFAULT_ROW, make_tables
+    source = ROOT / "results" / "figures_input"
+    for f in source.glob("*.json"):
+        shutil.copy(f, tmp_path / f.name)
+    walks = json.loads((source / "prototype.json").read_text())
+    runs = [("kd", 2.0, True), ("kd", 2.0, False), ("kp", 2.0, True), ("kp", 0.5, True), ("kp", 2.0, False)]
+    gains = [dict(w, gain=g, gain_scale=f, pd_matched=m) for g, f, m in runs for w in walks]
+    (tmp_path / "gains_walks.json").write_text(json.dumps(gains))
+    tables = make_tables(tmp_path)
+    lines = tables["gains"].splitlines()[2:]
+    row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in lines}
+    assert list(row) == [GAINS_DEFAULT_ROW, "**kp 0.5×, re-commanded**", "kp 2×, as commanded",
+                         "**kp 2×, re-commanded**", "kd 2×, as commanded", "**kd 2×, re-commanded**"]
+    assert row["kd 2×, as commanded"] == row[GAINS_DEFAULT_ROW]
+    assert [c.strip("* ") for c in row["**kp 0.5×, re-commanded**"]] == [c.strip() for c in row[GAINS_DEFAULT_ROW]]
+    assert "kp 0.5×" not in tables["gains_headline"] and "**kd 2×, re-commanded**" in tables["gains_headline"]
+
+
+def test_the_gains_walks_tool_labels_each_run_by_the_one_gain_it_changed(tmp_path):
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("gains_walks", ROOT / "tools" / "gains_walks.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+
+    def run(name, pid, matched=False):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "config.yaml").write_text(json.dumps({"pid": pid}))  # (YAML reads JSON)
+        (folder / "prototype.json").write_text(json.dumps([{"trajectory": "learned", "pd_matched": matched},
+                                                           {"trajectory": "cycloid", "pd_matched": matched}]))
+        return folder
+
+    kd2 = run("kd2", {"kd": [4.0, 4.0, 4.0]})
+    kd2m = run("kd2m", {"kd": [4.0, 4.0, 4.0]}, matched=True)
+    walks = tool.gains_walks([kd2, kd2m])
+    assert {(w["gain"], w["gain_scale"], w["pd_matched"]) for w in walks} == {("kd", 2.0, False), ("kd", 2.0, True)}
+    for bad, words in (({"kp": [120.0] * 3, "kd": [4.0] * 3}, "changes"), ({}, "neither"),
+                       ({"kp": [120.0, 60.0, 60.0]}, "not one factor")):
+        with pytest.raises(ValueError, match=words):
+            tool.gains_walks([run(f"bad{len(list(tmp_path.iterdir()))}", bad)])
+    with pytest.raises(ValueError, match="also"):
+        tool.gains_walks([kd2, run("kd2again", {"kd": [4.0, 4.0, 4.0]})])

@@ -18,6 +18,9 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
   (`evaluate.py stiffness`): the battery saving of the replayed paths, the policies and the searched shape at
   each, falls counted; where `stiffness_matched_walks.json` is shipped too (`evaluate.py stiffness
   --pd-matched`), the replayed paths with every command re-solved for the PD, beside them.
+- `gains` (where `gains_walks.json` is shipped, `tools/gains_walks.py`): the same run with the drivers' kp or kd
+  alone scaled, as commanded and re-commanded (`evaluate.py prototype --pd-matched-from-default`), beside the
+  default gains' saving.
 """
 from __future__ import annotations
 
@@ -34,6 +37,7 @@ from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
 FRESH_ROW = "**D_t on E, seeds 5–9 (never tuned on)**"  # a headline row only where its walks are shipped
 FRESH_PROTOTYPE_ROW = "**battery saving, seeds 5–9 (never tuned on)**"  # the same, the prototype run's
+GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
     "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
@@ -42,11 +46,10 @@ HEADLINES = {
                                          FRESH_PROTOTYPE_ROW,
                                          "learned against the shape searched for the battery (the best alternative)",
                                          "*paper, 1 m/s: range learned / cycloid*")),
-    "stiffness_headline": ("stiffness", ("**replayed learned path, PD 0.7×**", "**replayed learned path, PD 1×**",
-                                         "**replayed learned path, PD 1.4×**",
-                                         "**replayed learned path re-commanded for the PD, PD 1.4×**")),
+    "gains_headline": ("gains", (GAINS_DEFAULT_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
+                                 "kd 2×, as commanded", "**kd 2×, re-commanded**")),
 }
-NAMES = ("table5", "prototype", "stiffness", *HEADLINES)
+NAMES = ("table5", "prototype", "stiffness", "gains", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths of seeds it was never tuned on
@@ -54,6 +57,7 @@ FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths o
 PROTOTYPE_FRESH_SOURCE = "prototype_fresh.json"
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
+GAINS_SOURCE = "gains_walks.json"  # optional: prototype runs with kp or kd alone changed (tools/gains_walks.py)
 MINUS = "\u2212"  # the README's minus sign
 # the pages the tables are written into (relative to the repository root), and whether a page must hold every
 # table made (the full tables live in docs/results.md; the README marks the ones it shows)
@@ -243,6 +247,27 @@ def stiffness_markdown(walks: list[dict], robot: str = "hardware", matched: list
     return "\n".join(lines)
 
 
+def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware") -> str:
+    """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
+    scaled (`tools/gains_walks.py`'s walks, each labelled `gain`, `gain_scale`, `pd_matched`), as commanded and
+    re-commanded, beside the default gains' (the prototype run's `default_walks`)."""
+    default = {r["speed_mps"]: r for r in ps.summary_rows(default_walks)
+               if r["robot"] == robot and r["trajectory"] == "learned"}
+    speeds = sorted(default)
+    lines = _header("battery saving against the cheaper common trajectory", speeds)
+    lines.append(_line(GAINS_DEFAULT_ROW, [mean_ci(default[v], "battery_saving_pct", ".1f", " %") for v in speeds]))
+    runs = sorted({(w["gain"], w["gain_scale"], bool(w["pd_matched"])) for w in walks},
+                  key=lambda run: (run[0] != "kp", *run[1:]))  # kp's rows first, each factor as commanded first
+    for gain, scale, matched in runs:
+        here = [w for w in walks if (w["gain"], w["gain_scale"], bool(w["pd_matched"])) == (gain, scale, matched)]
+        by = {r["speed_mps"]: r for r in ps.summary_rows(here) if r["robot"] == robot and r["trajectory"] == "learned"}
+        cells = ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + _missed(by[v])
+                 for v in speeds]
+        label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
+        lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in cells]))
+    return "\n".join(lines)
+
+
 def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
     """Both tables from a folder holding comparison.json and prototype.json (and comparison_torque.json, if
     the paper's torque agent's paths were compared)."""
@@ -262,6 +287,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         matched = results / STIFFNESS_MATCHED_SOURCE
         tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
                                                  matched=json.loads(matched.read_text()) if matched.is_file() else None)
+    if (results / GAINS_SOURCE).is_file():
+        tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"])
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in HEADLINES.items() if full in tables})
     return tables
 
