@@ -175,7 +175,7 @@ class LearnedSet:
 
     def covers(self, speed: float) -> bool:
         """Whether every label has a path at `speed`."""
-        return bool(self) and all(any(p.serves(speed) for p in ps) for ps in self._by_label.values())
+        return bool(self) and all(self.has(label, speed) for label in self._by_label)
 
     def at(self, speed: float) -> dict[str, LearnedPath]:
         """Every label's path at `speed` (m/s), by the module's rule; LearnedSetError naming what is missing."""
