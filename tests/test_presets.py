@@ -22,8 +22,12 @@ def _long(name: str, *sets: str) -> C.ExperimentConfig:
 
 
 def _phases(name: str) -> dict[str, C.Phase]:
-    return {p.name: p for p in C.load_preset(ROOT / "configs" / name).phases}
+    """The phases of configs/<name>, or of a recipe of the log given as notebook/configs/<name>."""
+    path = ROOT / name if name.startswith("notebook/") else ROOT / "configs" / name
+    return {p.name: p for p in C.load_preset(path).phases}
 
+
+BAND = "notebook/configs/torque_band.yaml"  # results/torque/policy/seed0-2: the ideal robot's torque recipe
 
 # Each shipped phase against the long form and the command that made the shipped actors (docs/results.md).
 SHIPPED = {
@@ -32,15 +36,15 @@ SHIPPED = {
     ("battery.yaml", "stage1"): ("1", _long("quick_speeds.yaml", "train.stage2.max_env_steps=160000")),
     ("battery.yaml", "stage2"): ("2", _long("quick_speeds_battery_loop.yaml")),
     ("battery.yaml", "band"): ("2", _long("quick_speeds_battery_band.yaml")),
-    ("torque.yaml", "main"): ("both", _long("torque_prior.yaml")),
-    ("torque.yaml", "speed1"): ("1", _long("torque_prior.yaml", "env.prior_weight=0", "train.stage1.reward.speed=-100",
-                                           "train.stage2.reward.speed=-100", "train.stage1.max_env_steps=100000",
-                                           "train.stage1.critic_warmup_updates=2000")),
-    ("torque.yaml", "speed2"): ("2", _long("torque_prior.yaml", "train.stage1.reward.speed=-100",
-                                           "train.stage2.reward.speed=-100", "train.stage2.max_env_steps=100000")),
-    ("torque.yaml", "energy"): ("2", _long("torque_prior.yaml", "train.stage1.reward.speed=-100",
-                                           "train.stage2.reward.speed=-100", "train.stage2.reward.energy=-0.6",
-                                           "train.stage2.max_env_steps=50000")),
+    (BAND, "main"): ("both", _long("torque_prior.yaml")),
+    (BAND, "speed1"): ("1", _long("torque_prior.yaml", "env.prior_weight=0", "train.stage1.reward.speed=-100",
+                            "train.stage2.reward.speed=-100", "train.stage1.max_env_steps=100000",
+                            "train.stage1.critic_warmup_updates=2000")),
+    (BAND, "speed2"): ("2", _long("torque_prior.yaml", "train.stage1.reward.speed=-100",
+                            "train.stage2.reward.speed=-100", "train.stage2.max_env_steps=100000")),
+    (BAND, "energy"): ("2", _long("torque_prior.yaml", "train.stage1.reward.speed=-100",
+                            "train.stage2.reward.speed=-100", "train.stage2.reward.energy=-0.6",
+                            "train.stage2.max_env_steps=50000")),
 }
 
 
@@ -58,8 +62,7 @@ def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_w
     assert [(p.name, p.start) for p in _phases("battery.yaml").values()] == [
         ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
-        ("main", None), ("speed1", "main/stage1_final.pt"), ("speed2", "main/stage2_final.pt"),
-        ("energy", "speed2/stage2_final.pt")]
+        ("main", None), ("speed", "main/stage1_final.pt"), ("energy", "speed/stage1_final.pt")]
     assert C.load_preset(ROOT / "configs/battery.yaml").extract == {"replay_attempts": 16, "candidates": 2}
     assert not C.load_preset(ROOT / "configs/tiny.yaml").phased  # a plain two-stage run, as before phases
 

@@ -104,7 +104,25 @@ def test_each_hardware_effect_reaches_the_torque_envs_step(effect):
         assert np.abs(obs[1:, seen] - obs0[1:, seen]).max() > 1e-4  # another observation
     if effect == "estimated_velocity":
         assert all(i["velocity_estimate"] is not None for i in infos)
-        assert not np.allclose([i["forward_speed_used"] for i in infos], [i["forward_speed"] for i in infos])
+        used = [i["forward_speed_used"] for i in infos]
+        assert not np.allclose(used, [i["forward_speed"] for i in infos]) and np.ptp(used) > 1e-4  # it runs
+
+
+def test_the_velocity_filter_follows_the_body_under_a_torque_policy():
+    """With no trot controller the robot's velocity filter still runs: the speed the policy observes and the
+    reward pays (`forward_speed_used`) follows the body's, as it does under the trot (a filter left at its
+    reset would show a walking robot standing)."""
+    env = CyberDogEnv(C.EnvConfig(action_mode="torque", joint_damping=3.0, prior_weight=1.0, target_speed=1.0,
+                                  hardware=C.HardwareConfig(estimated_velocity=True, imu_noise=True)),
+                      reward="stage1")
+    env.reset(seed=0)
+    used, true = [], []
+    for _ in range(80):  # 2 s walked by the prior
+        _, _, terminated, _, info = env.step(np.zeros(12))
+        used.append(info["forward_speed_used"])
+        true.append(info["forward_speed"])
+    assert not terminated and np.mean(true[40:]) > 0.4
+    assert np.sqrt(np.mean((np.array(used) - true) ** 2)) < 0.1
 
 
 def test_joint_damping_is_motor_torque_whose_work_eq7_books():
@@ -118,6 +136,22 @@ def test_joint_damping_is_motor_torque_whose_work_eq7_books():
     # a physics step's speed at its start is the one PyBullet reports after the step before (= Δq / physics_dt)
     np.testing.assert_allclose(p["tau"][1:], np.clip(-3.0 * p["dq"][:-1], -25.0, 25.0), atol=1e-9)
     assert np.abs(p["tau"]).max() > 0.1 and walker.energy() > 0.0  # with no action at all: the damper's work
+
+
+def test_a_drawn_kd_scales_the_drivers_damping_and_the_next_episode_draws_anew():
+    """Randomised over the drivers' kd, the torque env's damping is the drawn kd times the configured one (no PID
+    runs under a torque policy: the damping is the drivers' kd), applied at every physics step as above."""
+    env = torque_env(joint_damping=3.0, randomization=C.RandomizationConfig(kd_factor=(0.5, 1.5)))
+    factors = []
+    for seed in range(2):
+        _, info = env.reset(seed=seed)
+        factors.append(kd := info["robot_draw"]["kd_factor"])
+        assert env.walker.joint_damping == pytest.approx(3.0 * kd)
+        for _ in range(5):
+            env.step(np.zeros(12))
+        p = env.walker.physics_traces()
+        np.testing.assert_allclose(p["tau"][1:], np.clip(-3.0 * kd * p["dq"][:-1], -25.0, 25.0), atol=1e-9)
+    assert abs(factors[0] - factors[1]) > 0.01 and all(abs(f - 1.0) > 0.01 for f in factors)
 
 
 def test_damping_and_prior_are_refused_outside_torque_mode():

@@ -125,7 +125,7 @@ class RandomizationConfig:
     mass_scale: Tuple[float, float] = (1.0, 1.0)  # × every link's mass and inertia [legged_gym: −1..+3 kg on 13 kg]
     motor_strength: Tuple[float, float] = (1.0, 1.0)  # × the torque the motors produce [walk-these-ways: 0.9..1.1]
     kp_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's proportional gains [walk-these-ways: 0.8..1.3]
-    kd_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's derivative gains [walk-these-ways: 0.5..1.5]
+    kd_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's kd, torque mode's damping [walk-these-ways: 0.5..1.5]
     ground_friction_scale: Tuple[float, float] = (1.0, 1.0)  # × SimConfig.ground_friction [legged_gym: 0.5..1.25 absolute]
 
     RANGES = ("joint_friction_scale", "latency_periods", "mass_scale", "motor_strength", "kp_factor", "kd_factor",

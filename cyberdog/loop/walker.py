@@ -86,7 +86,7 @@ class Walker:
     fall_height, fall_tilt: m, rad: what `fallen` means.
     joint_damping: N·m·s/rad, the motor drivers' damping −c·q̇ added at every physics step on the joint speed
         then (the drivers' kd with kp = 0: the torque-mode env's `EnvConfig.joint_damping`); motor torque, so
-        the energy books its work.
+        the energy books its work. A drawn robot's `kd_factor` scales it, as it scales the PID's kd.
 
     After each step, `reading` holds the robot's state in floats (`Robot.read`, what the controller's per-period
     path uses) and `state` the same as a `RobotState` of arrays, built when first asked.
@@ -110,7 +110,8 @@ class Walker:
         self.joint_stop, self.drive = joint_stop, drive
         if not (joint_damping >= 0 and np.isfinite(joint_damping)):
             raise ValueError(f"joint_damping must be >= 0 N·m·s/rad and finite, got {joint_damping!r}")
-        self.joint_damping = float(joint_damping)  # N·m·s/rad, the drivers' damping on the joint speed now
+        self.nominal_joint_damping = float(joint_damping)  # N·m·s/rad, the configured robot's
+        self.joint_damping = self.nominal_joint_damping  # N·m·s/rad, the drivers' damping on the joint speed now
         self.record, self.gait_metrics, self.body_trace = record, gait_metrics, body_trace
         self.fall_height, self.fall_tilt = fall_height, fall_tilt
         self.dt = cfg.sim.controller_dt  # s, one `step`
@@ -157,6 +158,7 @@ class Walker:
         self.robot.actuator.set_scales(d.joint_friction_scale, d.motor_strength)
         self.robot.set_ground_friction(self.cfg.sim.ground_friction * d.ground_friction_scale)
         self.controller.pid.set_gain_factors(d.kp_factor, d.kd_factor)
+        self.joint_damping = self.nominal_joint_damping * d.kd_factor  # the drivers' kd, drawn as the PID's is
         self.robot.reset()
         self.controller.reset()
         self.delay.reset(d.latency_periods)
@@ -251,7 +253,7 @@ class Walker:
         damping, traces) is skipped; the usual period (the truth, the controller alone) stays in floats."""
         r, k, sensing = self.reading, self.steps, self.sensing
         command = None
-        if self.drive:  # sense, then command (torque mode: no controller, so its sensors are not read)
+        if self.drive:  # sense, then command (torque mode: no controller; only the velocity filter runs)
             if sensing is None:  # the truth, in floats
                 q, dq = r.q, r.dq
                 feedback = BodyFeedback(r.base_rpy[2], r.base_position[1] - self._start_y,
@@ -264,6 +266,8 @@ class Walker:
             command = self.controller.command(k * self.dt, q, feedback, dq=dq)
             if self.body_trace:
                 self.speed_loop.append((self.controller.speed_correction, self.controller.speed_correction_limit))
+        elif sensing is not None and sensing.estimator_due(k):  # torque mode: no controller, but the robot's
+            sensing.advance_estimator(self.state, self.robot.foot_contacts)  # velocity filter runs all the same
         stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
         # the latency holds the whole command (targets, gains, feedforward, the added torques)
         arrived = (command, extra_torque, stop)

@@ -56,7 +56,7 @@ class RobotDraw:
     mass_scale: float = 1.0  # × every link's mass and inertia
     motor_strength: float = 1.0  # × the torque the motors produce
     kp_factor: float = 1.0  # × the PID's proportional gains
-    kd_factor: float = 1.0  # × the PID's derivative gains
+    kd_factor: float = 1.0  # × the PID's derivative gains and the drivers' joint damping (torque mode)
     ground_friction_scale: float = 1.0  # × SimConfig.ground_friction
 
 
@@ -188,9 +188,18 @@ class HardwareSensing:
         leg_v = leg_odometry_velocity(q, dq, contacts(), imu.gyroscope, self.cfg.robot)
         self.estimator.update(imu, leg_v, R)
 
+    def estimator_due(self, k: int) -> bool:
+        """The velocity filter runs at controller period k (every `estimator_every` periods after the first)."""
+        return self.hw.estimated_velocity and k > 0 and k % self.estimator_every == 0
+
+    def advance_estimator(self, state, contacts) -> None:
+        """One run of the velocity filter on the state read now (a period where `estimator_due`): the robot's
+        state estimator runs whatever commands the joints, a torque policy as well as the trot controller."""
+        self._update_estimator(state, contacts)
+
     def read(self, k: int, state, contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Sensor readings at controller period k (state read after period k − 1); `contacts()` → (4,) bool."""
-        if self.hw.estimated_velocity and k > 0 and k % self.estimator_every == 0:
+        if self.estimator_due(k):
             self._update_estimator(state, contacts)
         q, dq = self.joints(state.q, state.dq)
         return q, dq, (self.estimator.velocity if self.hw.estimated_velocity else None)
