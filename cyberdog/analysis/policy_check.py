@@ -9,6 +9,11 @@ same speed, the Eq. 7 reduction is 1 − E₂/E₁ over the same duration, and p
 (both must walk for it to mean anything; per metre, a policy that walks slower is not credited for it). The trot
 controller's own walk at each speed (trajectory + IK + PD at the controller rate, what a torque policy's prior
 came from) is the reference row, label "trot" and stage 0 (`check_trot`).
+
+Each walk is on a named robot (`ROBOTS`, `robot_env`): "ideal" (no hardware effect, no randomisation draw, whatever
+the actor trained on) or "hardware:N", the hardware-like robot of draw N (`HARDWARE_LIKE` with seed N: its mass,
+sensor noise and Kalman speed, latency and joint friction; the robot a scripted walk with that config walks). The
+per-metre reductions are on Eq. 7 and on the electrical energy (what the battery pays).
 """
 from __future__ import annotations
 
@@ -18,45 +23,75 @@ from pathlib import Path
 
 from cyberdog.config.paper import speed_within_band
 
-COLUMNS = ["label", "stage", "speed_command_mps", "walks", "fell", "duration_s", "mean_speed_mps", "in_band",
-           "energy_J", "electrical_energy_J", "energy_per_metre_J", "cost_of_transport", "score"]
+COLUMNS = ["label", "stage", "robot", "speed_command_mps", "walks", "fell", "duration_s", "mean_speed_mps", "in_band",
+           "energy_J", "electrical_energy_J", "energy_per_metre_J", "electrical_per_metre_J", "cost_of_transport",
+           "score"]
+ROBOTS = ("ideal", "hardware:N")  # the robots a check walks on (N: a hardware-like draw, 0, 1, ...)
 
 
-def check_actor(job: tuple) -> dict:
-    """One walk → one row. job: (label, stage, actor file, speed m/s, duration s, env seed)."""
-    from cyberdog.rl.rollout import load_actor, rollout
+def parse_robot(robot: str) -> int | None:
+    """"ideal" → None; "hardware:N" → N (the hardware-like draw's seed). Anything else is a ValueError."""
+    if robot == "ideal":
+        return None
+    head, _, draw = robot.partition(":")
+    if head != "hardware" or not draw.isdigit():
+        raise ValueError(f"a robot is 'ideal' or 'hardware:N' (N = 0, 1, ...: a hardware-like draw), got {robot!r}")
+    return int(draw)
 
-    label, stage, path, speed, duration, seed = job
-    t0 = time.perf_counter()
-    r = rollout(load_actor(path), speed=speed, duration=duration, seed=seed)
+
+def robot_env(env, robot: str):
+    """(the env config, hardware_robot) a walk on `robot` runs with: `env` (an EnvConfig, the actor's) with no
+    randomisation draw and the ideal robot's hardware, or the hardware-like robot of draw N."""
+    import dataclasses
+
+    from cyberdog.config import HARDWARE_LIKE, HardwareConfig, RandomizationConfig
+
+    draw = parse_robot(robot)
+    hardware = HardwareConfig() if draw is None else dataclasses.replace(HARDWARE_LIKE, seed=draw)
+    return dataclasses.replace(env, hardware=hardware, randomization=RandomizationConfig()), draw is not None
+
+
+def _row(label, stage, robot, path, speed, r) -> dict:
     in_band = speed_within_band(r.mean_speed, speed) if math.isfinite(r.mean_speed) else False
-    return {"label": label, "stage": stage, "actor": str(path), "speed_command_mps": speed,
+    return {"label": label, "stage": stage, "robot": robot, "actor": str(path), "speed_command_mps": speed,
             "walks": bool(not r.fell and in_band), "fell": bool(r.fell), "duration_s": r.duration,
             "mean_speed_mps": r.mean_speed, "in_band": in_band, "energy_J": r.energy,
             "electrical_energy_J": r.electrical_energy, "energy_per_metre_J": r.energy_per_metre,
-            "cost_of_transport": r.cost_of_transport, "score": r.score, "wall_s": time.perf_counter() - t0}
+            "electrical_per_metre_J": r.electrical_energy / r.distance if r.distance > 0 else math.nan,
+            "cost_of_transport": r.cost_of_transport, "score": r.score}
+
+
+def check_actor(job: tuple) -> dict:
+    """One walk → one row. job: (label, stage, actor file, speed m/s, duration s, env seed, robot)."""
+    from cyberdog.rl.rollout import load_actor, rollout
+
+    label, stage, path, speed, duration, seed, robot = job
+    t0 = time.perf_counter()
+    actor = load_actor(path)
+    env, hardware_robot = robot_env(actor.config.env, robot)
+    r = rollout(actor, speed=speed, duration=duration, seed=seed, env_config=env, hardware_robot=hardware_robot)
+    return {**_row(label, stage, robot, path, speed, r), "wall_s": time.perf_counter() - t0}
 
 
 def check_trot(job: tuple) -> dict:
     """The trot controller's own walk → one row like `check_actor`'s. job: (speed m/s, duration s, the env's
-    `WalkConfig`: the trot the env's controller, and a torque policy's prior, runs)."""
+    `WalkConfig`: the trot the env's controller, and a torque policy's prior, runs; robot)."""
     import dataclasses
 
     from cyberdog.analysis.walk import walk
+    from cyberdog.config import HARDWARE_LIKE
 
-    speed, duration, cfg = job
+    speed, duration, cfg, robot = job
+    draw = parse_robot(robot)
     t0 = time.perf_counter()
-    r = walk(dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, speed=float(speed))), duration=duration)
-    in_band = speed_within_band(r.mean_speed, speed) if math.isfinite(r.mean_speed) else False
-    return {"label": "trot", "stage": 0, "actor": "", "speed_command_mps": speed,
-            "walks": bool(not r.fell and in_band), "fell": bool(r.fell), "duration_s": r.duration,
-            "mean_speed_mps": r.mean_speed, "in_band": in_band, "energy_J": r.energy,
-            "electrical_energy_J": r.electrical_energy, "energy_per_metre_J": r.energy_per_metre,
-            "cost_of_transport": r.cost_of_transport, "score": math.nan, "wall_s": time.perf_counter() - t0}
+    r = walk(dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, speed=float(speed))), duration=duration,
+             hardware=None if draw is None else dataclasses.replace(HARDWARE_LIKE, seed=draw))
+    return {**_row("trot", 0, robot, "", speed, r), "score": math.nan, "wall_s": time.perf_counter() - t0}
 
 
-def check_jobs(actors: dict[str, dict[int, str | Path]], speeds, duration: float, seed: int = 0) -> list[tuple]:
-    """The walks to make: `actors` maps a label (a seed) to {stage: actor file}."""
+def check_jobs(actors: dict[str, dict[int, str | Path]], speeds, duration: float, seed: int = 0,
+               robots=("ideal",)) -> list[tuple]:
+    """The walks to make: `actors` maps a label (a seed) to {stage: actor file}; each walks on each robot."""
     if not actors:
         raise ValueError("no actor to check")
     if not (math.isfinite(duration) and duration > 0):
@@ -64,29 +99,41 @@ def check_jobs(actors: dict[str, dict[int, str | Path]], speeds, duration: float
     bad = [v for v in speeds if not (math.isfinite(v) and v > 0)]
     if bad or not speeds:
         raise ValueError(f"speeds must be > 0 m/s (one or more), got {list(speeds)!r}")
+    if not robots:
+        raise ValueError("no robot to walk on")
+    for robot in robots:
+        parse_robot(robot)
     for label, stages in actors.items():
         for stage, path in stages.items():
             if not Path(path).is_file():
                 raise FileNotFoundError(f"{label} stage {stage}: no actor file {path}")
-    return [(label, stage, str(path), float(v), float(duration), seed)
-            for label, stages in actors.items() for stage, path in sorted(stages.items()) for v in speeds]
+    return [(label, stage, str(path), float(v), float(duration), seed, robot)
+            for label, stages in actors.items() for stage, path in sorted(stages.items()) for robot in robots
+            for v in speeds]
 
 
 def stage_reductions(rows: list[dict]) -> list[dict]:
-    """Per label and speed with both stages: the Eq. 7 reduction of stage 2 against stage 1, 1 − E₂/E₁ (%), over
-    walks of the same duration, and whether both walked (only then is it a reduction at the same speed)."""
-    by_key = {(r["label"], r["stage"], r["speed_command_mps"]): r for r in rows}
+    """Per label, robot and speed with both stages: stage 2 against stage 1, 1 − E₂/E₁ (%) of Eq. 7 over walks of
+    the same duration and per metre walked, and of the electrical energy per metre; and whether both walked (only
+    then is it a reduction at the same speed)."""
+    by_key = {(r["label"], r["stage"], r.get("robot", "ideal"), r["speed_command_mps"]): r for r in rows}
     out = []
-    for (label, stage, speed), one in by_key.items():
-        two = by_key.get((label, 2, speed))
+    for (label, stage, robot, speed), one in by_key.items():
+        two = by_key.get((label, 2, robot, speed))
         if stage != 1 or two is None:
             continue
         same = one["duration_s"] == two["duration_s"]
-        out.append({"label": label, "speed_command_mps": speed, "both_walk": one["walks"] and two["walks"],
+        out.append({"label": label, "robot": robot, "speed_command_mps": speed,
+                    "both_walk": one["walks"] and two["walks"],
                     "energy_stage1_J": one["energy_J"], "energy_stage2_J": two["energy_J"],
                     "reduction_pct": 100.0 * (1.0 - two["energy_J"] / one["energy_J"]) if same else math.nan,
-                    "reduction_per_metre_pct": 100.0 * (1.0 - two["energy_per_metre_J"] / one["energy_per_metre_J"])})
+                    "reduction_per_metre_pct": 100.0 * (1.0 - two["energy_per_metre_J"] / one["energy_per_metre_J"]),
+                    "electrical_per_metre_stage1_J": one["electrical_per_metre_J"],
+                    "electrical_per_metre_stage2_J": two["electrical_per_metre_J"],
+                    "electrical_reduction_per_metre_pct":
+                        100.0 * (1.0 - two["electrical_per_metre_J"] / one["electrical_per_metre_J"])})
     return out
 
 
-__all__ = ["COLUMNS", "check_actor", "check_jobs", "check_trot", "stage_reductions"]
+__all__ = ["COLUMNS", "ROBOTS", "check_actor", "check_jobs", "check_trot", "parse_robot", "robot_env",
+           "stage_reductions"]

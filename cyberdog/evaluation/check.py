@@ -8,9 +8,12 @@ walk alone at the paper's speeds?
   first failing walk; this walks them all and prints per walk the mean speed as a share of the command, a fall
   and the electrical energy per metre (J/m), then each path's verdict ("ok", or the walks that failed). Writes
   replay_check.json; the exit status is 1 where a path fails a walk.
-- `--runs RUN ...` (train.py run folders): each run's stage-1 and stage-2 actors walk `--duration` s from the
-  stand at each speed, deterministically, on the ideal robot, alone (`cyberdog.analysis.policy_check`), and
-  stage 2's Eq. 7 reduction against stage 1 is tabulated. Writes policy_check.{md,json}.
+- `--runs RUN ...` (train.py run folders, a recipe's seed folders, shipped policy folders): each run's stage-1
+  and stage-2 actors walk `--duration` s from the stand at each speed, deterministically, alone
+  (`cyberdog.analysis.policy_check`), on each of `--robots` (default the ideal robot; `hardware:N` the
+  hardware-like robot of draw N), and stage 2's reduction against stage 1 is tabulated (Eq. 7, and the
+  electrical energy per metre). A seed folder of a recipe (train.py --seeds) gives its last stage-1 and last
+  stage-2 phase's actors. Writes policy_check.{md,json}.
 
 `cyberdog.evaluation.cli` imports this module for its help text and options (`LINE`, `PARAGRAPH`, `add_options`):
 it imports neither the simulator nor numpy, nor the command line, until a check runs.
@@ -28,8 +31,8 @@ LINE = "do learned paths pass the replay check, walk by walk (PATH...); do train
 PARAGRAPH = ("path files (commanded paths, as `extract` writes them; folders of them): every walk of the replay "
              "check at the speed each serves, under the trot it was recorded with, and a verdict per path "
              "(replay_check.json; exit status 1 where one fails). --runs RUN...: each run's stage-1 and stage-2 "
-             "actors walk alone at each speed on the ideal robot, and stage 2's Eq. 7 reduction against stage 1 "
-             "(policy_check.{md,json}).")
+             "actors walk alone at each speed on the ideal robot (or --robots), and stage 2's reduction against "
+             "stage 1 on Eq. 7 and the electrical energy per metre (policy_check.{md,json}).")
 
 
 def add_options(p) -> None:
@@ -43,8 +46,13 @@ def add_options(p) -> None:
                         "at the stiffness's ends, the 100 m hardware-like walks")
     g = p.add_argument_group("trained policies")
     g.add_argument("--runs", type=Path, nargs="+", default=None, metavar="RUN",
-                   help="train.py run folders, or shipped ones (results/<recipe>/policy/seed<N>), whose actors walk "
-                        "alone (label: the folder's name)")
+                   help="train.py run folders, a recipe's seed folders (RUN_DIR/seed<N>: its last stage-1 and "
+                        "stage-2 phases' actors), or shipped ones (results/<recipe>/policy/seed<N>), whose actors "
+                        "walk alone (label: the folder's name)")
+    g.add_argument("--robots", nargs="+", default=None, metavar="ROBOT",
+                   help="the robots each actor walks on: ideal (default), hardware:N (the hardware-like robot of "
+                        "draw N: its latency, friction, sensor noise, Kalman speed and mass), e.g. --robots ideal "
+                        "hardware:0 hardware:1")
     g.add_argument("--speeds", type=positive, nargs="+", default=None,
                    help="m/s (default " + " ".join(f"{v:g}" for v in PAPER_SPEEDS) + ")")
     g.add_argument("--duration", type=positive, default=None,
@@ -106,7 +114,7 @@ def _check_paths(args, cfg) -> int:
     from cyberdog.evaluation.recorded_trot import trot_for
 
     given = [o for o, v in (("--speeds", args.speeds), ("--duration", args.duration), ("--actor", args.actor),
-                            ("--trot", args.trot)) if v]
+                            ("--trot", args.trot), ("--robots", args.robots)) if v]
     if given:
         raise UsageError(f"{', '.join(given)}: options of check --runs; a path walks at the one speed it serves")
     files = learned_files(args.paths)
@@ -143,10 +151,21 @@ def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
     its run's final actors); a run with neither stage is refused."""
     from cyberdog.evaluation.cli import UsageError
 
+    from cyberdog.config import is_lineage, read_phases
+
     actors = {}
     for run in runs:
         names = [f"stage{{}}_{actor}_actor.pt"] + (["stage{}_actor.pt"] if actor == "final" else [])
-        stages = {s: next((run / n.format(s) for n in names if (run / n.format(s)).is_file()), None) for s in (1, 2)}
+        if is_lineage(run):  # a recipe's seed folder: the last phase that ends with each stage
+            try:
+                phases = read_phases(run)[0]
+            except ValueError as err:
+                raise UsageError(f"--runs {run}: {err}") from None
+            folders = {s: next((run / p.name for p in reversed(phases) if p.last_stage == s), run) for s in (1, 2)}
+        else:
+            folders = {1: run, 2: run}
+        stages = {s: next((folders[s] / n.format(s) for n in names if (folders[s] / n.format(s)).is_file()), None)
+                  for s in (1, 2)}
         stages = {s: f for s, f in stages.items() if f is not None}
         if not stages:
             raise UsageError(f"--runs {run}: no stage1_{actor}_actor.pt or stage2_{actor}_actor.pt")
@@ -160,9 +179,9 @@ def _check_policies(args) -> int:
     from cyberdog.analysis.parallel import map_in_processes, progress_log
     from cyberdog.analysis.policy_check import COLUMNS, check_actor, check_jobs, check_trot, stage_reductions
     from cyberdog.analysis.report import json_safe, markdown_table
-    from cyberdog.config import ExperimentConfig, load
     from cyberdog.evaluation.cli import UsageError
     from cyberdog.evaluation.commands import Run, new_out
+    from cyberdog.rl.rollout import load_actor
 
     given = [o for o, v in (("--parts", args.parts), ("--config", args.config), ("--set", args.overrides),
                             ("--no-recorded-trot", args.no_recorded_trot)) if v]
@@ -170,8 +189,9 @@ def _check_policies(args) -> int:
         raise UsageError(f"{', '.join(given)}: not for --runs (a policy walks in the env it was trained in, its "
                          f"run's config.yaml)")
     speeds, duration = args.speeds or list(PAPER_SPEEDS), args.duration or PAPER_WALK_DURATION
+    robots = args.robots or ["ideal"]
     try:
-        jobs = check_jobs(run_actors(args.runs, args.actor or "final"), speeds, duration)
+        jobs = check_jobs(run_actors(args.runs, args.actor or "final"), speeds, duration, robots=robots)
     except (ValueError, FileNotFoundError) as err:
         raise UsageError(str(err)) from None
     out = args.out or new_out()
@@ -179,21 +199,21 @@ def _check_policies(args) -> int:
         run = Run(args, out)  # no config.yaml: each policy walks in its own run's config
     except OSError as err:
         raise UsageError(f"cannot write the output folder --out {out}: {err.strerror or err}") from None
-    print(f"{len(jobs)} walks of {duration:g} s on the ideal robot, the policies alone", flush=True)
+    print(f"{len(jobs)} walks of {duration:g} s on {', '.join(robots)}, the policies alone", flush=True)
 
     def line(r: dict) -> str:
-        return (f"{r['label']} stage {r['stage']} {r['speed_command_mps']:g} m/s: {r['mean_speed_mps']:.3f} m/s, "
-                f"{'fell' if r['fell'] else 'walks' if r['walks'] else 'off the band'}, {r['energy_J']:.0f} J")
+        return (f"{r['label']} stage {r['stage']} {r['robot']} {r['speed_command_mps']:g} m/s: "
+                f"{r['mean_speed_mps']:.3f} m/s, {'fell' if r['fell'] else 'walks' if r['walks'] else 'off the band'}, "
+                f"{r['energy_J']:.0f} J, {r['electrical_per_metre_J']:.0f} J/m electrical")
 
     rows = map_in_processes(check_actor, jobs, args.workers, on_result=progress_log(len(jobs), line))
-    if args.trot:  # the reference: the trot controller's own walks, as the first run's env has it
-        config = args.runs[0] / "config.yaml"
-        walk_cfg = (load(ExperimentConfig, config) if config.is_file() else ExperimentConfig()).env.walk
-        rows += map_in_processes(check_trot, [(float(v), duration, walk_cfg) for v in speeds], args.workers,
-                                 on_result=progress_log(len(speeds), line))
+    if args.trot:  # the reference: the trot controller's own walks, as the first actor's env has it
+        walk_cfg = load_actor(jobs[0][2]).config.env.walk
+        trot_jobs = [(float(v), duration, walk_cfg, robot) for robot in robots for v in speeds]
+        rows += map_in_processes(check_trot, trot_jobs, args.workers, on_result=progress_log(len(trot_jobs), line))
     reductions = stage_reductions(rows)
     md = ("## Every walk\n\n" + markdown_table([{k: r[k] for k in COLUMNS} for r in rows])
-          + "\n\n## Stage 2 against stage 1 (Eq. 7, same speed and duration)\n\n" + markdown_table(reductions) + "\n")
+          + "\n\n## Stage 2 against stage 1 (same robot, speed and duration)\n\n" + markdown_table(reductions) + "\n")
     print(md)
     (run.out / "policy_check.md").write_text(md)
     (run.out / "policy_check.json").write_text(json.dumps(json_safe({"walks": rows, "reductions": reductions}),
