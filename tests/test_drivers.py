@@ -189,3 +189,14 @@ def test_a_walk_at_doubled_damping_steps_its_drivers_twice_as_often():
             Walker(cfg, robot=coarse)
     finally:
         coarse.close()
+
+
+def test_the_torque_modes_damping_sets_the_rate_and_the_pid_it_does_not_run_does_not():
+    """Under a torque policy the drivers' law is their damping alone (kd with kp = 0): 3 N·m·s/rad needs 1.6 kHz
+    as kd 4 does; the trot's PID, which does not run then, does not set the step, even when stiff."""
+    stiff = C.replace(CFG, pid=C.replace(CFG.pid, kp=(240.0,) * 3))
+    assert driver_rate_config(stiff, drive=False) is stiff  # no damping, no PD: the configured step
+    assert driver_rate_config(CFG, joint_damping=3.0, drive=False).sim.physics_dt == CFG.sim.physics_dt / 2
+    assert driver_rate_config(CFG, joint_damping=1.0, drive=False) is CFG  # kd·h/J = 0.17
+    with Walker(CFG, drive=False, joint_damping=3.0) as w:
+        assert w.substeps == 2 * N

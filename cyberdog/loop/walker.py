@@ -56,12 +56,16 @@ SLIP_SAMPLE_PERIOD = 0.005  # s between samples of the feet's positions and cont
 
 
 
-def driver_rate_config(cfg: WalkConfig) -> WalkConfig:
-    """`cfg` with the physics step at which its joint PD converges (`cyberdog.core.drivers.driver_physics_dt`
-    of `cfg.pid`'s gains; unchanged at the default gains): a user who doubles kd gets the energy of the drivers'
-    law, not of the step's size. The gains a robot draw scales at a reset (`RandomizationConfig`) and the
-    torque-mode env's damping (`EnvConfig.joint_damping`) are not counted: the step is the configured robot's."""
-    h = driver_physics_dt(cfg.sim.physics_dt, cfg.pid.kp, cfg.pid.kd, cfg.robot.reflected_rotor_inertia)
+def driver_rate_config(cfg: WalkConfig, joint_damping: float = 0.0, drive: bool = True) -> WalkConfig:
+    """`cfg` with the physics step at which the drivers' law converges (`cyberdog.core.drivers.driver_physics_dt`;
+    unchanged at the default gains): a user who doubles kd gets the energy of the drivers' law, not of the
+    step's size. The law is the PID's PD where the trot drives the joints (`drive`), and the drivers' damping
+    `joint_damping` (N·m·s/rad, the torque-mode env's `EnvConfig.joint_damping`, kd with kp = 0) where it is
+    on: its 3 N·m·s/rad walks at 1.6 kHz. The gains a robot draw scales at a reset (`RandomizationConfig`) are
+    not counted: the step is the configured robot's."""
+    kp = list(cfg.pid.kp) if drive else []
+    kd = (list(cfg.pid.kd) if drive else []) + [joint_damping]
+    h = driver_physics_dt(cfg.sim.physics_dt, kp, kd, cfg.robot.reflected_rotor_inertia)
     if h == cfg.sim.physics_dt:
         return cfg
     return dataclasses.replace(cfg, sim=dataclasses.replace(cfg.sim, physics_dt=h))
@@ -99,7 +103,9 @@ class Walker:
                  joint_damping: float = 0.0) -> None:
         if hardware is not None and not isinstance(hardware, HardwareConfig):
             raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
-        self.cfg = cfg = driver_rate_config(hardware_walk_config(cfg, hardware))
+        if not (joint_damping >= 0 and np.isfinite(joint_damping)):
+            raise ValueError(f"joint_damping must be >= 0 N·m·s/rad and finite, got {joint_damping!r}")
+        self.cfg = cfg = driver_rate_config(hardware_walk_config(cfg, hardware), joint_damping, drive)
         if robot is not None and robot.actuator_config != cfg.actuator:
             raise ValueError("robot was built with another ActuatorConfig than the walk needs (friction="
                              f"{cfg.actuator.friction}); build it from hardware_walk_config(cfg, hardware)")
@@ -108,8 +114,6 @@ class Walker:
         self.controller = controller or TrotController(cfg)
         self.hardware = hardware
         self.joint_stop, self.drive = joint_stop, drive
-        if not (joint_damping >= 0 and np.isfinite(joint_damping)):
-            raise ValueError(f"joint_damping must be >= 0 N·m·s/rad and finite, got {joint_damping!r}")
         self.nominal_joint_damping = float(joint_damping)  # N·m·s/rad, the configured robot's
         self.joint_damping = self.nominal_joint_damping  # N·m·s/rad, the drivers' damping on the joint speed now
         self.record, self.gait_metrics, self.body_trace = record, gait_metrics, body_trace
