@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,3 +46,36 @@ def test_portable_paths_are_relative_to_the_folder_or_name_the_run():
         "long_s0/stage2_final_actor.pt"
     assert portable_command(["--out", "/repo/runs/x", "--result=/repo/r.json", "--speeds", "1.0"], root="/repo") == \
         "--out runs/x --result=r.json --speeds 1.0"
+
+
+def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every_phases_log(tmp_path):
+    """configs/torque.yaml: main and speed end with stage 1, energy with stage 2: the shipped stage-1 actor is
+    speed's, the stage-2 actor energy's, and each phase's log and summary travel with them."""
+    import csv
+
+    import yaml
+
+    from cyberdog import config as C
+
+    seed = tmp_path / "seed7"
+    C.write_phases(seed, C.load_preset(ROOT / "configs" / "torque.yaml"), 7)
+    for phase, stage in (("main", 1), ("speed", 1), ("energy", 2)):
+        run = seed / phase
+        run.mkdir()
+        (run / f"stage{stage}_final_actor.pt").write_bytes(phase.encode())
+        (run / "config.yaml").write_text(yaml.safe_dump({"train": {"seed": 7}, "phase": phase}))
+        rows = [{**r, "fell": "0"} for r in episode_rows([1000.0 + 10.0 * i for i in range(5)], stage=stage)]
+        with open(run / "metrics.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    out = tmp_path / "shipped"
+    assert ship_result.main([str(seed), "--out", str(out), "--all-phases"]) == 0
+    assert (out / "stage1_actor.pt").read_bytes() == b"speed" and (out / "stage2_actor.pt").read_bytes() == b"energy"
+    assert yaml.safe_load((out / "config.yaml").read_text())["phase"] == "energy"
+    assert {f.name for f in out.glob("metrics_*.csv")} == {"metrics_main.csv", "metrics_speed.csv",
+                                                           "metrics_energy.csv"}
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["seed"] == 7 and list(meta["phases"]) == ["main", "speed", "energy"]
+    assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 3 * (4 * 10.0 + 8.0)
+    assert C.read_phases(out)[0] == C.read_phases(seed)[0]  # every phase's settings as resolved

@@ -3,12 +3,15 @@
 
     python tools/ship_result.py runs/table5/seed0 --out results/table5/policy/seed0
 
-The run is a train.py run folder, or a seed folder of a preset's phases (then its last phase's run is shipped).
-Writes (never over an existing folder unless --force): stage1_actor.pt and stage2_actor.pt (the final actors of
-the two stages; no stage1_actor.pt for a stage-2 run started from another's agent), config.yaml (the resolved
-experiment), metrics.csv (the training log, for Figure 6) and metadata.json (seed, env steps, episodes and wall
-time per stage, final window scores, the git commit of the code, the source run). Checkpoints with replay
-buffers are not copied (tens of MB).
+The run is a train.py run folder, or a seed folder of a preset's phases. Writes (never over an existing folder
+unless --force): stage1_actor.pt and stage2_actor.pt (the final actors of the two stages; no stage1_actor.pt for
+a stage-2 run started from another's agent), config.yaml (the resolved experiment), metrics.csv (the training
+log, for Figure 6) and metadata.json (seed, env steps, episodes and wall time per stage, final window scores, the
+git commit of the code, the source run). Checkpoints with replay buffers are not copied (tens of MB).
+
+A seed folder ships its last phase's run, or with --all-phases the recipe's two actors: stage<N>_actor.pt from
+the last phase that ends with stage N, config.yaml and metrics.csv of the last phase, phases.yaml (every phase's
+resolved settings), metrics_<phase>.csv of each phase and, in metadata.json, each phase's summary.
 """
 from __future__ import annotations
 
@@ -20,7 +23,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from cyberdog.config.preset import final_run
+from cyberdog.config.preset import final_run, is_lineage, read_phases
 from cyberdog.provenance import portable_path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -66,7 +69,12 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, required=True, help="the shipped folder, e.g. results/table5/policy/seed0")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
     p.add_argument("--note", default="", help="free text stored in metadata.json")
+    p.add_argument("--all-phases", action="store_true",
+                   help="a preset's seed folder: ship the last stage-1 and the last stage-2 phase's actors and "
+                        "every phase's log (default: its last phase's run)")
     args = p.parse_args(argv)
+    if args.all_phases:
+        return ship_lineage(args)
     if final_run(args.run_dir) != args.run_dir:
         args.run_dir = final_run(args.run_dir)
         print(f"a preset's seed folder: shipping its last phase, {args.run_dir}")
@@ -86,6 +94,56 @@ def main(argv=None) -> int:
     meta = {"seed": cfg["train"]["seed"], "source_run": portable_path(args.run_dir), "git_commit": git_commit(),
             "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
             "actors": "stage<N>_actor.pt = stage<N>_final_actor.pt of the run (the agent at the end of the stage)"}
+    (args.out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")
+    size = sum(f.stat().st_size for f in args.out.iterdir())
+    print(f"wrote {args.out} ({size / 1e6:.2f} MB): " + ", ".join(sorted(f.name for f in args.out.iterdir())))
+    if size > MAX_BYTES:
+        print(f"warning: {size / 1e6:.2f} MB is over the 2 MB the shipped folder should stay under", file=sys.stderr)
+    return 0
+
+
+def _rows(run: Path) -> list[dict]:
+    with open(run / "metrics.csv") as f:
+        return list(csv.DictReader(f))
+
+
+def ship_lineage(args) -> int:
+    """--all-phases: the recipe's two actors and every phase's log, from a preset's seed folder."""
+    import yaml
+
+    if not is_lineage(args.run_dir):
+        sys.exit(f"{args.run_dir} is not a preset's seed folder (no phases.yaml): --all-phases needs one")
+    phases = read_phases(args.run_dir)[0]
+    runs = {p.name: args.run_dir / p.name for p in phases}
+    missing = [f"{p.name}/stage{p.last_stage}_final_actor.pt" for p in phases
+               if not (runs[p.name] / f"stage{p.last_stage}_final_actor.pt").is_file()]
+    if missing:
+        sys.exit(f"{args.run_dir} is not a finished lineage: missing {missing}")
+    if args.out.exists() and not args.force:
+        sys.exit(f"{args.out} exists; pass --force to replace it")
+    args.out.mkdir(parents=True, exist_ok=True)
+    actors = {}
+    for stage in (1, 2):
+        last = next((p for p in reversed(phases) if p.last_stage == stage), None)
+        if last is not None:
+            shutil.copy2(runs[last.name] / f"stage{stage}_final_actor.pt", args.out / f"stage{stage}_actor.pt")
+            actors[f"stage{stage}_actor.pt"] = f"{last.name}/stage{stage}_final_actor.pt"
+    final = runs[phases[-1].name]
+    shutil.copy2(final / "config.yaml", args.out / "config.yaml")
+    shutil.copy2(final / "metrics.csv", args.out / "metrics.csv")
+    shutil.copy2(args.run_dir / "phases.yaml", args.out / "phases.yaml")
+    summaries = {}
+    for p in phases:
+        shutil.copy2(runs[p.name] / "metrics.csv", args.out / f"metrics_{p.name}.csv")
+        rows = _rows(runs[p.name])
+        summary = {s: stage_summary(rows, s) for s in (1, 2)}
+        summaries[p.name] = {"stage": p.stage, "from": p.start, **{f"stage{s}": v for s, v in summary.items() if v},
+                             "falls": sum(r.get("fell") in ("1", "True", "true") for r in rows)}
+    wall = sum(v["wall_time_s"] for ph in summaries.values() for k, v in ph.items() if k.startswith("stage")
+               and isinstance(v, dict))
+    meta = {"seed": yaml.safe_load((final / "config.yaml").read_text())["train"]["seed"],
+            "source_run": portable_path(args.run_dir), "git_commit": git_commit(), "actors": actors,
+            "phases": summaries, "wall_time_s": round(wall, 1), "note": args.note}
     (args.out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")
     size = sum(f.stat().st_size for f in args.out.iterdir())
     print(f"wrote {args.out} ({size / 1e6:.2f} MB): " + ", ".join(sorted(f.name for f in args.out.iterdir())))
