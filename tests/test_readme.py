@@ -337,3 +337,29 @@ def test_the_gains_walks_tool_labels_each_run_by_the_one_gain_it_changed(tmp_pat
             tool.gains_walks([run(f"bad{len(list(tmp_path.iterdir()))}", bad)])
     with pytest.raises(ValueError, match="also"):
         tool.gains_walks([kd2, run("kd2again", {"kd": [4.0, 4.0, 4.0]})])
+
+
+def test_the_torque_table_counts_the_walks_and_averages_each_stage_over_the_seeds():
+    """torque_check.json (a policy check of the torque recipe's actors): the band count over every robot and
+    stage, each stage's electrical J/m and stage 2's per-metre saving as the mean of the seeds, the lowest seed
+    beside it, the trot's own row; a saving where a stage missed the band is left out."""
+    from cyberdog.analysis.policy_check import stage_reductions
+    from cyberdog.analysis.readme_tables import TORQUE_SAVING_ROW, torque_markdown
+
+    def walk(label, stage, robot, speed, j_per_m, walks=True):
+        return {"label": label, "stage": stage, "robot": robot, "speed_command_mps": speed, "walks": walks,
+                "fell": False, "duration_s": 10.0, "energy_J": 1000.0, "energy_per_metre_J": 100.0,
+                "electrical_per_metre_J": j_per_m}
+
+    walks = [walk("seed0", 1, "ideal", 1.0, 400.0), walk("seed0", 2, "ideal", 1.0, 360.0),
+             walk("seed1", 1, "ideal", 1.0, 500.0), walk("seed1", 2, "ideal", 1.0, 400.0),
+             walk("seed2", 1, "ideal", 1.0, 450.0), walk("seed2", 2, "ideal", 1.0, 300.0, walks=False),
+             walk("trot", 0, "ideal", 1.0, 356.0)]
+    table = torque_markdown({"walks": walks, "reductions": stage_reductions(walks)})
+    row = {line.split("|")[1].strip(): line.split("|")[2].strip() for line in table.splitlines()[2:]}
+    assert row["walks in the ±5 % band, no fall (both stages; ideal robot)"] == "5 of 6"
+    assert row["electrical J/m, stage 1 (ideal robot)"].startswith("450 ± ")
+    assert row["**electrical J/m, stage 2 (ideal robot)**"].startswith("**353 ± ")  # (360 + 400 + 300) / 3
+    assert row[TORQUE_SAVING_ROW.format(robot="ideal robot")].endswith("(lowest 10.0 %)**")  # seed 2 left out
+    assert row[TORQUE_SAVING_ROW.format(robot="ideal robot")].startswith("**15.0 % ± ")  # mean of 10 and 20
+    assert row["electrical J/m, the trot controller (H = 0.10 m, ideal robot)"] == "356"

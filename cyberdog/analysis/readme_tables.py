@@ -38,6 +38,8 @@ from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 FRESH_ROW = "**D_t on E, seeds 5–9 (never tuned on)**"  # a headline row only where its walks are shipped
 FRESH_PROTOTYPE_ROW = "**battery saving, seeds 5–9 (never tuned on)**"  # the same, the prototype run's
 GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
+TORQUE_WALKS_ROW = "walks in the ±5 % band, no fall (both stages; {robots})"  # the robots the check walked
+TORQUE_SAVING_ROW = "**stage 2's saving against stage 1, electrical per metre ({robot})**"
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
     "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
@@ -48,8 +50,13 @@ HEADLINES = {
                                          "*paper, 1 m/s: range learned / cycloid*")),
     "gains_headline": ("gains", (GAINS_DEFAULT_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
                                  "kd 2×, as commanded", "**kd 2×, re-commanded**")),
+    "torque_headline": ("torque", (TORQUE_WALKS_ROW.format(robots="ideal robot, hardware-like draws 0 and 1"),
+                                   "electrical J/m, stage 1 (ideal robot)",
+                                   "**electrical J/m, stage 2 (ideal robot)**",
+                                   TORQUE_SAVING_ROW.format(robot="ideal robot"),
+                                   "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
 }
-NAMES = ("table5", "prototype", "stiffness", "gains", *HEADLINES)
+NAMES = ("table5", "prototype", "stiffness", "gains", "torque", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths of seeds it was never tuned on
@@ -58,6 +65,8 @@ PROTOTYPE_FRESH_SOURCE = "prototype_fresh.json"
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
 GAINS_SOURCE = "gains_walks.json"  # optional: prototype runs with kp or kd alone changed (tools/gains_walks.py)
+# optional: `evaluate.py check --runs <the torque recipe's actors> --robots ideal hardware:0 hardware:1 --trot`
+TORQUE_CHECK_SOURCE = "torque_check.json"
 MINUS = "\u2212"  # the README's minus sign
 # the pages the tables are written into (relative to the repository root), and whether a page must hold every
 # table made (the full tables live in docs/results.md; the README marks the ones it shows)
@@ -268,6 +277,54 @@ def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "h
     return "\n".join(lines)
 
 
+def torque_markdown(check: dict) -> str:
+    """The torque recipe's table from a policy check (`evaluate.py check --runs ... --robots ... --trot`'s
+    policy_check.json): how many of its walks keep the band, each stage's electrical energy per metre (mean ± 95 %
+    CI over the seeds), stage 2's saving against stage 1 per metre (and the lowest seed's), and the trot's cost."""
+    from cyberdog.analysis.stats import mean_ci as ci
+
+    walks = [w for w in check["walks"] if w["label"] != "trot"]
+    trot = {(w["robot"], w["speed_command_mps"]): w for w in check["walks"] if w["label"] == "trot"}
+    speeds = sorted({w["speed_command_mps"] for w in walks})
+    robots = sorted({w["robot"] for w in walks}, key=lambda r: (r != "ideal", r))
+    seeds = sorted({w["label"] for w in walks})
+
+    def cell(values: list[float], fmt: str, unit: str = "", lowest: bool = False) -> str:
+        if not values:
+            return "–"
+        m, h = ci(values)
+        text = number(m, fmt) + unit + (f" ± {number(h, fmt)}" if math.isfinite(h) else "")
+        return text + (f" (lowest {number(min(values), fmt)}{unit})" if lowest and len(values) > 1 else "")
+
+    lines = _header(f"the policy alone, 10 s ({len(seeds)} seeds)", speeds)
+    band = [[w for w in walks if w["speed_command_mps"] == v] for v in speeds]
+    draws = [r.split(":")[1] for r in robots if r != "ideal"]
+    named = ["ideal robot"] if "ideal" in robots else []
+    if draws:
+        listed = draws[0] if len(draws) == 1 else ", ".join(draws[:-1]) + " and " + draws[-1]
+        named.append(f"hardware-like draw{'s' if len(draws) > 1 else ''} {listed}")
+    lines.append(_line(TORQUE_WALKS_ROW.format(robots=", ".join(named)),
+                       [f"{sum(w['walks'] for w in ws)} of {len(ws)}" for ws in band]))
+    reductions = check["reductions"]
+    for robot in robots:
+        where = "ideal robot" if robot == "ideal" else f"hardware-like draw {robot.split(':')[1]}"
+        for stage in (1, 2):
+            label = f"electrical J/m, stage {stage} ({where})"
+            values = [[w["electrical_per_metre_J"] for w in walks if w["robot"] == robot and w["stage"] == stage
+                       and w["speed_command_mps"] == v and not w["fell"]] for v in speeds]
+            cells = [cell(x, ".0f") for x in values]
+            lines.append(_line(f"**{label}**", [f"**{c}**" for c in cells]) if stage == 2 else _line(label, cells))
+        saving = [[r["electrical_reduction_per_metre_pct"] for r in reductions if r["robot"] == robot
+                   and r["speed_command_mps"] == v and r["both_walk"]] for v in speeds]
+        lines.append(_line(TORQUE_SAVING_ROW.format(robot=where),
+                           [f"**{cell(x, '.1f', ' %', lowest=True)}**" for x in saving]))
+        if any((robot, v) in trot for v in speeds):
+            lines.append(_line(f"electrical J/m, the trot controller (H = 0.10 m, {where})",
+                               [number(trot[robot, v]["electrical_per_metre_J"], ".0f") if (robot, v) in trot
+                                else "–" for v in speeds]))
+    return "\n".join(lines)
+
+
 def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
     """Both tables from a folder holding comparison.json and prototype.json (and comparison_torque.json, if
     the paper's torque agent's paths were compared)."""
@@ -287,6 +344,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         matched = results / STIFFNESS_MATCHED_SOURCE
         tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
                                                  matched=json.loads(matched.read_text()) if matched.is_file() else None)
+    if (results / TORQUE_CHECK_SOURCE).is_file():
+        tables["torque"] = torque_markdown(json.loads((results / TORQUE_CHECK_SOURCE).read_text()))
     if (results / GAINS_SOURCE).is_file():
         tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"])
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in HEADLINES.items() if full in tables})
