@@ -100,7 +100,7 @@ def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
     from cyberdog.evaluation.cli import UsageError
 
     root = Path(__file__).resolve().parents[1]
-    shipped, run = root / "results/table5/policy/seed0", root / "results/torque/policy/seed0"
+    shipped, run = root / "results/table5/policy/seed0", root / "notebook/results/policy_torque_band/seed0"
     assert run_actors([shipped], "final")["seed0"] == {1: shipped / "stage1_actor.pt", 2: shipped / "stage2_actor.pt"}
     assert run_actors([run], "final")["seed0"][2] == run / "stage2_final_actor.pt"
     with pytest.raises(UsageError, match="stage1_best_actor.pt"):

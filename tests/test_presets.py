@@ -27,7 +27,7 @@ def _phases(name: str) -> dict[str, C.Phase]:
     return {p.name: p for p in C.load_preset(path).phases}
 
 
-BAND = "notebook/configs/torque_band.yaml"  # results/torque/policy/seed0-2: the ideal robot's torque recipe
+BAND = "notebook/configs/torque_band.yaml"  # notebook/results/policy_torque_band: the ideal robot's torque recipe
 
 # Each shipped phase against the long form and the command that made the shipped actors (docs/results.md).
 SHIPPED = {
@@ -54,6 +54,20 @@ def test_a_shipped_phase_resolves_to_the_long_form_it_replaced(preset, phase):
     resolved = _phases(preset)[phase]
     assert resolved.stage == stage
     assert C.changed_settings(resolved.config, long_form) == {}
+
+
+def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resolve_now():
+    """results/torque/policy/seed<N>/recipe_phases.yaml records the settings of every phase its two actors came from
+    (tools/ship_result.py --all-phases): they are configs/torque.yaml's phases as it resolves today, but for the
+    seed."""
+    recipe = C.load_preset(ROOT / "configs" / "torque.yaml").phases
+    shipped = sorted((ROOT / "results" / "torque" / "policy").glob("seed*"))
+    assert shipped
+    for folder in shipped:
+        phases = C.read_phases(folder / "recipe_phases.yaml")[0]
+        assert [(p.name, p.stage, p.start) for p in phases] == [(p.name, p.stage, p.start) for p in recipe]
+        for made, now in zip(phases, recipe):
+            assert set(C.changed_settings(made.config, now.config)) <= {"train.seed"}, (folder.name, made.name)
 
 
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():

@@ -78,4 +78,5 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
     meta = json.loads((out / "metadata.json").read_text())
     assert meta["seed"] == 7 and list(meta["phases"]) == ["main", "speed", "energy"]
     assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 3 * (4 * 10.0 + 8.0)
-    assert C.read_phases(out)[0] == C.read_phases(seed)[0]  # every phase's settings as resolved
+    assert C.read_phases(out / "recipe_phases.yaml")[0] == C.read_phases(seed)[0]  # every phase's settings
+    assert not C.is_lineage(out)  # not a folder to resume or extract as a lineage

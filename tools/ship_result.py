@@ -10,8 +10,8 @@ log, for Figure 6) and metadata.json (seed, env steps, episodes and wall time pe
 git commit of the code, the source run). Checkpoints with replay buffers are not copied (tens of MB).
 
 A seed folder ships its last phase's run, or with --all-phases the recipe's two actors: stage<N>_actor.pt from
-the last phase that ends with stage N, config.yaml and metrics.csv of the last phase, phases.yaml (every phase's
-resolved settings), metrics_<phase>.csv of each phase and, in metadata.json, each phase's summary.
+the last phase that ends with stage N, config.yaml and metrics.csv of the last phase, recipe_phases.yaml (every
+phase's resolved settings), metrics_<phase>.csv of each phase and, in metadata.json, each phase's summary.
 """
 from __future__ import annotations
 
@@ -131,7 +131,8 @@ def ship_lineage(args) -> int:
     final = runs[phases[-1].name]
     shutil.copy2(final / "config.yaml", args.out / "config.yaml")
     shutil.copy2(final / "metrics.csv", args.out / "metrics.csv")
-    shutil.copy2(args.run_dir / "phases.yaml", args.out / "phases.yaml")
+    # under another name: the shipped folder is not a lineage that train.py or extract --sweep would walk into
+    shutil.copy2(args.run_dir / "phases.yaml", args.out / "recipe_phases.yaml")
     summaries = {}
     for p in phases:
         shutil.copy2(runs[p.name] / "metrics.csv", args.out / f"metrics_{p.name}.csv")

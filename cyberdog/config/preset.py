@@ -287,8 +287,9 @@ def write_phases(folder: str | Path, preset: Preset, seed: int) -> Path:
 
 
 def read_phases(folder: str | Path) -> tuple[tuple[Phase, ...], dict]:
-    """The phases (and the extraction settings) of a lineage folder's phases.yaml."""
-    path = Path(folder) / PHASES_FILE
+    """The phases (and the extraction settings) of a lineage folder's phases.yaml, or of such a file given
+    itself (a shipped policy folder keeps it as recipe_phases.yaml: it is not a lineage to train or resume)."""
+    path = Path(folder) if Path(folder).is_file() else Path(folder) / PHASES_FILE
     try:
         data = yaml.safe_load(path.read_text())
         phases = tuple(Phase(name=p["name"], stage=str(p["stage"]), start=p.get("from"),
