@@ -149,9 +149,8 @@ def _check_paths(args, cfg) -> int:
 def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
     """{run folder name: {stage: actor file}} of the stages each run has (a shipped folder's stage<N>_actor.pt are
     its run's final actors); a run with neither stage is refused."""
-    from cyberdog.evaluation.cli import UsageError
-
     from cyberdog.config import is_lineage, read_phases
+    from cyberdog.evaluation.cli import UsageError
 
     actors = {}
     for run in runs:
