@@ -87,16 +87,20 @@ def main(argv=None) -> int:
     for src, dst in FILES.items():
         if (args.run_dir / src).is_file():
             shutil.copy2(args.run_dir / src, args.out / dst)
-    with open(args.run_dir / "metrics.csv") as f:
-        rows = list(csv.DictReader(f))
+    rows = _rows(args.run_dir)
     import yaml
     cfg = yaml.safe_load((args.run_dir / "config.yaml").read_text())
     meta = {"seed": cfg["train"]["seed"], "source_run": portable_path(args.run_dir), "git_commit": git_commit(),
             "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
             "actors": "stage<N>_actor.pt = stage<N>_final_actor.pt of the run (the agent at the end of the stage)"}
-    (args.out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")
-    size = sum(f.stat().st_size for f in args.out.iterdir())
-    print(f"wrote {args.out} ({size / 1e6:.2f} MB): " + ", ".join(sorted(f.name for f in args.out.iterdir())))
+    return write_metadata(args.out, meta)
+
+
+def write_metadata(out: Path, meta: dict) -> int:
+    """`out`/metadata.json, then the folder's files and size (a warning over MAX_BYTES); the exit status."""
+    (out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")
+    size = sum(f.stat().st_size for f in out.iterdir())
+    print(f"wrote {out} ({size / 1e6:.2f} MB): " + ", ".join(sorted(f.name for f in out.iterdir())))
     if size > MAX_BYTES:
         print(f"warning: {size / 1e6:.2f} MB is over the 2 MB the shipped folder should stay under", file=sys.stderr)
     return 0
@@ -140,17 +144,11 @@ def ship_lineage(args) -> int:
         summary = {s: stage_summary(rows, s) for s in (1, 2)}
         summaries[p.name] = {"stage": p.stage, "from": p.start, **{f"stage{s}": v for s, v in summary.items() if v},
                              "falls": sum(r.get("fell") in ("1", "True", "true") for r in rows)}
-    wall = sum(v["wall_time_s"] for ph in summaries.values() for k, v in ph.items() if k.startswith("stage")
-               and isinstance(v, dict))
+    wall = sum(ph[k]["wall_time_s"] for ph in summaries.values() for k in ("stage1", "stage2") if k in ph)
     meta = {"seed": yaml.safe_load((final / "config.yaml").read_text())["train"]["seed"],
             "source_run": portable_path(args.run_dir), "git_commit": git_commit(), "actors": actors,
             "phases": summaries, "wall_time_s": round(wall, 1), "note": args.note}
-    (args.out / "metadata.json").write_text(json.dumps(meta, indent=1) + "\n")
-    size = sum(f.stat().st_size for f in args.out.iterdir())
-    print(f"wrote {args.out} ({size / 1e6:.2f} MB): " + ", ".join(sorted(f.name for f in args.out.iterdir())))
-    if size > MAX_BYTES:
-        print(f"warning: {size / 1e6:.2f} MB is over the 2 MB the shipped folder should stay under", file=sys.stderr)
-    return 0
+    return write_metadata(args.out, meta)
 
 
 if __name__ == "__main__":

@@ -271,7 +271,7 @@ class Walker:
             if self.body_trace:
                 self.speed_loop.append((self.controller.speed_correction, self.controller.speed_correction_limit))
         elif sensing is not None and sensing.estimator_due(k):  # torque mode: no controller, but the robot's
-            sensing.advance_estimator(self.state, self.robot.foot_contacts)  # velocity filter runs all the same
+            sensing.update_estimator(self.state, self.robot.foot_contacts)  # velocity filter runs all the same
         stop = self.joint_stop.torque(r.q, r.dq) if self.joint_stop is not None else None
         # the latency holds the whole command (targets, gains, feedforward, the added torques)
         arrived = (command, extra_torque, stop)

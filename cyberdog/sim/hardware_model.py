@@ -177,7 +177,9 @@ class HardwareSensing:
             dq = dq + self.rng.normal(0.0, hw.joint_velocity_noise_std, dq.shape)
         return q, dq
 
-    def _update_estimator(self, state, contacts) -> None:
+    def update_estimator(self, state, contacts) -> None:
+        """One run of the velocity filter on the state read now (a period where `estimator_due`): `read` runs it
+        for the trot controller; a walker with no controller (a torque policy) calls it itself."""
         dt = self.hw.estimator_dt
         R = state.rotation_matrix
         v_world = state.base_linear_velocity_world
@@ -192,15 +194,10 @@ class HardwareSensing:
         """The velocity filter runs at controller period k (every `estimator_every` periods after the first)."""
         return self.hw.estimated_velocity and k > 0 and k % self.estimator_every == 0
 
-    def advance_estimator(self, state, contacts) -> None:
-        """One run of the velocity filter on the state read now (a period where `estimator_due`): the robot's
-        state estimator runs whatever commands the joints, a torque policy as well as the trot controller."""
-        self._update_estimator(state, contacts)
-
     def read(self, k: int, state, contacts) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Sensor readings at controller period k (state read after period k − 1); `contacts()` → (4,) bool."""
         if self.estimator_due(k):
-            self._update_estimator(state, contacts)
+            self.update_estimator(state, contacts)
         q, dq = self.joints(state.q, state.dq)
         return q, dq, (self.estimator.velocity if self.hw.estimated_velocity else None)
 
