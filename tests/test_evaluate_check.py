@@ -110,15 +110,15 @@ def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
 
 
 def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tmp_path):
-    """configs/torque.yaml's seed folder: main (stage 1), speed (stage 1), energy (stage 2): the check walks
-    speed's stage-1 actor and energy's stage-2 actor, labelled by the seed folder."""
+    """configs/torque.yaml's seed folder: main (stage 1), speed (stage 1), energy and energy2 (stage 2): the check
+    walks speed's stage-1 actor and energy2's stage-2 actor, labelled by the seed folder."""
     from cyberdog import config as C
     from cyberdog.evaluation.check import run_actors
 
     seed = tmp_path / "seed3"
     C.write_phases(seed, C.load_preset(Path(evaluate.__file__).parent / "configs" / "torque.yaml"), 3)
-    for phase, stage in (("main", 1), ("speed", 1), ("energy", 2)):
+    for phase, stage in (("main", 1), ("speed", 1), ("energy", 2), ("energy2", 2)):
         (seed / phase).mkdir()
         (seed / phase / f"stage{stage}_final_actor.pt").write_bytes(b"")
     assert run_actors([seed], "final") == {"seed3": {1: seed / "speed" / "stage1_final_actor.pt",
-                                                     2: seed / "energy" / "stage2_final_actor.pt"}}
+                                                     2: seed / "energy2" / "stage2_final_actor.pt"}}

@@ -49,8 +49,8 @@ def test_portable_paths_are_relative_to_the_folder_or_name_the_run():
 
 
 def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every_phases_log(tmp_path):
-    """configs/torque.yaml: main and speed end with stage 1, energy with stage 2: the shipped stage-1 actor is
-    speed's, the stage-2 actor energy's, and each phase's log and summary travel with them."""
+    """configs/torque.yaml: main and speed end with stage 1, energy and energy2 with stage 2: the shipped stage-1
+    actor is speed's, the stage-2 actor energy2's, and each phase's log and summary travel with them."""
     import csv
 
     import yaml
@@ -59,7 +59,7 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
 
     seed = tmp_path / "seed7"
     C.write_phases(seed, C.load_preset(ROOT / "configs" / "torque.yaml"), 7)
-    for phase, stage in (("main", 1), ("speed", 1), ("energy", 2)):
+    for phase, stage in (("main", 1), ("speed", 1), ("energy", 2), ("energy2", 2)):
         run = seed / phase
         run.mkdir()
         (run / f"stage{stage}_final_actor.pt").write_bytes(phase.encode())
@@ -71,12 +71,12 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
             w.writerows(rows)
     out = tmp_path / "shipped"
     assert ship_result.main([str(seed), "--out", str(out), "--all-phases"]) == 0
-    assert (out / "stage1_actor.pt").read_bytes() == b"speed" and (out / "stage2_actor.pt").read_bytes() == b"energy"
-    assert yaml.safe_load((out / "config.yaml").read_text())["phase"] == "energy"
+    assert (out / "stage1_actor.pt").read_bytes() == b"speed" and (out / "stage2_actor.pt").read_bytes() == b"energy2"
+    assert yaml.safe_load((out / "config.yaml").read_text())["phase"] == "energy2"
     assert {f.name for f in out.glob("metrics_*.csv")} == {"metrics_main.csv", "metrics_speed.csv",
-                                                           "metrics_energy.csv"}
+                                                           "metrics_energy.csv", "metrics_energy2.csv"}
     meta = json.loads((out / "metadata.json").read_text())
-    assert meta["seed"] == 7 and list(meta["phases"]) == ["main", "speed", "energy"]
-    assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 3 * (4 * 10.0 + 8.0)
+    assert meta["seed"] == 7 and list(meta["phases"]) == ["main", "speed", "energy", "energy2"]
+    assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 4 * (4 * 10.0 + 8.0)
     assert C.read_phases(out / "recipe_phases.yaml")[0] == C.read_phases(seed)[0]  # every phase's settings
     assert not C.is_lineage(out)  # not a folder to resume or extract as a lineage
