@@ -186,7 +186,7 @@ def _check_policies(args) -> int:
                             ("--no-recorded-trot", args.no_recorded_trot)) if v]
     if given:
         raise UsageError(f"{', '.join(given)}: not for --runs (a policy walks in the env it was trained in, its "
-                         f"run's config.yaml)")
+                         f"run's config.yaml; --robots chooses the robot it walks)")
     speeds, duration = args.speeds or list(PAPER_SPEEDS), args.duration or PAPER_WALK_DURATION
     robots = args.robots or ["ideal"]
     try:
