@@ -3,6 +3,7 @@ import importlib.util
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from cyberdog.config import RobotConfig
 from cyberdog.core import kinematics as kin
@@ -33,3 +34,15 @@ def test_the_correction_moves_the_command_by_the_gain_times_the_errors_low_harmo
         q = kin.inverse_kinematics(feet, robot, side=side)
         np.testing.assert_allclose(q[:, 2] - command[leg, :, 2], 0.5 * low, atol=1e-9)
         np.testing.assert_allclose(q[:, :2], command[leg, :, :2], atol=1e-9)
+
+
+def test_the_touchdown_split_takes_the_bins_around_each_legs_first_contact():
+    bins = 40
+    contact = np.zeros((4, bins))
+    contact[:, 20:] = 1.0  # every leg touches down at bin 20
+    difference = np.zeros((4, bins, 3))
+    difference[:, 20, :] = 3.0  # the torque differs at touchdown only
+    at, rest = tool.touchdown_split(difference, contact)
+    assert at == pytest.approx(np.sqrt(3.0)) and rest == 0.0  # one of the three bins around touchdown differs
+    difference[:, 30, :] = 1.0  # and in mid-stance
+    assert tool.touchdown_split(difference, contact)[1] > 0.0

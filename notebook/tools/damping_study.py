@@ -5,7 +5,8 @@ A learned path re-commanded for new gains (`cyberdog.analysis.pd_match_recording
 the old torque along the old motion, walk that motion again. For one shipped battery path at its speed this
 script measures, on the ideal robot, how far the re-commanded walk's motion is from the default PD's (RMS over
 the joints and the 160 phases of the cycle-mean joint angles, the first 3 s left out), with its Eq. (7) energy
-per metre, at kp 2×, kd 2× and kd 0.5× (one gain changed). Then, for `--gain`, it walks the path at the default
+per metre and how far its cycle-mean joint torque is from the default's around each foot's touchdown and over
+the rest of the cycle, at kp 2×, kd 2× and kd 0.5× (one gain changed). Then, for `--gain`, it walks the path at the default
 gains and re-commanded on robots with one hardware effect of `HARDWARE_LIKE` on at a time (the prototype's robot
 draw 0: its mass draw and sensor streams), 12 s after a 3 s run-up: which effect moves the re-commanded gait?
 With `--ilc N`, N rounds of a P-type iterative correction on the ideal robot follow (the command moved by
@@ -33,6 +34,7 @@ from cyberdog.core.pd_match_solver import phase_means
 from cyberdog.evaluation.recorded_trot import with_trot
 
 H = HARDWARE_LIKE
+TORQUE_BINS = 40  # phases of the cycle-mean torque (10 ms apart): a touchdown falls within one or two
 EFFECTS = {  # one effect of HARDWARE_LIKE at a time, the prototype's draw 0 (its seed)
     "none (ideal)": None,
     "latency 2.5 ms": HardwareConfig(latency_s=H.latency_s, seed=H.seed),
@@ -45,8 +47,10 @@ EFFECTS = {  # one effect of HARDWARE_LIKE at a time, the prototype's draw 0 (it
 }
 
 
-def cycle_means(cfg, trajectory, table: FootOffsetPath):
-    """(joint angles, commanded joint targets), each (4, n, 3) rad at the table's n phases, and the walk."""
+def cycle_means(cfg, trajectory, table: FootOffsetPath, torque: bool = False):
+    """(joint angles, commanded joint targets), each (4, n, 3) rad at the table's n phases, and the walk; with
+    `torque`, also the joint torque (4, TORQUE_BINS, 3) N·m and each leg's ground contact share (4,
+    TORQUE_BINS) at TORQUE_BINS phases."""
     result = walk(cfg, RECORD_S, trajectory, record=True, foot_offsets=table)
     tr = result.traces
     keep = tr["t"] >= SETTLE_S
@@ -54,7 +58,21 @@ def cycle_means(cfg, trajectory, table: FootOffsetPath):
     steps = int(keep.sum())
     q = phase_means(phases, tr["q"][keep].reshape(steps, 4, 3), table.n)
     command = phase_means(phases, kin.inverse_kinematics(tr["foot_targets"][keep], cfg.robot), table.n)
-    return q, command, result
+    if not torque:
+        return q, command, result
+    tau = phase_means(phases, tr["tau"][keep].reshape(steps, 4, 3), TORQUE_BINS)
+    contact = phase_means(phases, tr["contacts"][keep][:, :, None].astype(float), TORQUE_BINS)[:, :, 0]
+    return q, command, result, tau, contact
+
+
+def touchdown_split(difference: np.ndarray, contact: np.ndarray) -> tuple[float, float]:
+    """N·m: the RMS of a cycle-mean torque difference (4, bins, 3) over each leg's touchdown (the bin where its
+    contact share rises most, and the bins either side) and over the rest of the cycle."""
+    at = np.zeros(difference.shape[:2], dtype=bool)
+    for leg in range(4):
+        k = int(np.argmax(np.roll(contact[leg], -1) - contact[leg])) + 1  # the first bin in contact
+        at[leg, [(k - 1) % at.shape[1], k % at.shape[1], (k + 1) % at.shape[1]]] = True
+    return float(np.sqrt(np.mean(difference[at] ** 2))), float(np.sqrt(np.mean(difference[~at] ** 2)))
 
 
 def with_gain(cfg, gain: str, factor: float):
@@ -86,15 +104,18 @@ def main() -> None:
     args = p.parse_args()
     path = LearnedSet.load([args.path]).paths()[0]
     cfg, trajectory, offsets = path.walk_args(with_trot(C.WalkConfig(), path.recorded_controller), path.speed)
-    q_ref, _, ref = cycle_means(cfg, trajectory, offsets)
+    q_ref, _, ref, tau_ref, contact = cycle_means(cfg, trajectory, offsets, torque=True)
     print(f"{path.label} at {path.speed:g} m/s, default PD, ideal robot: {ref.mean_speed:.3f} m/s, "
           f"{ref.energy_per_metre:.1f} J/m (Eq. 7)")
     for gain, factor in (("kp", 2.0), ("kd", 2.0), ("kd", 0.5)):
         new = with_gain(cfg, gain, factor)
-        q, _, r = cycle_means(new, trajectory, pd_matched_foot_offsets(cfg, trajectory, offsets, new.pid))
+        q, _, r, tau, _ = cycle_means(new, trajectory, pd_matched_foot_offsets(cfg, trajectory, offsets, new.pid),
+                                      torque=True)
         rms = float(np.sqrt(np.mean((q - q_ref) ** 2))) * 1e3
+        at, rest = touchdown_split(tau - tau_ref, contact)
         print(f"  {gain} {factor:g}x re-commanded, ideal robot: motion {rms:.1f} mrad RMS from the default's, "
-              f"{r.mean_speed:.3f} m/s, {r.energy_per_metre:.1f} J/m", flush=True)
+              f"{r.mean_speed:.3f} m/s, {r.energy_per_metre:.1f} J/m; joint torque {at:.2f} N·m RMS from the "
+              f"default's at touchdown, {rest:.2f} over the rest of the cycle", flush=True)
     new = with_gain(cfg, args.gain, args.factor)
     table = pd_matched_foot_offsets(cfg, trajectory, offsets, new.pid)
     print(f"one effect at a time, 12 s after a 3 s run-up: default PD | {args.gain} {args.factor:g}x re-commanded")
