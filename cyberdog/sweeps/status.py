@@ -28,7 +28,8 @@ class SeedStatus:
     pid: int | None = None
     host: str | None = None
     stage: int | None = None
-    env_steps: int = 0  # total env steps at the end of the last logged episode (from metrics.csv)
+    env_steps: int = 0  # env steps at the end of the last logged episode (from metrics.csv; a lineage's: every
+    #                     phase's so far, each phase's metrics.csv counting from 0)
     episodes: int = 0
     best_score: dict = field(default_factory=dict)  # stage ("1"/"2") -> best episode score
     window_score: float | None = None  # mean score over the trainer's score window, last episode
@@ -48,16 +49,20 @@ class SeedStatus:
 
     def read_metrics(self) -> None:
         """Steps, episodes and scores from the run's metrics.csv (read incrementally; a resumed run may have
-        truncated it, in which case it is read again from the start)."""
-        path = C.current_run(self.run_dir) / "metrics.csv"
+        truncated it, in which case it is read again from the start). In a lineage, the phase training now is
+        read, and the env steps of the phases before it are added (each phase's metrics.csv counts from 0)."""
+        run = C.current_run(self.run_dir)
+        path = run / "metrics.csv"
         try:
             size = path.stat().st_size
         except OSError:
             size = -1
         st = self._csv
-        if size < st.get("offset", 0) or not st:
+        if st and st["run"] != run:  # the lineage moved on to its next phase: its scores stay, its steps add up
+            st.update(offset=0, header=None, run=run, before=_steps_before(Path(self.run_dir), run))
+        elif size < st.get("offset", 0) or not st:
             self.reset_metrics()
-            st.update(offset=0, header=None)
+            st.update(offset=0, header=None, run=run, before=_steps_before(Path(self.run_dir), run))
         if size <= st["offset"]:
             return
         with open(path, "rb") as f:
@@ -73,13 +78,44 @@ class SeedStatus:
             h = st["header"]
             try:
                 stage, score = int(cells[h["stage"]]), float(cells[h["score"]])
-                self.env_steps, self.stage = int(cells[h["env_steps"]]), stage
+                self.env_steps, self.stage = st["before"] + int(cells[h["env_steps"]]), stage
                 self.episodes = int(cells[h["episode"]])
                 self.window_score = float(cells[h["window_mean_score"]])
             except (KeyError, IndexError, ValueError):
                 continue
             key = str(stage)
             self.best_score[key] = max(self.best_score.get(key, -float("inf")), score)
+
+
+def _steps_before(run_dir: Path, run: Path) -> int:
+    """Env steps of a lineage's phases before `run` (the last logged episode of each phase's metrics.csv); 0
+    for a run that is not a lineage's phase."""
+    if run == run_dir:
+        return 0
+    total = 0
+    for phase in C.read_phases(run_dir)[0]:
+        if run_dir / phase.name == run:
+            break
+        total += _last_env_steps(run_dir / phase.name / "metrics.csv")
+    return total
+
+
+def _last_env_steps(path: Path) -> int:
+    """The env_steps of a metrics.csv's last complete row; 0 without one."""
+    try:
+        lines = path.read_text(errors="replace").split("\n")[:-1]  # complete rows only
+    except OSError:
+        return 0
+    header = lines[0].split(",") if lines else []
+    if "env_steps" not in header:
+        return 0
+    column = header.index("env_steps")
+    for line in reversed(lines[1:]):
+        try:
+            return int(line.split(",")[column])
+        except (IndexError, ValueError):
+            continue
+    return 0
 
 
 def seed_statuses(sweep_dir: Path, spec: SweepSpec) -> dict[int, SeedStatus]:
