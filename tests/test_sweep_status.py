@@ -1,0 +1,29 @@
+"""A sweep seed's live status (cyberdog.sweeps.status): what it reads from a run's metrics.csv."""
+import yaml
+
+from cyberdog.sweeps.status import SeedStatus
+
+
+def test_a_lineage_seed_counts_the_env_steps_of_its_finished_phases(tmp_path):
+    """Each phase's metrics.csv counts from 0: the sweep's progress adds the finished phases' steps."""
+    run = tmp_path / "seed0"
+    run.mkdir()
+    (run / "phases.yaml").write_text(yaml.safe_dump({"seed": 0, "phases": [
+        {"name": "main", "stage": 1, "config": {}}, {"name": "energy", "stage": 2, "from": "main", "config": {}}]}))
+    header = "episode,stage,env_steps,score,window_mean_score\n"
+    (run / "main").mkdir()
+    (run / "main" / "metrics.csv").write_text(header + "1,1,400,1.0,1.0\n2,1,800,2.0,1.5\n")
+    st = SeedStatus(seed=0, run_dir=str(run))
+    st.read_metrics()
+    assert (st.env_steps, st.stage) == (800, 1)
+    (run / "energy").mkdir()
+    (run / "energy" / "metrics.csv").write_text(header + "1,2,400,-3.0,-3.0\n")
+    st.read_metrics()  # the lineage moved on: 800 of main + 400 of energy
+    assert (st.env_steps, st.stage, st.best_score) == (1200, 2, {"1": 2.0, "2": -3.0})
+    with open(run / "energy" / "metrics.csv", "a") as f:
+        f.write("2,2,800,-2.0,-2.5\n3,2,12")  # a row still being written is not read
+    st.read_metrics()
+    assert st.env_steps == 1600
+    fresh = SeedStatus(seed=0, run_dir=str(run))  # a resumed sweep reads it back the same
+    fresh.read_metrics()
+    assert fresh.env_steps == 1600
