@@ -21,25 +21,30 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
 - `gains` (where `gains_walks.json` is shipped, `tools/gains_walks.py`): the same run with the drivers' kp or kd
   alone scaled, as commanded and re-commanded (`evaluate.py prototype --pd-matched-from-default`), beside the
   default gains' saving.
+- `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone (`cyberdog.analysis.torque_table`),
+  with the rows of the seeds it was never tuned on where `torque_check_fresh.json` is shipped.
 """
 from __future__ import annotations
 
 import json
-import math
 import re
 from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
 from cyberdog.analysis.compare import REFERENCE
+from cyberdog.analysis.markdown_cells import header as _header
+from cyberdog.analysis.markdown_cells import line as _line
+from cyberdog.analysis.markdown_cells import mean_ci
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
+from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_FRESH_WALKS_ROW, TORQUE_SAVING_ROW,
+                                           TORQUE_WALKS_ROW, torque_markdown)
 from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
-FRESH_ROW = "**D_t on E, seeds 5–9 (never tuned on)**"  # a headline row only where its walks are shipped
-FRESH_PROTOTYPE_ROW = "**battery saving, seeds 5–9 (never tuned on)**"  # the same, the prototype run's
+FRESH_SEEDS = "seeds 5–9"  # the seeds the recipes were never tuned on, as their rows name them
+FRESH_ROW = f"**D_t on E, {FRESH_SEEDS} (never tuned on)**"  # a headline row only where its walks are shipped
+FRESH_PROTOTYPE_ROW = f"**battery saving, {FRESH_SEEDS} (never tuned on)**"  # the same, the prototype run's
 GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
-TORQUE_WALKS_ROW = "walks in the ±5 % band, no fall (both stages; {robots})"  # the robots the check walked
-TORQUE_SAVING_ROW = "**stage 2's saving against stage 1, electrical per metre ({robot})**"
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
     "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
@@ -54,8 +59,13 @@ HEADLINES = {
                                    "electrical J/m, stage 1 (ideal robot)",
                                    "**electrical J/m, stage 2 (ideal robot)**",
                                    TORQUE_SAVING_ROW.format(robot="ideal robot"),
+                                   TORQUE_FRESH_WALKS_ROW.format(seeds=FRESH_SEEDS),
+                                   TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
 }
+# the fresh seeds' rows: in a headline only where their walks are shipped
+OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_WALKS_ROW.format(seeds=FRESH_SEEDS),
+                 TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS)}
 NAMES = ("table5", "prototype", "stiffness", "gains", "torque", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
@@ -67,32 +77,10 @@ STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same 
 GAINS_SOURCE = "gains_walks.json"  # optional: prototype runs with kp or kd alone changed (tools/gains_walks.py)
 # optional: `evaluate.py check --runs <the torque recipe's actors> --robots ideal hardware:0 hardware:1 --trot`
 TORQUE_CHECK_SOURCE = "torque_check.json"
-MINUS = "\u2212"  # the README's minus sign
+TORQUE_CHECK_FRESH_SOURCE = "torque_check_fresh.json"  # optional: the same check of the seeds never tuned on
 # the pages the tables are written into (relative to the repository root), and whether a page must hold every
 # table made (the full tables live in docs/results.md; the README marks the ones it shows)
 DOCUMENTS = {"README.md": False, "docs/results.md": True}
-
-
-def number(x: float, fmt: str, sign: bool = False) -> str:
-    """`x` formatted, with a typographic minus (and a plus if `sign`)."""
-    text = format(x, ("+" if sign else "") + fmt)
-    return text.replace("-", MINUS)
-
-
-def mean_ci(row: dict, key: str, fmt: str, unit: str = "", sign: bool = False) -> str:
-    """"m unit ± h" for a row's `key`_mean and `key`_ci95 (no "± h" where the CI is undefined: one value)."""
-    m, h = row.get(f"{key}_mean", math.nan), row.get(f"{key}_ci95", math.nan)
-    if not math.isfinite(m):
-        return "–"
-    return number(m, fmt, sign) + unit + (f" ± {number(h, fmt)}" if math.isfinite(h) else "")
-
-
-def _line(label: str, cells: list[str]) -> str:
-    return "|" + "".join(f" {c} |" if c else " |" for c in [label, *cells])
-
-
-def _header(first: str, speeds: list[float]) -> list[str]:
-    return [_line(first, [f"{v:.1f} m/s" for v in speeds]), "|---|" + "---|" * len(speeds)]
 
 
 def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
@@ -277,54 +265,6 @@ def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "h
     return "\n".join(lines)
 
 
-def torque_markdown(check: dict) -> str:
-    """The torque recipe's table from a policy check (`evaluate.py check --runs ... --robots ... --trot`'s
-    policy_check.json): how many of its walks keep the band, each stage's electrical energy per metre (mean ± 95 %
-    CI over the seeds), stage 2's saving against stage 1 per metre (and the lowest seed's), and the trot's cost."""
-    from cyberdog.analysis.stats import mean_ci as ci
-
-    walks = [w for w in check["walks"] if w["label"] != "trot"]
-    trot = {(w["robot"], w["speed_command_mps"]): w for w in check["walks"] if w["label"] == "trot"}
-    speeds = sorted({w["speed_command_mps"] for w in walks})
-    robots = sorted({w["robot"] for w in walks}, key=lambda r: (r != "ideal", r))
-    seeds = sorted({w["label"] for w in walks})
-
-    def cell(values: list[float], fmt: str, unit: str = "", lowest: bool = False) -> str:
-        if not values:
-            return "–"
-        m, h = ci(values)
-        text = number(m, fmt) + unit + (f" ± {number(h, fmt)}" if math.isfinite(h) else "")
-        return text + (f" (lowest {number(min(values), fmt)}{unit})" if lowest and len(values) > 1 else "")
-
-    lines = _header(f"the policy alone, 10 s ({len(seeds)} seeds)", speeds)
-    band = [[w for w in walks if w["speed_command_mps"] == v] for v in speeds]
-    draws = [r.split(":")[1] for r in robots if r != "ideal"]
-    named = ["ideal robot"] if "ideal" in robots else []
-    if draws:
-        listed = draws[0] if len(draws) == 1 else ", ".join(draws[:-1]) + " and " + draws[-1]
-        named.append(f"hardware-like draw{'s' if len(draws) > 1 else ''} {listed}")
-    lines.append(_line(TORQUE_WALKS_ROW.format(robots=", ".join(named)),
-                       [f"{sum(w['walks'] for w in ws)} of {len(ws)}" for ws in band]))
-    reductions = check["reductions"]
-    for robot in robots:
-        where = "ideal robot" if robot == "ideal" else f"hardware-like draw {robot.split(':')[1]}"
-        for stage in (1, 2):
-            label = f"electrical J/m, stage {stage} ({where})"
-            values = [[w["electrical_per_metre_J"] for w in walks if w["robot"] == robot and w["stage"] == stage
-                       and w["speed_command_mps"] == v and not w["fell"]] for v in speeds]
-            cells = [cell(x, ".0f") for x in values]
-            lines.append(_line(f"**{label}**", [f"**{c}**" for c in cells]) if stage == 2 else _line(label, cells))
-        saving = [[r["electrical_reduction_per_metre_pct"] for r in reductions if r["robot"] == robot
-                   and r["speed_command_mps"] == v and r["both_walk"]] for v in speeds]
-        lines.append(_line(TORQUE_SAVING_ROW.format(robot=where),
-                           [f"**{cell(x, '.1f', ' %', lowest=True)}**" for x in saving]))
-        if any((robot, v) in trot for v in speeds):
-            lines.append(_line(f"electrical J/m, the trot controller (H = 0.10 m, {where})",
-                               [number(trot[robot, v]["electrical_per_metre_J"], ".0f") if (robot, v) in trot
-                                else "–" for v in speeds]))
-    return "\n".join(lines)
-
-
 def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
     """Both tables from a folder holding comparison.json and prototype.json (and comparison_torque.json, if
     the paper's torque agent's paths were compared)."""
@@ -345,7 +285,9 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
                                                  matched=json.loads(matched.read_text()) if matched.is_file() else None)
     if (results / TORQUE_CHECK_SOURCE).is_file():
-        tables["torque"] = torque_markdown(json.loads((results / TORQUE_CHECK_SOURCE).read_text()))
+        fresh_check = results / TORQUE_CHECK_FRESH_SOURCE
+        tables["torque"] = torque_markdown(json.loads((results / TORQUE_CHECK_SOURCE).read_text()),
+                                           json.loads(fresh_check.read_text()) if fresh_check.is_file() else None)
     if (results / GAINS_SOURCE).is_file():
         tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"])
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in HEADLINES.items() if full in tables})
@@ -357,7 +299,7 @@ def headline(table: str, rows: tuple[str, ...]) -> str:
     not there is an error (a renamed row must not vanish from the README unnoticed)."""
     lines = table.splitlines()
     kept = [ln for ln in lines[2:] if ln.split("|")[1].strip() in rows]
-    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept} - {FRESH_ROW, FRESH_PROTOTYPE_ROW}
+    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept} - OPTIONAL_ROWS
     if missing:
         raise ValueError(f"headline rows {sorted(missing)} are not in the table")
     return "\n".join(lines[:2] + kept)

@@ -1,0 +1,30 @@
+"""The cells and lines of the result pages' Markdown tables: numbers with a typographic minus, mean ± 95 % CI."""
+from __future__ import annotations
+
+import math
+
+MINUS = "\u2212"  # the pages' minus sign
+
+
+def number(x: float, fmt: str, sign: bool = False) -> str:
+    """`x` formatted, with a typographic minus (and a plus if `sign`)."""
+    text = format(x, ("+" if sign else "") + fmt)
+    return text.replace("-", MINUS)
+
+
+def mean_ci(row: dict, key: str, fmt: str, unit: str = "", sign: bool = False) -> str:
+    """"m unit ± h" for a row's `key`_mean and `key`_ci95 (no "± h" where the CI is undefined: one value)."""
+    m, h = row.get(f"{key}_mean", math.nan), row.get(f"{key}_ci95", math.nan)
+    if not math.isfinite(m):
+        return "–"
+    return number(m, fmt, sign) + unit + (f" ± {number(h, fmt)}" if math.isfinite(h) else "")
+
+
+def line(label: str, cells: list[str]) -> str:
+    """One table row: `label`, then the cells (an empty cell stays empty)."""
+    return "|" + "".join(f" {c} |" if c else " |" for c in [label, *cells])
+
+
+def header(first: str, speeds: list[float]) -> list[str]:
+    """A table's header over the commanded speeds (m/s) and its rule."""
+    return [line(first, [f"{v:.1f} m/s" for v in speeds]), "|---|" + "---|" * len(speeds)]
