@@ -21,8 +21,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
 - `gains` (where `gains_walks.json` is shipped, `tools/gains_walks.py`): the same run with the drivers' kp or kd
   alone scaled, as commanded and re-commanded (`evaluate.py prototype --pd-matched-from-default`), beside the
   default gains' saving.
-- `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone (`cyberdog.analysis.torque_table`),
-  with the rows of the seeds it was never tuned on where `torque_check_fresh.json` is shipped.
+- `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
+  (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where `torque_check_fresh.json` is shipped.
 """
 from __future__ import annotations
 
