@@ -353,8 +353,8 @@ def build_parser() -> argparse.ArgumentParser:
                                        "the PD the paths were recorded under (as `stiffness --pd-matched` for a "
                                        "stiffness factor; default: each walks its command as it is)")
     sub["stiffness"].add_argument("--pd-scales", type=positive, nargs="+", default=[0.7, 1.0, 1.4], metavar="S",
-                                  help="joint-PD stiffness factors (default 0.7 1.0 1.4; training draws 0.8-1.2 in "
-                                       "the battery preset, 0.6-1.6 in its stiffness variant)")
+                                  help="joint-PD stiffness factors (default 0.7 1.0 1.4; the battery preset's training "
+                                       "draws kp 0.6-1.6x and kd 0.7-1.3x)")
     sub["stiffness"].add_argument("--pd-matched", action="store_true",
                                   help="at each stiffness, walk every path and trajectory (not a policy) with its "
                                        "command re-solved for that PD, so that it executes the motion it executes "

@@ -1,0 +1,48 @@
+"""Every relative link of the project's pages (README, docs/, results/, notebook/) reaches a file, and every anchor a
+heading of that file (as GitHub names a heading's anchor): text moved between pages must not leave a link behind."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = sorted([ROOT / "README.md", ROOT / "results" / "README.md", *ROOT.glob("docs/*.md"),
+                *ROOT.glob("notebook/*.md")])
+LINK = re.compile(r"\]\(([^)\s]+)\)")
+
+
+def anchors(page: Path) -> set[str]:
+    """GitHub's anchors of a Markdown page's headings: lower case, punctuation dropped, spaces as hyphens."""
+    out = set()
+    in_code = False
+    for line in page.read_text().splitlines():
+        if line.startswith("```"):
+            in_code = not in_code
+        if in_code or not line.startswith("#"):
+            continue
+        title = line.lstrip("#").strip().lower()
+        out.add(re.sub(r"[^\w\- ]", "", title).replace(" ", "-"))
+    return out
+
+
+def test_the_anchor_rule_drops_punctuation_and_keeps_words(tmp_path):
+    page = tmp_path / "p.md"
+    page.write_text("# Title\n## The controller's rate\n```\n# not a heading\n```\n## Table 5 (Eq. 7, ideal)\n")
+    assert anchors(page) == {"title", "the-controllers-rate", "table-5-eq-7-ideal"}
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_relative_link_and_anchor_resolves(page):
+    broken = []
+    for target in LINK.findall(page.read_text()):
+        if target.startswith(("http://", "https://", "mailto:")):
+            continue
+        path, _, anchor = target.partition("#")
+        file = (page.parent / path).resolve() if path else page
+        if not file.exists():
+            broken.append(f"{target}: no file {file}")
+        elif anchor and file.suffix == ".md" and anchor not in anchors(file):
+            broken.append(f"{target}: no heading with anchor '{anchor}' in {file.relative_to(ROOT)}")
+    assert broken == []
