@@ -181,7 +181,7 @@ def test_the_result_tables_are_the_shipped_results_as_made(page):
         assert set(blocks) == set(HEADLINES), f"{page} shows {sorted(blocks)}, not the headlines"
         for name, (source, rows) in HEADLINES.items():
             present = [r for r in rows if f"| {r} |" in tables[source]]  # a fresh-seed row where it is shipped
-            assert blocks[name].count("\n") == len(present) + 1 <= 6 and blocks[name] in tables[name]
+            assert blocks[name].count("\n") == len(present) + 1 <= 7 and blocks[name] in tables[name]  # ≤ 6 rows
     for name in blocks:
         assert blocks[name] == tables[name], \
             f"{page}'s {name} table differs: python tools/make_readme_tables.py --write"
