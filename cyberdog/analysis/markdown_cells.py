@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 MINUS = "\u2212"  # the pages' minus sign
 
@@ -28,3 +29,9 @@ def line(label: str, cells: list[str]) -> str:
 def header(first: str, speeds: list[float]) -> list[str]:
     """A table's header over the commanded speeds (m/s) and its rule."""
     return [line(first, [f"{v:.1f} m/s" for v in speeds]), "|---|" + "---|" * len(speeds)]
+
+
+def seeds_named(labels: Iterable[str]) -> str:
+    """"seeds 5–9": the first and last seed that labels "seedN" (or "N") name; "fresh seeds" where none does."""
+    numbers = sorted({int(n) for n in (str(x).removeprefix("seed") for x in labels) if n.isdigit()})
+    return f"seeds {numbers[0]}–{numbers[-1]}" if numbers else "fresh seeds"

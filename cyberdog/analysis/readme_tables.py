@@ -22,7 +22,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
   alone scaled, as commanded and re-commanded (`evaluate.py prototype --pd-matched-from-default`), beside the
   default gains' saving.
 - `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
-  (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where `torque_check_fresh.json` is shipped.
+  (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where
+  `torque_check_fresh.json` is shipped.
 """
 from __future__ import annotations
 
@@ -35,7 +36,7 @@ from cyberdog.analysis import table5
 from cyberdog.analysis.compare import REFERENCE
 from cyberdog.analysis.markdown_cells import header as _header
 from cyberdog.analysis.markdown_cells import line as _line
-from cyberdog.analysis.markdown_cells import mean_ci
+from cyberdog.analysis.markdown_cells import mean_ci, seeds_named
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
 from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_FRESH_WALKS_ROW, TORQUE_SAVING_ROW,
                                            TORQUE_WALKS_ROW, torque_markdown)
@@ -133,17 +134,10 @@ def _fresh_lines(walks: list[dict], speeds: list[float]) -> list[str]:
     """Table 5's rows of the fresh seeds' paths (the seeds named in their rows), with the seeds that replay."""
     fresh = {r["speed_command_mps"]: r for r in table5.summary_rows(walks) if r["set"] == "same_lift"}
     rows = [fresh.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
-    named = _seeds_named(walks)
+    named = seeds_named(w.get("seed", "") for w in walks)
     return [_line(f"E, learned, {named} (kJ)", [mean_ci(r, "learned_energy_kJ", ".3f") for r in rows]),
             _line(f"**D_t on E, {named} (never tuned on)**",
                   [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}** ({r['n_valid']} of {r['n_seeds']})" for r in rows])]
-
-
-def _seeds_named(walks: list[dict]) -> str:
-    """"seeds 5–9": the range of the seeds named in the walks' rows ("seedN")."""
-    seeds = sorted({int(str(w["seed"]).removeprefix("seed")) for w in walks if str(w.get("seed", "")).removeprefix(
-        "seed").isdigit()})
-    return f"seeds {seeds[0]}–{seeds[-1]}" if seeds else "fresh seeds"
 
 
 def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -> list[str]:
@@ -151,7 +145,7 @@ def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -
     the cheaper common trajectory (walks that fell or left the band counted, as in the robustness table)."""
     by = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
     rows = [by.get(("learned", v)) for v in speeds]
-    named = _seeds_named(walks)
+    named = seeds_named(w.get("seed", "") for w in walks)
     seeds = {str(w["seed"]) for w in walks if w["trajectory"] == "learned" and w["robot"] == robot}
     return [_line(f"battery % per 100 m: learned, {named}",
                   ["–" if r is None else mean_ci(r, "battery_pct_per_100m", ".2f") for r in rows]),

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from cyberdog.analysis.markdown_cells import header, line, number
+from cyberdog.analysis.markdown_cells import header, line, number, seeds_named
 from cyberdog.analysis.stats import mean_ci
 
 TORQUE_WALKS_ROW = "walks in the ±5 % band, no fall (both stages; {robots})"  # the robots the check walked
@@ -28,12 +28,6 @@ def _seeds(walks: list[dict]) -> list[str]:
         n = label.removeprefix("seed")
         return (0, int(n), label) if n.isdigit() else (1, 0, label)
     return sorted({w["label"] for w in walks}, key=order)
-
-
-def seeds_named(walks: list[dict]) -> str:
-    """"seeds 5–9" (the first and last seed the actors' labels name), or "fresh seeds" where none is a number."""
-    numbers = [int(s.removeprefix("seed")) for s in _seeds(walks) if s.removeprefix("seed").isdigit()]
-    return f"seeds {numbers[0]}–{numbers[-1]}" if numbers else "fresh seeds"
 
 
 def _cell(values: list[float], fmt: str, unit: str = "", lowest: bool = False) -> str:
@@ -79,8 +73,9 @@ def torque_markdown(check: dict, fresh: dict | None = None) -> str:
         named.append(f"hardware-like draw{'s' if len(draws) > 1 else ''} {listed}")
     lines.append(line(TORQUE_WALKS_ROW.format(robots=", ".join(named)), _band(walks, speeds)))
     if fresh is not None:
-        lines.append(line(TORQUE_FRESH_WALKS_ROW.format(seeds=seeds_named(_policy_walks(fresh))),
-                          _band(_policy_walks(fresh), speeds)))
+        fresh_walks = _policy_walks(fresh)
+        fresh_seeds = _seeds(fresh_walks)
+        lines.append(line(TORQUE_FRESH_WALKS_ROW.format(seeds=seeds_named(fresh_seeds)), _band(fresh_walks, speeds)))
     for robot in robots:
         where = "ideal robot" if robot == "ideal" else f"hardware-like draw {robot.split(':')[1]}"
         for stage in (1, 2):
@@ -92,13 +87,13 @@ def torque_markdown(check: dict, fresh: dict | None = None) -> str:
         lines.append(line(TORQUE_SAVING_ROW.format(robot=where),
                           [f"**{_cell(_savings(check, robot, v), '.1f', ' %', lowest=True)}**" for v in speeds]))
         if robot == "ideal" and fresh is not None:
-            checked = len(_seeds(_policy_walks(fresh)))
+            checked = len(fresh_seeds)
             cells = []
             for v in speeds:
                 saving = _savings(fresh, "ideal", v)
                 fewer = f" ({len(saving)} of {checked} seeds)" if len(saving) < checked else ""
                 cells.append(f"**{_cell(saving, '.1f', ' %', lowest=True)}**{fewer}")
-            lines.append(line(TORQUE_FRESH_SAVING_ROW.format(seeds=seeds_named(_policy_walks(fresh))), cells))
+            lines.append(line(TORQUE_FRESH_SAVING_ROW.format(seeds=seeds_named(fresh_seeds)), cells))
         if any((robot, v) in trot for v in speeds):
             lines.append(line(f"electrical J/m, the trot controller (H = 0.10 m, {where})",
                               [number(trot[robot, v]["electrical_per_metre_J"], ".0f") if (robot, v) in trot
