@@ -128,3 +128,29 @@ def test_an_actor_of_fewer_inputs_is_widened_and_acts_as_before():
         assert torch.allclose(_actions(wide, widened), _actions(narrow, obs), atol=1e-6)
     with pytest.raises(ValueError, match="has shape"):  # another hidden size is not widened
         Agent(C.AgentConfig(hidden_sizes=(32,)), 63, 12).load_actor(narrow.actor.state_dict())
+
+
+def test_fresh_critics_start_a_stage_from_a_final_agent_as_from_its_actor_file(tmp_path):
+    cfg = tiny("train.learning_starts=0", "train.stage1.max_env_steps=200", "train.batch_size=32")
+    Trainer(cfg, tmp_path / "a", stages=(1,), progress=False).run()
+    final = tmp_path / "a" / "stage1_final.pt"
+    trained = load_checkpoint(final)["agent"]
+    cont = C.override(cfg, ["train.stage2.max_env_steps=200"])
+    kept = Trainer(cont, tmp_path / "kept", stages=(2,), init_from=final, progress=False)
+    fresh = Trainer(C.override(cont, ["train.stage2.fresh_critics=true"]), tmp_path / "fresh", stages=(2,),
+                    init_from=tmp_path / "a" / "stage1_final.pt", progress=False)
+    actor_only = Trainer(cont, tmp_path / "file", stages=(2,), init_from=tmp_path / "a" / "stage1_final_actor.pt",
+                         progress=False)
+    try:
+        critics = [k for k in trained["loss"] if k.startswith("qvalue_network_params.") and k.endswith("weight")]
+        actor = [k for k in trained["loss"] if k.startswith("actor_network_params.")]
+        assert critics and actor
+        k_state, f_state, a_state = (t.agent.network_state() for t in (kept, fresh, actor_only))
+        assert all(torch.equal(k_state[k], trained["loss"][k]) for k in critics)  # by default the critics carry over
+        assert not any(torch.equal(f_state[k], trained["loss"][k]) for k in critics)  # fresh_critics: new ones
+        assert all(torch.equal(f_state[k], trained["loss"][k]) for k in actor)  # and the same actor
+        assert all(torch.equal(f_state[k], a_state[k]) for k in f_state)  # exactly as from the actor file
+        assert kept.agent.updates > 0 and fresh.agent.updates == 0 and fresh.agent.actor_from_file
+    finally:
+        for t in (kept, fresh, actor_only):
+            t.close()

@@ -80,3 +80,32 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
     assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 4 * (4 * 10.0 + 8.0)
     assert C.read_phases(out / "recipe_phases.yaml")[0] == C.read_phases(seed)[0]  # every phase's settings
     assert not C.is_lineage(out)  # not a folder to resume or extract as a lineage
+
+
+def test_a_run_continued_from_a_shipped_actor_records_where_that_actor_is(tmp_path, monkeypatch):
+    """--init-from: the continued run's start, relative to the repository, in metadata.json; a start that is not
+    there is refused before anything is written."""
+    import csv
+
+    import pytest
+    import yaml
+
+    monkeypatch.chdir(tmp_path)
+    run, start = Path("runs/gains/seed3"), Path("results/policy/seed3/band/stage2_actor.pt")
+    run.mkdir(parents=True)
+    start.parent.mkdir(parents=True)
+    start.write_bytes(b"band")
+    (run / "stage2_final_actor.pt").write_bytes(b"gains")
+    (run / "config.yaml").write_text(yaml.safe_dump({"train": {"seed": 3}}))
+    rows = episode_rows([1000.0 + 10.0 * i for i in range(3)])
+    with open(run / "metrics.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with pytest.raises(SystemExit, match="no such file"):
+        ship_result.main([str(run), "--out", "results/policy/seed3", "--force", "--init-from", "nowhere.pt"])
+    assert not Path("results/policy/seed3/stage2_actor.pt").exists()
+    assert ship_result.main([str(run), "--out", "results/policy/seed3", "--force", "--init-from", str(start)]) == 0
+    meta = json.loads(Path("results/policy/seed3/metadata.json").read_text())
+    assert meta["init_from"] == "results/policy/seed3/band/stage2_actor.pt" and meta["seed"] == 3
+    assert Path("results/policy/seed3/stage2_actor.pt").read_bytes() == b"gains" and start.read_bytes() == b"band"

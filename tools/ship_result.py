@@ -69,6 +69,9 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, required=True, help="the shipped folder, e.g. results/table5/policy/seed0")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
     p.add_argument("--note", default="", help="free text stored in metadata.json")
+    p.add_argument("--init-from", type=Path, default=None, metavar="ACTOR",
+                   help="the file the run started from (train.py --init-from), where it is shipped: recorded in "
+                        "metadata.json as init_from, relative to the repository")
     p.add_argument("--all-phases", action="store_true",
                    help="a preset's seed folder: ship the last stage-1 and the last stage-2 phase's actors and "
                         "every phase's log (default: its last phase's run)")
@@ -83,6 +86,8 @@ def main(argv=None) -> int:
         sys.exit(f"{args.run_dir} is not a finished run: missing {missing}")
     if args.out.exists() and not args.force:
         sys.exit(f"{args.out} exists; pass --force to replace it")
+    if args.init_from is not None and not args.init_from.is_file():
+        sys.exit(f"--init-from {args.init_from}: no such file (the run's start, where it is shipped)")
     args.out.mkdir(parents=True, exist_ok=True)
     for src, dst in FILES.items():
         if (args.run_dir / src).is_file():
@@ -92,6 +97,7 @@ def main(argv=None) -> int:
     cfg = yaml.safe_load((args.run_dir / "config.yaml").read_text())
     meta = {"seed": cfg["train"]["seed"], "source_run": portable_path(args.run_dir), "git_commit": git_commit(),
             "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
+            **({"init_from": portable_path(args.init_from)} if args.init_from is not None else {}),
             "actors": "stage<N>_actor.pt = stage<N>_final_actor.pt of the run (the agent at the end of the stage)"}
     return write_metadata(args.out, meta)
 

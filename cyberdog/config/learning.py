@@ -123,6 +123,10 @@ class StageConfig:
     critic_warmup_targets: bool = False  # during that warm-up the target networks follow (every policy_delay
     #                                      updates), so that the critics evaluate the actor as it is over many
     #                                      steps; False: they wait too (one step's reward over frozen targets)
+    fresh_critics: bool = False  # a stage started from an agent (--init-from, a recipe's previous phase) keeps
+    #                              only its actor: critics, optimizers and exploration noise start anew, as from an
+    #                              actor file, so that a phase continued from shipped actor files and the same
+    #                              phase in a lineage train alike
 
     @staticmethod
     def upgrade_fields(data: dict) -> dict:

@@ -28,13 +28,14 @@ class RunState:
         return save_checkpoint(self._state(), self.run_dir / name)
 
     def _load_agent(self, state: dict, path) -> None:
-        if "agent" not in state and "actor" in state:  # an actor file: the actor only, new critics
+        stage = self.cfg.train.stage2 if self.stages[0] == 2 else self.cfg.train.stage1
+        if "actor" in state and ("agent" not in state or stage.fresh_critics):  # the actor only, new critics
             try:
                 added = self.agent.load_actor(state["actor"])
             except ValueError as e:
                 raise CheckpointError(f"{path}: {e}") from e
-            stage = self.cfg.train.stage2 if self.stages[0] == 2 else self.cfg.train.stage1
-            print(f"{path}: an actor file; the actor starts from it, the critics anew"
+            what = "an actor file" if "agent" not in state else "its actor only (fresh_critics)"
+            print(f"{path}: {what}; the actor starts from it, the critics anew"
                   + (f"; its first layer widened by {added} zero weights for inputs it did not observe"
                      if added else "")
                   + ("" if stage.critic_warmup_updates else " (with no critic_warmup_updates in this stage the "
