@@ -244,3 +244,24 @@ def test_a_recipe_extraction_setting_is_checked_as_the_command_line_checks_it(tm
         path = _write(tmp_path / "x.yaml", {"base": str(ROOT / "configs/tiny.yaml"), "extract": bad})
         with pytest.raises(ValueError, match=words):
             C.load_preset(path)
+
+
+def test_the_gains_continuation_is_the_band_phase_with_wider_gains_and_made_its_actors():
+    """notebook/configs/battery_gains.yaml (notebook/2026-12-01_gains_phase.md) changes configs/battery.yaml's band
+    phase in the gains drawn, the drivers' rate and how the continuation starts; its actors (notebook/results/
+    policy_battery_gains/seed<N>) were trained with it, each from the shipped band actor of its seed (an actor file:
+    its critics were new whatever fresh_critics says)."""
+    import json
+    gains = C.load(C.ExperimentConfig, NOTEBOOK / "battery_gains.yaml")
+    assert set(C.changed_settings(_phases("battery.yaml")["band"].config, gains)) == {
+        "env.walk.sim.physics_dt", "env.randomization.kp_factor", "env.randomization.kd_factor",
+        "train.stage2.max_env_steps", "train.stage2.actor_anchor", "train.stage2.critic_warmup_updates",
+        "train.stage2.critic_warmup_targets", "train.stage2.fresh_critics"}
+    assert gains.env.randomization.kd_factor == (0.5, 2.0) and gains.train.stage2.fresh_critics
+    shipped = sorted((ROOT / "notebook" / "results" / "policy_battery_gains").glob("seed*"))
+    assert shipped
+    for folder in shipped:
+        made = C.load(C.ExperimentConfig, folder / "config.yaml")
+        assert set(C.changed_settings(gains, made)) <= {"train.seed", "train.stage2.fresh_critics"}, folder.name
+        start = json.loads((folder / "metadata.json").read_text())["init_from"]
+        assert start == f"results/battery/policy/{folder.name}/stage2_actor.pt" and (ROOT / start).is_file()

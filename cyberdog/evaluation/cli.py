@@ -49,7 +49,7 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
     "all": ("compare + prototype + figures (+ --video) on the learned trajectories (the default)",
             "compare, prototype and figures (+ a video with --video) on the learned trajectories (default: "
             "Table 5 on results/table5/paths/, the paper preset's commanded paths, one per seed and speed; the "
-            "prototype on results/battery/paths/, the deadband battery preset's; --learned "
+            "prototype on results/battery/paths/, the battery recipe's; --learned "
             "FILE|DIR... (both), or --policies/--sweep to extract them first). Writes table5.md, "
             "table5_summary.*, table5.*, comparison.*, "
             "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.*, "
@@ -72,8 +72,8 @@ COMMANDS = {  # name: (one line for the list of sub-commands, the paragraph of i
                 "electrical energy, positive work and foot slip, and as a reference row the direct search's shape at "
                 "the same lift (--reference); Figures 10 and 13."),
     "prototype": ("Section 4.2 in simulation: battery use and range",
-                  "every learned seed's paths (default results/battery/paths/, the deadband battery "
-                  "preset's, where shipped) and the common trajectories at their lift, walks of "
+                  "every learned seed's paths (default results/battery/paths/, the battery "
+                  "recipe's, where shipped) and the common trajectories at their lift, walks of "
                   "--prototype-distance m (default "
                   "20; the paper's 100) on the ideal robot and on --prototype-draws hardware-like robots: battery "
                   "use (Eq. 13), range, energy per 100 m, cost of transport, mean ± 95 % CI across seeds, the "
@@ -191,7 +191,7 @@ def _learned_option() -> argparse.ArgumentParser:
                    help="extracted trajectories (JSON/CSV files, or folders of JSON files): commanded paths (one "
                         "per seed and speed) or sampled x-z paths (one per seed, rescaled to every speed); "
                         "default results/table5/paths/ (the paper's Eq. 7 preset), and for the prototype run "
-                        "results/battery/paths/ (the deadband battery preset) where it is shipped")
+                        "results/battery/paths/ (the battery recipe) where it is shipped")
     return p
 
 
