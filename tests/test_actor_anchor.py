@@ -138,7 +138,7 @@ def test_fresh_critics_start_a_stage_from_a_final_agent_as_from_its_actor_file(t
     cont = C.override(cfg, ["train.stage2.max_env_steps=200"])
     kept = Trainer(cont, tmp_path / "kept", stages=(2,), init_from=final, progress=False)
     fresh = Trainer(C.override(cont, ["train.stage2.fresh_critics=true"]), tmp_path / "fresh", stages=(2,),
-                    init_from=tmp_path / "a" / "stage1_final.pt", progress=False)
+                    init_from=final, progress=False)
     actor_only = Trainer(cont, tmp_path / "file", stages=(2,), init_from=tmp_path / "a" / "stage1_final_actor.pt",
                          progress=False)
     try:
