@@ -293,7 +293,7 @@ def test_the_gains_table_rows_are_each_runs_walks_as_the_prototype_summary_gives
     import json
     import shutil
 
-    from cyberdog.analysis.readme_tables import GAINS_DEFAULT_ROW, make_tables
+    from cyberdog.analysis.readme_tables import GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW, make_tables
     source = ROOT / "results" / "figures_input"
     for f in source.glob("*.json"):
         shutil.copy(f, tmp_path / f.name)
@@ -304,11 +304,38 @@ def test_the_gains_table_rows_are_each_runs_walks_as_the_prototype_summary_gives
     tables = make_tables(tmp_path)
     lines = tables["gains"].splitlines()[2:]
     row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in lines}
-    assert list(row) == [GAINS_DEFAULT_ROW, "**kp 0.5×, re-commanded**", "kp 2×, as commanded",
+    assert list(row) == [GAINS_DEFAULT_ROW, GAINS_DEFAULT_POLICY_ROW, "**kp 0.5×, re-commanded**", "kp 2×, as commanded",
                          "**kp 2×, re-commanded**", "kd 2×, as commanded", "**kd 2×, re-commanded**"]
     assert row["kd 2×, as commanded"] == row[GAINS_DEFAULT_ROW]
     assert [c.strip("* ") for c in row["**kp 0.5×, re-commanded**"]] == [c.strip() for c in row[GAINS_DEFAULT_ROW]]
     assert "kp 0.5×" not in tables["gains_headline"] and "**kd 2×, re-commanded**" in tables["gains_headline"]
+
+
+def test_a_gains_run_that_walked_the_policies_gives_their_row_beside_the_default_gains_policy_row(tmp_path):
+    """A gains run with the policies closed loop among its walks (`prototype --closed-loop`): their own row after
+    that factor's path rows, and at the top the default gains' policy row from the stiffness run's PD 1× walks
+    (relabelled here, the same walks give the same numbers); a run without policies has no such row."""
+    import json
+    import shutil
+
+    from cyberdog.analysis.readme_tables import GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW, make_tables
+    source = ROOT / "results" / "figures_input"
+    for f in source.glob("*.json"):
+        shutil.copy(f, tmp_path / f.name)
+    at_default = [w for w in json.loads((source / "stiffness_walks.json").read_text()) if w["pd_scale"] == 1.0]
+    assert {w["trajectory"] for w in at_default} >= {"learned", "policy", "cycloid", "straight"}
+    paths_only = json.loads((source / "prototype.json").read_text())
+    gains = ([dict(w, gain="kd", gain_scale=2.0, pd_matched=False) for w in at_default]
+             + [dict(w, gain=g, gain_scale=2.0, pd_matched=m) for g, m in (("kp", False), ("kp", True), ("kd", True))
+                for w in paths_only])
+    (tmp_path / "gains_walks.json").write_text(json.dumps(gains))
+    lines = make_tables(tmp_path)["gains"].splitlines()[2:]
+    row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in lines}
+    assert list(row) == [GAINS_DEFAULT_ROW, GAINS_DEFAULT_POLICY_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
+                         "kd 2×, as commanded", "**kd 2×, re-commanded**", "kd 2×, the policy, closed loop"]
+    assert row["kd 2×, the policy, closed loop"] == row[GAINS_DEFAULT_POLICY_ROW] != row[GAINS_DEFAULT_ROW]
+    (tmp_path / "stiffness_walks.json").unlink()  # no default-gains policy walks shipped: no default policy row
+    assert GAINS_DEFAULT_POLICY_ROW not in make_tables(tmp_path)["gains"]
 
 
 def test_the_gains_walks_tool_labels_each_run_by_the_one_gain_it_changed(tmp_path):

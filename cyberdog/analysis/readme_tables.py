@@ -20,7 +20,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
   --pd-matched`), the replayed paths with every command re-solved for the PD, beside them.
 - `gains` (where `gains_walks.json` is shipped, `tools/gains_walks.py`): the same run with the drivers' kp or kd
   alone scaled, as commanded and re-commanded (`evaluate.py prototype --pd-matched-from-default`), beside the
-  default gains' saving.
+  default gains' saving; where the runs walked the policies too (`--closed-loop`), the policies' own saving under
+  those gains, beside theirs at the default gains (the stiffness run's PD 1× walks).
 - `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
   (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where
   `torque_check_fresh.json` is shipped.
@@ -46,6 +47,8 @@ FRESH_SEEDS = "seeds 5–9"  # the seeds the recipes were never tuned on, as the
 FRESH_ROW = f"**D_t on E, {FRESH_SEEDS} (never tuned on)**"  # a headline row only where its walks are shipped
 FRESH_PROTOTYPE_ROW = f"**battery saving, {FRESH_SEEDS} (never tuned on)**"  # the same, the prototype run's
 GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
+POLICY_ROW = "the policy, closed loop"  # the gains table's rows of the policies walking the protocol themselves
+GAINS_DEFAULT_POLICY_ROW = f"default gains, {POLICY_ROW}"
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
     "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
@@ -237,24 +240,40 @@ def stiffness_markdown(walks: list[dict], robot: str = "hardware", matched: list
     return "\n".join(lines)
 
 
-def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware") -> str:
+def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware",
+                   default_policy_walks: list[dict] | None = None) -> str:
     """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
     scaled (`tools/gains_walks.py`'s walks, each labelled `gain`, `gain_scale`, `pd_matched`), as commanded and
-    re-commanded, beside the default gains' (the prototype run's `default_walks`)."""
+    re-commanded, beside the default gains' (the prototype run's `default_walks`). Where a run walked the
+    policies too (`prototype --closed-loop`), their row follows that factor's: the policy itself under those
+    gains, nothing re-solved; `default_policy_walks` (walks at the default gains with the policies among them,
+    e.g. the stiffness run's PD 1× walks) give the default gains' policy row."""
+    def cells(rows: list[dict], trajectory: str) -> list[str] | None:
+        by = {r["speed_mps"]: r for r in ps.summary_rows(rows) if r["robot"] == robot and r["trajectory"] == trajectory}
+        if not by:
+            return None
+        return ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + _missed(by[v])
+                for v in speeds]
+
     default = {r["speed_mps"]: r for r in ps.summary_rows(default_walks)
                if r["robot"] == robot and r["trajectory"] == "learned"}
     speeds = sorted(default)
     lines = _header("battery saving against the cheaper common trajectory", speeds)
     lines.append(_line(GAINS_DEFAULT_ROW, [mean_ci(default[v], "battery_saving_pct", ".1f", " %") for v in speeds]))
-    runs = sorted({(w["gain"], w["gain_scale"], bool(w["pd_matched"])) for w in walks},
-                  key=lambda run: (run[0] != "kp", *run[1:]))  # kp's rows first, each factor as commanded first
-    for gain, scale, matched in runs:
-        here = [w for w in walks if (w["gain"], w["gain_scale"], bool(w["pd_matched"])) == (gain, scale, matched)]
-        by = {r["speed_mps"]: r for r in ps.summary_rows(here) if r["robot"] == robot and r["trajectory"] == "learned"}
-        cells = ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + _missed(by[v])
-                 for v in speeds]
-        label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
-        lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in cells]))
+    policy = cells(default_policy_walks or [], "policy")
+    if policy:
+        lines.append(_line(GAINS_DEFAULT_POLICY_ROW, policy))
+    factors = sorted({(w["gain"], w["gain_scale"]) for w in walks}, key=lambda f: (f[0] != "kp", f[1]))  # kp first
+    for gain, scale in factors:
+        at = [w for w in walks if (w["gain"], w["gain_scale"]) == (gain, scale)]
+        for matched in (False, True):  # as commanded, then re-commanded
+            row = cells([w for w in at if bool(w["pd_matched"]) == matched], "learned")
+            if row is not None:
+                label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
+                lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in row]))
+        policy = cells(at, "policy")
+        if policy:
+            lines.append(_line(f"{gain} {scale:g}×, {POLICY_ROW}", policy))
     return "\n".join(lines)
 
 
@@ -282,7 +301,10 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         tables["torque"] = torque_markdown(json.loads((results / TORQUE_CHECK_SOURCE).read_text()),
                                            json.loads(fresh_check.read_text()) if fresh_check.is_file() else None)
     if (results / GAINS_SOURCE).is_file():
-        tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"])
+        stiffness = (json.loads((results / STIFFNESS_SOURCE).read_text())
+                     if (results / STIFFNESS_SOURCE).is_file() else [])
+        tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"],
+                                         default_policy_walks=[w for w in stiffness if w["pd_scale"] == 1.0])
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in HEADLINES.items() if full in tables})
     return tables
 
