@@ -271,7 +271,7 @@ def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "h
             if row is not None:
                 label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
                 lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in row]))
-        policy = cells(at, "policy")
+        policy = cells([w for w in at if not w["pd_matched"]], "policy")  # against the commons as commanded
         if policy:
             lines.append(_line(f"{gain} {scale:g}×, {POLICY_ROW}", policy))
     return "\n".join(lines)
