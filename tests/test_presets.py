@@ -265,3 +265,34 @@ def test_the_gains_continuation_is_the_band_phase_with_wider_gains_and_made_its_
         assert set(C.changed_settings(gains, made)) <= {"train.seed", "train.stage2.fresh_critics"}, folder.name
         start = json.loads((folder / "metadata.json").read_text())["init_from"]
         assert start == f"results/battery/policy/{folder.name}/stage2_actor.pt" and (ROOT / start).is_file()
+
+
+@pytest.mark.parametrize("candidate, changed", [
+    # notebook/2026-12-02_torque_stage2.md: the keep-moving bonus raised with |E| in both stage-2 phases
+    ("torque_bonus.yaml", {"energy": {"train.stage2.reward.keep_moving"},
+                           "energy2": {"train.stage2.reward.keep_moving"}}),
+    # ... and the speed term over a stride beyond a deadband, with a stronger energy term and a longer warm-up
+    ("torque_band_energy.yaml", {
+        "energy": {"train.stage2.reward.keep_moving", "train.stage2.reward.energy", "train.stage2.reward.speed",
+                   "train.stage2.reward.speed_window", "train.stage2.reward.speed_deadband",
+                   "train.stage2.critic_warmup_updates", "train.stage2.critic_warmup_targets"},
+        "energy2": {"train.stage2.reward.keep_moving", "train.stage2.reward.energy", "train.stage2.reward.speed",
+                    "train.stage2.reward.speed_window", "train.stage2.reward.speed_deadband"}}),
+])
+def test_a_torque_stage2_candidate_changes_only_what_it_says_and_keeps_stage_1(candidate, changed):
+    """The candidates of the torque recipe's stage 2 (notebook/configs/) resolve to configs/torque.yaml's phases but
+    for the settings their comments name; stage 1 (main, speed) is the recipe's, so a lineage whose stage 1 was
+    made by notebook/configs/torque_stage1.yaml continues into either; where D rises with E, a walk nets stage 1's
+    bonus per step for a stage-2 walk's 12.4 J of electrical energy a step (D/400 − |E|·12.4 ≈ 7.5)."""
+    shipped, mine = _phases("torque.yaml"), _phases(f"notebook/configs/{candidate}")
+    stage1 = _phases("notebook/configs/torque_stage1.yaml")
+    assert list(mine) == list(shipped) and list(stage1) == ["main", "speed"]
+    for name in ("main", "speed"):
+        assert mine[name].stage == stage1[name].stage == shipped[name].stage
+        assert C.changed_settings(mine[name].config, shipped[name].config) == {}
+        assert C.changed_settings(stage1[name].config, shipped[name].config) == {}
+    for name, keys in changed.items():
+        assert mine[name].stage == shipped[name].stage == "2"
+        assert set(C.changed_settings(mine[name].config, shipped[name].config)) == keys, name
+        reward = mine[name].config.train.stage2.reward
+        assert reward.keep_moving / 400 - abs(reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2), name
