@@ -111,9 +111,11 @@ def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
 
 def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tmp_path):
     """configs/torque.yaml's seed folder: main (stage 1), speed (stage 1), energy and energy2 (stage 2): the check
-    walks speed's stage-1 actor and energy2's stage-2 actor, labelled by the seed folder."""
+    walks speed's stage-1 actor and energy2's stage-2 actor, labelled by the seed folder; one whose last stage-2
+    phase has not finished is refused (not walked as stage 1 alone); a phase of both stages gives both."""
     from cyberdog import config as C
     from cyberdog.evaluation.check import run_actors
+    from cyberdog.evaluation.cli import UsageError
 
     seed = tmp_path / "seed3"
     C.write_phases(seed, C.load_preset(Path(evaluate.__file__).parent / "configs" / "torque.yaml"), 3)
@@ -122,3 +124,12 @@ def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tm
         (seed / phase / f"stage{stage}_final_actor.pt").write_bytes(b"")
     assert run_actors([seed], "final") == {"seed3": {1: seed / "speed" / "stage1_final_actor.pt",
                                                      2: seed / "energy2" / "stage2_final_actor.pt"}}
+    (seed / "energy2" / "stage2_final_actor.pt").unlink()  # its last stage-2 phase interrupted: refused, not stage 1 alone
+    with pytest.raises(UsageError, match="phase energy2 .stage 2. has no stage2_final_actor.pt"):
+        run_actors([seed], "final")
+    one = tmp_path / "seed4"  # configs/table5.yaml: one phase that trains both stages
+    C.write_phases(one, C.load_preset(Path(evaluate.__file__).parent / "configs" / "table5.yaml"), 4)
+    (one / "train").mkdir()
+    for stage in (1, 2):
+        (one / "train" / f"stage{stage}_final_actor.pt").write_bytes(b"")
+    assert run_actors([one], "final") == {"seed4": {s: one / "train" / f"stage{s}_final_actor.pt" for s in (1, 2)}}

@@ -155,12 +155,17 @@ def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
     actors = {}
     for run in runs:
         names = [f"stage{{}}_{actor}_actor.pt"] + (["stage{}_actor.pt"] if actor == "final" else [])
-        if is_lineage(run):  # a recipe's seed folder: the last phase that ends with each stage
+        if is_lineage(run):  # a recipe's seed folder: the last phase that trains each stage
             try:
                 phases = read_phases(run)[0]
             except ValueError as err:
                 raise UsageError(f"--runs {run}: {err}") from None
-            folders = {s: next((run / p.name for p in reversed(phases) if p.last_stage == s), run) for s in (1, 2)}
+            folders = {s: next((run / p.name for p in reversed(phases) if p.stage in (str(s), "both")), run)
+                       for s in (1, 2)}
+            for s, folder in folders.items():  # a stage the recipe trains but whose last phase has not finished
+                if folder != run and not any((folder / n.format(s)).is_file() for n in names):
+                    raise UsageError(f"--runs {run}: its phase {folder.name} (stage {s}) has no stage{s}_{actor}_actor.pt "
+                                     f"(not finished?): `train.py --resume {run}` continues it")
         else:
             folders = {1: run, 2: run}
         stages = {s: next((folders[s] / n.format(s) for n in names if (folders[s] / n.format(s)).is_file()), None)
