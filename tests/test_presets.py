@@ -296,3 +296,39 @@ def test_a_torque_stage2_candidate_changes_only_what_it_says_and_keeps_stage_1(c
         assert set(C.changed_settings(mine[name].config, shipped[name].config)) == keys, name
         reward = mine[name].config.train.stage2.reward
         assert reward.keep_moving / 400 - abs(reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2), name
+
+
+def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_speed_phase(tmp_path):
+    """notebook/results/torque_stage1_remade/seed<N> (notebook/2026-12-02_torque_stage2.md) holds the `main` phase's
+    final agent (critics included) of notebook/configs/torque_stage1.yaml: phases as the recipe's now, an agent after
+    300,000 env steps of stage 1, and a lineage of a candidate holding it as main/stage1_final.pt skips `main`."""
+    import shutil
+
+    import torch
+
+    from cyberdog.lineage import run_lineage
+
+    folders = sorted((ROOT / "notebook" / "results" / "torque_stage1_remade").glob("seed*"))
+    assert [f.name for f in folders] == ["seed0", "seed1"]
+    recipe = _phases("torque.yaml")
+    for folder in folders:
+        phases, _ = C.read_phases(folder)
+        assert [p.name for p in phases] == ["main", "speed"] and phases[0].config.train.seed == int(folder.name[4:])
+        for p in phases:
+            made = _with_seed(p.config, 0)
+            assert C.changed_settings(made, _with_seed(recipe[p.name].config, 0)) == {}, p.name
+        agent = torch.load(folder / "main_stage1_final.pt", weights_only=True)
+        assert agent["kind"] == "stage_final" and agent["stage"] == 1 and agent["env_steps"] == 300_000
+        seed = tmp_path / folder.name
+        C.write_phases(seed, C.load_preset(NOTEBOOK / "torque_bonus.yaml"), int(folder.name[4:]))
+        (seed / "main").mkdir()
+        shutil.copy(folder / "main_stage1_final.pt", seed / "main" / "stage1_final.pt")
+        started = []
+        run_lineage(seed, lambda cfg, label, **kw: started.append(label) or 1, say=lambda _: None)
+        assert started and "phase speed" in started[0]  # main is done: the lineage goes on at speed
+
+
+def _with_seed(cfg: C.ExperimentConfig, seed: int) -> C.ExperimentConfig:
+    """`cfg` with train.seed = `seed` (to compare two seeds' settings)."""
+    import dataclasses
+    return dataclasses.replace(cfg, train=dataclasses.replace(cfg.train, seed=seed))
