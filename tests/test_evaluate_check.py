@@ -124,7 +124,8 @@ def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tm
         (seed / phase / f"stage{stage}_final_actor.pt").write_bytes(b"")
     assert run_actors([seed], "final") == {"seed3": {1: seed / "speed" / "stage1_final_actor.pt",
                                                      2: seed / "energy2" / "stage2_final_actor.pt"}}
-    (seed / "energy2" / "stage2_final_actor.pt").unlink()  # its last stage-2 phase interrupted: refused, not stage 1 alone
+    # its last stage-2 phase interrupted: refused, not walked as stage 1 alone
+    (seed / "energy2" / "stage2_final_actor.pt").unlink()
     with pytest.raises(UsageError, match="phase energy2 .stage 2. has no stage2_final_actor.pt"):
         run_actors([seed], "final")
     one = tmp_path / "seed4"  # configs/table5.yaml: one phase that trains both stages

@@ -3,6 +3,7 @@ per seed that resumes mid-phase, and a broken preset is one line."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -330,5 +331,4 @@ def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_sp
 
 def _with_seed(cfg: C.ExperimentConfig, seed: int) -> C.ExperimentConfig:
     """`cfg` with train.seed = `seed` (to compare two seeds' settings)."""
-    import dataclasses
     return dataclasses.replace(cfg, train=dataclasses.replace(cfg.train, seed=seed))
