@@ -162,15 +162,14 @@ def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
                 raise UsageError(f"--runs {run}: {err}") from None
             folders = {s: next((run / p.name for p in reversed(phases) if p.stage in (str(s), "both")), run)
                        for s in (1, 2)}
-            for s, folder in folders.items():  # a stage the recipe trains but whose last phase has not finished
-                if folder != run and not any((folder / n.format(s)).is_file() for n in names):
-                    raise UsageError(f"--runs {run}: its phase {folder.name} (stage {s}) has no "
-                                     f"stage{s}_{actor}_actor.pt (not finished?): `train.py --resume {run}` "
-                                     f"continues it")
         else:
             folders = {1: run, 2: run}
         stages = {s: next((folders[s] / n.format(s) for n in names if (folders[s] / n.format(s)).is_file()), None)
                   for s in (1, 2)}
+        for s, folder in folders.items():  # a stage a recipe's phase trains, but that phase has not finished
+            if folder != run and stages[s] is None:
+                raise UsageError(f"--runs {run}: its phase {folder.name} (stage {s}) has no stage{s}_{actor}_actor.pt "
+                                 f"(not finished?): `train.py --resume {run}` continues it")
         stages = {s: f for s, f in stages.items() if f is not None}
         if not stages:
             raise UsageError(f"--runs {run}: no stage1_{actor}_actor.pt or stage2_{actor}_actor.pt")
