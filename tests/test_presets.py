@@ -299,6 +299,36 @@ def test_a_torque_stage2_candidate_changes_only_what_it_says_and_keeps_stage_1(c
         assert reward.keep_moving / 400 - abs(reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2), name
 
 
+def test_the_torque_speed_band_candidate_adds_a_band_phase_and_keeps_its_speed_form_through_stage_2():
+    """notebook/configs/torque_speed_band.yaml (notebook/2026-12-02_torque_stage2.md): the recipe's main and speed
+    phases as they are, then a stage-1 band phase that pays r_v over a stride beyond 2 % of the command, the same
+    speed form in both stage-2 phases, whose only other changes are the bonus raised with |E| (a walk nets stage 1's
+    D/400 = 7.5 a step for 12.4 J a step), the critics' warm-up and a slower actor (3e-5)."""
+    shipped, mine = _phases("torque.yaml"), _phases("notebook/configs/torque_speed_band.yaml")
+    assert list(mine) == ["main", "speed", "band", "energy", "energy2"]
+    assert [(p.name, p.start) for p in mine.values()][2:] == [
+        ("band", "speed/stage1_final.pt"), ("energy", "band/stage1_final.pt"), ("energy2", "energy/stage2_final.pt")]
+    for name in ("main", "speed"):
+        assert C.changed_settings(mine[name].config, shipped[name].config) == {}, name
+    band = mine["band"].config.train.stage1
+    assert mine["band"].stage == "1" and mine["band"].config.env.prior_weight == 0.0
+    assert set(C.changed_settings(mine["band"].config, shipped["speed"].config)) == {
+        "train.stage1.reward.speed", "train.stage1.reward.speed_window", "train.stage1.reward.speed_deadband",
+        "train.stage1.max_env_steps", "train.stage1.critic_warmup_updates"}  # its targets follow, as in main
+    speed_form = {"train.stage2.reward.speed", "train.stage2.reward.speed_window", "train.stage2.reward.speed_deadband",
+                  "train.stage2.reward.keep_moving"}
+    assert set(C.changed_settings(mine["energy"].config, shipped["energy"].config)) == speed_form | {
+        "train.stage2.critic_warmup_updates", "train.stage2.critic_warmup_targets", "train.stage2.actor_lr"}
+    assert set(C.changed_settings(mine["energy2"].config, shipped["energy2"].config)) == speed_form | {
+        "train.stage2.actor_lr"}
+    for name in ("energy", "energy2"):
+        stage2 = mine[name].config.train.stage2
+        assert (stage2.reward.speed, stage2.reward.speed_window, stage2.reward.speed_deadband) == (
+            band.reward.speed, band.reward.speed_window, band.reward.speed_deadband), name
+        assert stage2.reward.keep_moving / 400 - abs(stage2.reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2), name
+        assert stage2.actor_lr == 3e-5 < mine[name].config.agent.actor_lr, name
+
+
 def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_speed_phase(tmp_path):
     """notebook/results/torque_stage1_remade/seed<N> (notebook/2026-12-02_torque_stage2.md) holds the `main` phase's
     final agent (critics included) of notebook/configs/torque_stage1.yaml: phases as the recipe's now, an agent after
