@@ -340,7 +340,7 @@ def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_sp
     from cyberdog.lineage import run_lineage
 
     folders = sorted((ROOT / "notebook" / "results" / "torque_stage1_remade").glob("seed*"))
-    assert [f.name for f in folders] == ["seed0", "seed1"]
+    assert [f.name for f in folders] == ["seed0", "seed1", "seed2"]
     recipe = _phases("torque.yaml")
     for folder in folders:
         phases, _ = C.read_phases(folder)
