@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from cyberdog import config as C
+from cyberdog.core.rewards import speed_term
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 
 
@@ -149,3 +150,46 @@ def test_speed_at_nominal_stride_is_checked_and_reaches_the_stage_reward():
     assert not C.stage_reward(C.TrainConfig().stage2).speed_at_nominal_stride
     with pytest.raises(ValueError, match="speed_at_nominal_stride"):
         C.TrainConfig(buffer_between_stages="relabel", stage2=nominal)
+
+
+def test_a_relative_speed_term_pays_a_share_of_the_set_speed_the_same_at_every_command():
+    """speed_term(per_speed=v_set): ((v_cmd − v_x) / v_set)², after the deadband; a 5 % error costs the same at
+    1.0 and 1.4 m/s, where in m/s it costs 1.96x at 1.4."""
+    assert speed_term(0.95, 1.0, per_speed=1.0) == pytest.approx(speed_term(1.33, 1.4, per_speed=1.4), rel=1e-12)
+    assert speed_term(1.33, 1.4) == pytest.approx(1.96 * speed_term(0.95, 1.0), rel=1e-12)
+    assert speed_term(1.2, 1.4, 0.02, per_speed=1.4) == pytest.approx(((0.2 - 0.028) / 1.4) ** 2, rel=1e-12)
+    assert speed_term(1.39, 1.4, 0.02, per_speed=1.4) == 0.0  # inside the deadband
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="per_speed"):
+            speed_term(1.0, 1.2, per_speed=bad)
+
+
+def test_speed_relative_reaches_the_env_step_and_is_checked():
+    """With reward.speed_relative the env's r_v is the error over the episode's set speed, not the ramped command."""
+    with pytest.raises(ValueError, match="speed_relative"):
+        C.RewardConfig(speed_relative=1)
+    relative = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, energy=0.0, speed_relative=True))
+    with pytest.raises(ValueError, match="speed_relative"):
+        C.TrainConfig(buffer_between_stages="relabel", stage2=relative)
+
+    def walk(on: bool):
+        env = CyberDogEnv(config=C.EnvConfig(action_mode="foot"), reward=C.RewardConfig(speed_relative=on))
+        try:
+            env.reset(seed=0)
+            out = []
+            for _ in range(60):
+                _, _, terminated, _, info = env.step(np.zeros(12))
+                assert not terminated
+                out.append((info["forward_speed_paid"], env.controller.commanded_speed(env.t),
+                            info["reward_terms"]["speed"], info["target_speed"]))
+            return np.array(out)
+        finally:
+            env.close()
+
+    on, off = walk(True), walk(False)
+    np.testing.assert_allclose(on[:, [0, 1, 3]], off[:, [0, 1, 3]], rtol=0)  # the same walk: the term does not act
+    v_set = on[0, 3]
+    assert v_set > 0 and (on[:, 3] == v_set).all()
+    np.testing.assert_allclose(on[:, 2], ((on[:, 1] - on[:, 0]) / v_set) ** 2, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(off[:, 2], (off[:, 1] - off[:, 0]) ** 2, rtol=1e-9, atol=1e-15)
+    assert (on[:, 1] < 0.5 * v_set).any()  # the ramp: r_v divides by the set speed, not the ramped command

@@ -53,6 +53,11 @@ class RewardConfig:
     # the command where training drew its robots and leaves the loop no margin for a robot that needs more (a
     # stiffer joint PD); paid for that lean, it carries the speed in its own foot path
     speed_at_nominal_stride: bool = False
+    # r_v on the error as a share of the episode's set speed, ((v_cmd − v_x) / v_set)², unitless (A per share²;
+    # A = −300 in m/s at 1.2 m/s is −432 here). False = in m/s, the paper's. The evaluation's band is a share
+    # (±5 %): in m/s a 5 % error at 1.0 m/s is paid half what it is at 1.4 m/s, and an energy term pulls the
+    # lowest command's walk slowest
+    speed_relative: bool = False
 
     @functools.cached_property
     def weights(self) -> dict[str, float]:
@@ -75,6 +80,8 @@ class RewardConfig:
                "in [0, 1) (a share of the command; 0 = the paper's)", self.speed_deadband)
         _check(isinstance(self.speed_at_nominal_stride, bool), "RewardConfig.speed_at_nominal_stride",
                "True or False", self.speed_at_nominal_stride)
+        _check(isinstance(self.speed_relative, bool), "RewardConfig.speed_relative", "True or False",
+               self.speed_relative)
 
 
 STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0

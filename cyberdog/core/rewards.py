@@ -17,17 +17,22 @@ from cyberdog.config import REWARD_TERM_NAMES, RewardConfig
 _TERM_NAME_SET = frozenset(REWARD_TERM_NAMES)
 
 
-def speed_term(v_x: float, v_target: float, deadband: float = 0.0) -> float:
+def speed_term(v_x: float, v_target: float, deadband: float = 0.0, per_speed: float | None = None) -> float:
     """r_v = (v_target − v_x)², (m/s)²: squared error of the forward body speed.
 
     The paper writes r_v = (v0 − v_x)² but calls v0 the measured and v_x the target speed; here v_x is the
     measured forward speed and v_target the commanded one (the square makes the order irrelevant).
     With `deadband` > 0 (a share of the command, `RewardConfig.speed_deadband`) only the error beyond
     deadband·|v_target| counts: r_v = max(0, |v_target − v_x| − deadband·|v_target|)². 0 is the paper's term.
+    With `per_speed` (m/s, `RewardConfig.speed_relative`: the episode's set speed) the error is a share of it and
+    r_v is unitless: r_v = (max(0, |v_target − v_x| − deadband·|v_target|) / per_speed)². None is the paper's.
     """
     if not (0.0 <= deadband < 1.0):
         raise ValueError(f"deadband must be in [0, 1) (a share of the command), got {deadband!r}")
-    return max(0.0, abs(v_target - v_x) - deadband * abs(v_target)) ** 2
+    if per_speed is not None and not (per_speed > 0 and math.isfinite(per_speed)):
+        raise ValueError(f"per_speed must be > 0 m/s and finite (None: the error in m/s), got {per_speed!r}")
+    error = max(0.0, abs(v_target - v_x) - deadband * abs(v_target))
+    return (error if per_speed is None else error / per_speed) ** 2
 
 
 class SpeedWindow:
@@ -89,11 +94,11 @@ def energy_term(step_energy_J: float) -> float:
 
 def reward_terms(*, v_x: float, v_target: float, y: float, z: float, z_nominal: float,
                  sample_time: float, episode_time: float, step_energy_J: float,
-                 speed_deadband: float = 0.0) -> dict[str, float]:
+                 speed_deadband: float = 0.0, speed_per: float | None = None) -> dict[str, float]:
     """The five unweighted terms of Eq. (10), keyed by `REWARD_TERM_NAMES` (speed, y_offset, fuselage,
-    keep_moving, energy), in that order. `speed_deadband`: see `speed_term`."""
+    keep_moving, energy), in that order. `speed_deadband`, `speed_per`: see `speed_term`'s deadband, per_speed."""
     return {  # in the order of REWARD_TERM_NAMES
-        "speed": float(speed_term(v_x, v_target, speed_deadband)),
+        "speed": float(speed_term(v_x, v_target, speed_deadband, speed_per)),
         "y_offset": float(y_offset_term(y)),
         "fuselage": float(fuselage_term(z, z_nominal)),
         "keep_moving": float(keep_moving_term(sample_time, episode_time)),

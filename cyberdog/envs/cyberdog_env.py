@@ -101,7 +101,8 @@ class CyberDogEnv(gym.Env):
     the within-stride surge of a trot is not paid for (`forward_speed_used` stays the step's own speed); with
     `reward.speed_deadband`, only the error beyond that share of the command; with
     `reward.speed_at_nominal_stride`, on the speed the gait would walk at the stride its command asks for
-    (`forward_speed_paid`: v · v_cmd / (v_cmd + the trot's speed-loop correction, `speed_loop_correction`)).
+    (`forward_speed_paid`: v · v_cmd / (v_cmd + the trot's speed-loop correction, `speed_loop_correction`)); with
+    `reward.speed_relative`, on the error as a share of the episode's set speed (`target_speed`).
 
     **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
     penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
@@ -325,7 +326,8 @@ class CyberDogEnv(gym.Env):
                                      z_nominal=cfg.reward.z_nominal, sample_time=cfg.control_dt,
                                      episode_time=cfg.episode_time,
                                      step_energy_J=step_energy if step_electrical is None else step_electrical,
-                                     speed_deadband=cfg.reward.speed_deadband)
+                                     speed_deadband=cfg.reward.speed_deadband,
+                                     speed_per=self.target_speed if cfg.reward.speed_relative else None)
         weighted = rewards.weighted_terms(terms, cfg.reward)
         reward = float(sum(weighted.values()))
         finite = math.isfinite(sum(s.q.tolist()) + sum(s.base_position.tolist()))  # a NaN or inf anywhere
