@@ -329,6 +329,24 @@ def test_the_torque_speed_band_candidate_adds_a_band_phase_and_keeps_its_speed_f
         assert stage2.actor_lr == 3e-5 < mine[name].config.agent.actor_lr, name
 
 
+def test_the_torque_speed_relative_continuation_changes_only_the_speed_scale_and_the_energy_weight():
+    """notebook/configs/torque_speed_relative.yaml: torque_speed_band.yaml's phases as they are, then energy3rel from
+    its stage-2 agent with r_v on the error as a share of the set speed (A = -432: -300 in m/s at 1.2 m/s),
+    E = -1.2 and D raised so that a walk still nets stage 1's 7.5 a step."""
+    band = _phases("notebook/configs/torque_speed_band.yaml")
+    mine = _phases("notebook/configs/torque_speed_relative.yaml")
+    assert list(mine) == [*band, "energy3rel"] and mine["energy3rel"].start == "energy2/stage2_final.pt"
+    for name in band:
+        assert C.changed_settings(mine[name].config, band[name].config) == {}, name
+    assert set(C.changed_settings(mine["energy3rel"].config, band["energy2"].config)) == {
+        "train.stage2.max_env_steps", "train.stage2.reward.energy", "train.stage2.reward.keep_moving",
+        "train.stage2.reward.speed", "train.stage2.reward.speed_relative"}
+    reward = mine["energy3rel"].config.train.stage2.reward
+    in_metres = band["energy2"].config.train.stage2.reward.speed
+    assert reward.speed_relative and reward.speed == pytest.approx(in_metres * 1.2 ** 2)  # the same at 1.2 m/s
+    assert reward.keep_moving / 400 - abs(reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2)
+
+
 def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_speed_phase(tmp_path):
     """notebook/results/torque_stage1_remade/seed<N> (notebook/2026-12-02_torque_stage2.md) holds the `main` phase's
     final agent (critics included) of notebook/configs/torque_stage1.yaml: phases as the recipe's now, an agent after
