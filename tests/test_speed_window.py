@@ -118,19 +118,9 @@ def test_speed_at_nominal_stride_pays_the_speed_loops_lengthening():
     """r_v on v · v_cmd / (v_cmd + c), c the trot's speed-loop correction: the speed the gait would walk at the
     stride its command asks for; off, the speed itself."""
     def walk(on: bool):
-        env = CyberDogEnv(config=C.EnvConfig(target_speed=1.0, action_mode="foot"),
-                          reward=C.RewardConfig(speed_at_nominal_stride=on))
-        try:
-            env.reset(seed=0)
-            out = []
-            for _ in range(60):
-                _, _, terminated, _, info = env.step(np.zeros(12))
-                assert not terminated
-                out.append((info["forward_speed_used"], info["forward_speed_paid"], info["speed_loop_correction"],
-                            env.controller.commanded_speed(env.t), info["reward_terms"]["speed"]))
-            return np.array(out)
-        finally:
-            env.close()
+        return _trot_steps(C.EnvConfig(target_speed=1.0, action_mode="foot"),
+                           C.RewardConfig(speed_at_nominal_stride=on),
+                           ("forward_speed_used", "forward_speed_paid", "speed_loop_correction", "command", "speed"))
 
     on = walk(True)
     used, paid, c, cmd, term = on.T
@@ -173,18 +163,8 @@ def test_speed_relative_reaches_the_env_step_and_is_checked():
         C.TrainConfig(buffer_between_stages="relabel", stage2=relative)
 
     def walk(on: bool):
-        env = CyberDogEnv(config=C.EnvConfig(action_mode="foot"), reward=C.RewardConfig(speed_relative=on))
-        try:
-            env.reset(seed=0)
-            out = []
-            for _ in range(60):
-                _, _, terminated, _, info = env.step(np.zeros(12))
-                assert not terminated
-                out.append((info["forward_speed_paid"], env.controller.commanded_speed(env.t),
-                            info["reward_terms"]["speed"], info["target_speed"]))
-            return np.array(out)
-        finally:
-            env.close()
+        return _trot_steps(C.EnvConfig(action_mode="foot"), C.RewardConfig(speed_relative=on),
+                           ("forward_speed_paid", "command", "speed", "target_speed"))
 
     on, off = walk(True), walk(False)
     np.testing.assert_allclose(on[:, [0, 1, 3]], off[:, [0, 1, 3]], rtol=0)  # the same walk: the term does not act
@@ -193,3 +173,20 @@ def test_speed_relative_reaches_the_env_step_and_is_checked():
     np.testing.assert_allclose(on[:, 2], ((on[:, 1] - on[:, 0]) / v_set) ** 2, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(off[:, 2], (off[:, 1] - off[:, 0]) ** 2, rtol=1e-9, atol=1e-15)
     assert (on[:, 1] < 0.5 * v_set).any()  # the ramp: r_v divides by the set speed, not the ramped command
+
+
+def _trot_steps(config: C.EnvConfig, reward: C.RewardConfig, columns: tuple[str, ...], steps: int = 60) -> np.ndarray:
+    """The trot (a zero foot action) walked `steps` agent steps from seed 0, no fall allowed: per step the `info`
+    entries named in `columns`, with "command" the ramped command and "speed" the unweighted r_v."""
+    env = CyberDogEnv(config=config, reward=reward)
+    try:
+        env.reset(seed=0)
+        out = []
+        for _ in range(steps):
+            _, _, terminated, _, info = env.step(np.zeros(12))
+            assert not terminated
+            row = {**info, "command": env.controller.commanded_speed(env.t), "speed": info["reward_terms"]["speed"]}
+            out.append([row[c] for c in columns])
+        return np.array(out, dtype=float)
+    finally:
+        env.close()
