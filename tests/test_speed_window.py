@@ -175,6 +175,34 @@ def test_speed_relative_reaches_the_env_step_and_is_checked():
     assert (on[:, 1] < 0.5 * v_set).any()  # the ramp: r_v divides by the set speed, not the ramped command
 
 
+def test_a_capped_speed_term_stops_growing_at_its_share_of_the_command():
+    """RewardConfig.speed_cap: the error counts up to cap·|v_cmd| after the deadband, so a walk far off the command
+    pays a bounded r_v per step; below the cap the term is the uncapped one."""
+    assert speed_term(1.0, 1.2, 0.02, cap=0.15) == speed_term(1.0, 1.2, 0.02)  # 0.176 beyond: under 0.18
+    assert speed_term(0.5, 1.2, 0.02, cap=0.15) == pytest.approx((0.15 * 1.2) ** 2, rel=1e-12)
+    assert speed_term(0.0, 1.2, 0.0, per_speed=1.2, cap=0.15) == pytest.approx(0.15 ** 2, rel=1e-12)
+    assert speed_term(2.0, 1.2, cap=0.15) == pytest.approx((0.15 * 1.2) ** 2, rel=1e-12)  # too fast: capped too
+    assert speed_term(0.0, 1.2, cap=0.0) == pytest.approx(1.44, rel=1e-12)  # 0: no cap, the paper's term
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="cap"):
+            speed_term(1.0, 1.2, cap=bad)
+        with pytest.raises(ValueError, match="speed_cap"):
+            C.RewardConfig(speed_cap=bad)
+
+
+def test_speed_cap_reaches_the_env_step():
+    """With reward.speed_cap the env's r_v is capped at the share of its ramped command, and nothing else moves."""
+    columns = ("forward_speed_paid", "command", "speed")
+    capped = _trot_steps(C.EnvConfig(action_mode="foot"), C.RewardConfig(speed_cap=0.1), columns)
+    free = _trot_steps(C.EnvConfig(action_mode="foot"), C.RewardConfig(), columns)
+    np.testing.assert_allclose(capped[:, :2], free[:, :2], rtol=0)  # the same walk
+    error = np.abs(capped[:, 1] - capped[:, 0])
+    np.testing.assert_allclose(capped[:, 2], np.minimum(error, 0.1 * np.abs(capped[:, 1])) ** 2, rtol=1e-9,
+                               atol=1e-15)
+    assert (error > 0.1 * np.abs(capped[:, 1])).any() and (error < 0.1 * np.abs(capped[:, 1])).any()
+    assert (capped[:, 2] < free[:, 2]).any()
+
+
 def _trot_steps(config: C.EnvConfig, reward: C.RewardConfig, columns: tuple[str, ...], steps: int = 60) -> np.ndarray:
     """The trot (a zero foot action) walked `steps` agent steps from seed 0, no fall allowed: per step the `info`
     entries named in `columns`, with "command" the ramped command and "speed" the unweighted r_v."""

@@ -58,6 +58,11 @@ class RewardConfig:
     # (±5 %): in m/s a 5 % error at 1.0 m/s is paid half what it is at 1.4 m/s, and an energy term pulls the
     # lowest command's walk slowest
     speed_relative: bool = False
+    # share of the command beyond which r_v stops growing: the error counts up to speed_cap·v_cmd (after the
+    # deadband). 0 = no cap, the paper's. The episode ends at a fall, so an unbounded r_v makes a fall the better
+    # end of a walk far off the command once A·r_v per step exceeds the keep-moving bonus D·Ts/Tf: capped, a
+    # walk with D·Ts/Tf > |A|·r_v(cap) + |E|·r_E always scores above a fall
+    speed_cap: float = 0.0
 
     @functools.cached_property
     def weights(self) -> dict[str, float]:
@@ -82,6 +87,8 @@ class RewardConfig:
                "True or False", self.speed_at_nominal_stride)
         _check(isinstance(self.speed_relative, bool), "RewardConfig.speed_relative", "True or False",
                self.speed_relative)
+        _check(0 <= self.speed_cap < 10 and math.isfinite(self.speed_cap), "RewardConfig.speed_cap",
+               "in [0, 10) (a share of the command; 0 = no cap, the paper's)", self.speed_cap)
 
 
 STAGE1_REWARD = RewardConfig(energy=0.0)  # paper Section 3: stage 1 learns speed and direction, E = 0

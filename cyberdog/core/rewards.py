@@ -17,7 +17,8 @@ from cyberdog.config import REWARD_TERM_NAMES, RewardConfig
 _TERM_NAME_SET = frozenset(REWARD_TERM_NAMES)
 
 
-def speed_term(v_x: float, v_target: float, deadband: float = 0.0, per_speed: float | None = None) -> float:
+def speed_term(v_x: float, v_target: float, deadband: float = 0.0, per_speed: float | None = None,
+               cap: float = 0.0) -> float:
     """r_v = (v_target − v_x)², (m/s)²: squared error of the forward body speed.
 
     The paper writes r_v = (v0 − v_x)² but calls v0 the measured and v_x the target speed; here v_x is the
@@ -26,12 +27,18 @@ def speed_term(v_x: float, v_target: float, deadband: float = 0.0, per_speed: fl
     deadband·|v_target| counts: r_v = max(0, |v_target − v_x| − deadband·|v_target|)². 0 is the paper's term.
     With `per_speed` (m/s, `RewardConfig.speed_relative`: the episode's set speed) the error is a share of it and
     r_v is unitless: r_v = (max(0, |v_target − v_x| − deadband·|v_target|) / per_speed)². None is the paper's.
+    With `cap` > 0 (a share of the command, `RewardConfig.speed_cap`) the error counts up to cap·|v_target|: r_v
+    stops growing there, so that a walk far off the command still scores above a fall. 0 is the paper's (no cap).
     """
     if not (0.0 <= deadband < 1.0):
         raise ValueError(f"deadband must be in [0, 1) (a share of the command), got {deadband!r}")
     if per_speed is not None and not (per_speed > 0 and math.isfinite(per_speed)):
         raise ValueError(f"per_speed must be > 0 m/s and finite (None: the error in m/s), got {per_speed!r}")
+    if not (0.0 <= cap and math.isfinite(cap)):
+        raise ValueError(f"cap must be >= 0 and finite (a share of the command; 0: no cap), got {cap!r}")
     error = max(0.0, abs(v_target - v_x) - deadband * abs(v_target))
+    if cap > 0:
+        error = min(error, cap * abs(v_target))
     return (error if per_speed is None else error / per_speed) ** 2
 
 
@@ -94,11 +101,13 @@ def energy_term(step_energy_J: float) -> float:
 
 def reward_terms(*, v_x: float, v_target: float, y: float, z: float, z_nominal: float,
                  sample_time: float, episode_time: float, step_energy_J: float,
-                 speed_deadband: float = 0.0, speed_per: float | None = None) -> dict[str, float]:
+                 speed_deadband: float = 0.0, speed_per: float | None = None,
+                 speed_cap: float = 0.0) -> dict[str, float]:
     """The five unweighted terms of Eq. (10), keyed by `REWARD_TERM_NAMES` (speed, y_offset, fuselage,
-    keep_moving, energy), in that order. `speed_deadband`, `speed_per`: see `speed_term`'s deadband, per_speed."""
+    keep_moving, energy), in that order. `speed_deadband`, `speed_per`, `speed_cap`: see `speed_term`'s deadband,
+    per_speed, cap."""
     return {  # in the order of REWARD_TERM_NAMES
-        "speed": float(speed_term(v_x, v_target, speed_deadband, speed_per)),
+        "speed": float(speed_term(v_x, v_target, speed_deadband, speed_per, speed_cap)),
         "y_offset": float(y_offset_term(y)),
         "fuselage": float(fuselage_term(z, z_nominal)),
         "keep_moving": float(keep_moving_term(sample_time, episode_time)),

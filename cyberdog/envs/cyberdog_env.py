@@ -102,7 +102,8 @@ class CyberDogEnv(gym.Env):
     `reward.speed_deadband`, only the error beyond that share of the command; with
     `reward.speed_at_nominal_stride`, on the speed the gait would walk at the stride its command asks for
     (`forward_speed_paid`: v · v_cmd / (v_cmd + the trot's speed-loop correction, `speed_loop_correction`)); with
-    `reward.speed_relative`, on the error as a share of the episode's set speed (`target_speed`).
+    `reward.speed_relative`, on the error as a share of the episode's set speed (`target_speed`); with
+    `reward.speed_cap`, the error counted only up to that share of the command.
 
     **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
     penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
@@ -327,7 +328,8 @@ class CyberDogEnv(gym.Env):
                                      episode_time=cfg.episode_time,
                                      step_energy_J=step_energy if step_electrical is None else step_electrical,
                                      speed_deadband=cfg.reward.speed_deadband,
-                                     speed_per=self.target_speed if cfg.reward.speed_relative else None)
+                                     speed_per=self.target_speed if cfg.reward.speed_relative else None,
+                                     speed_cap=cfg.reward.speed_cap)
         weighted = rewards.weighted_terms(terms, cfg.reward)
         reward = float(sum(weighted.values()))
         finite = math.isfinite(sum(s.q.tolist()) + sum(s.base_position.tolist()))  # a NaN or inf anywhere
