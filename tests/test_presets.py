@@ -347,6 +347,35 @@ def test_the_torque_speed_relative_continuation_changes_only_the_speed_scale_and
     assert reward.keep_moving / 400 - abs(reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2)
 
 
+def test_the_torque_speed_cap_candidate_keeps_the_band_phase_relative_and_caps_r_v_below_the_bonus():
+    """notebook/configs/torque_speed_cap.yaml: the recipe's main and speed phases as they are, torque_speed_band.yaml's
+    band phase with r_v as a share of the set speed at the same weight at 1.2 m/s, then three stage-2 phases with the
+    same r_v (relative, over a stride, no deadband, capped at 15 %) where a walk at the cap still nets 1.5-3 a step
+    above a fall: D/400 > |A|·cap² + |E|·12.4 J."""
+    shipped, band = _phases("torque.yaml"), _phases("notebook/configs/torque_speed_band.yaml")
+    mine = _phases("notebook/configs/torque_speed_cap.yaml")
+    assert list(mine) == ["main", "speed", "band", "energy", "energy2", "energy3"]
+    assert [p.start for p in mine.values()][3:] == [
+        "band/stage1_final.pt", "energy/stage2_final.pt", "energy2/stage2_final.pt"]
+    for name in ("main", "speed"):
+        assert C.changed_settings(mine[name].config, shipped[name].config) == {}, name
+    assert set(C.changed_settings(mine["band"].config, band["band"].config)) == {
+        "train.stage1.reward.speed", "train.stage1.reward.speed_relative"}
+    stage1 = mine["band"].config.train.stage1.reward
+    assert stage1.speed == pytest.approx(band["band"].config.train.stage1.reward.speed * 1.2 ** 2)
+    energies = []
+    for name in ("energy", "energy2", "energy3"):
+        stage2 = mine[name].config.train.stage2
+        r = stage2.reward
+        assert (r.speed_relative, r.speed_window, r.speed_deadband, r.speed_cap) == (True, 0.4, 0.0, 0.15), name
+        assert 1.5 < r.keep_moving / 400 - abs(r.speed) * r.speed_cap ** 2 - abs(r.energy) * 12.4 < 3.0, name
+        assert stage2.actor_lr == 3e-5 and mine[name].config.env.prior_weight == 0.0, name
+        energies.append(r.energy)
+    assert energies == [-0.3, -0.6, -1.2]
+    assert [mine[n].config.train.stage2.max_env_steps for n in ("energy", "energy2", "energy3")] == [
+        150_000, 50_000, 100_000]
+
+
 def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_speed_phase(tmp_path):
     """notebook/results/torque_stage1_remade/seed<N> (notebook/2026-12-02_torque_stage2.md) holds the `main` phase's
     final agent (critics included) of notebook/configs/torque_stage1.yaml: phases as the recipe's now, an agent after
