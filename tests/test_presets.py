@@ -76,8 +76,9 @@ def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_w
     assert [(p.name, p.start) for p in _phases("battery.yaml").values()] == [
         ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
-        ("main", None), ("speed", "main/stage1_final.pt"), ("energy", "speed/stage1_final.pt"),
-        ("energy2", "energy/stage2_final.pt")]
+        ("main", None), ("speed", "main/stage1_final.pt"), ("band", "speed/stage1_final.pt"),
+        ("energy", "band/stage1_final.pt"), ("energy2", "energy/stage2_final.pt"),
+        ("energy3", "energy2/stage2_final.pt")]
     assert C.load_preset(ROOT / "configs/battery.yaml").extract == {"replay_attempts": 16, "candidates": 2}
     assert not C.load_preset(ROOT / "configs/tiny.yaml").phased  # a plain two-stage run, as before phases
 

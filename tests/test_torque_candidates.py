@@ -32,20 +32,21 @@ def _phases(name: str) -> dict[str, C.Phase]:
                     "train.stage2.reward.speed_window", "train.stage2.reward.speed_deadband"}}),
 ])
 def test_a_torque_stage2_candidate_changes_only_what_it_says_and_keeps_stage_1(candidate, changed):
-    """The candidates of the torque recipe's stage 2 (notebook/configs/) resolve to configs/torque.yaml's phases but
-    for the settings their comments name; stage 1 (main, speed) is the recipe's, so a lineage whose stage 1 was
-    made by notebook/configs/torque_stage1.yaml continues into either; where D rises with E, a walk nets stage 1's
-    bonus per step for a stage-2 walk's 12.4 J of electrical energy a step (D/400 − |E|·12.4 ≈ 7.5)."""
-    shipped, mine = _phases("torque.yaml"), _phases(f"notebook/configs/{candidate}")
+    """The candidates of the torque recipe's stage 2 (notebook/configs/) resolve to the recipe's phases as they were
+    (torque_previous.yaml) but for the settings their comments name; stage 1 (main, speed) is the recipe's, so a
+    lineage whose stage 1 was made by notebook/configs/torque_stage1.yaml continues into either; where D rises with
+    E, a walk nets stage 1's bonus per step for a stage-2 walk's 12.4 J of electrical energy a step
+    (D/400 − |E|·12.4 ≈ 7.5)."""
+    previous, mine = _phases("notebook/configs/torque_previous.yaml"), _phases(f"notebook/configs/{candidate}")
     stage1 = _phases("notebook/configs/torque_stage1.yaml")
-    assert list(mine) == list(shipped) and list(stage1) == ["main", "speed"]
+    assert list(mine) == list(previous) and list(stage1) == ["main", "speed"]
     for name in ("main", "speed"):
-        assert mine[name].stage == stage1[name].stage == shipped[name].stage
-        assert C.changed_settings(mine[name].config, shipped[name].config) == {}
-        assert C.changed_settings(stage1[name].config, shipped[name].config) == {}
+        assert mine[name].stage == stage1[name].stage == previous[name].stage
+        assert C.changed_settings(mine[name].config, previous[name].config) == {}
+        assert C.changed_settings(stage1[name].config, previous[name].config) == {}
     for name, keys in changed.items():
-        assert mine[name].stage == shipped[name].stage == "2"
-        assert set(C.changed_settings(mine[name].config, shipped[name].config)) == keys, name
+        assert mine[name].stage == previous[name].stage == "2"
+        assert set(C.changed_settings(mine[name].config, previous[name].config)) == keys, name
         reward = mine[name].config.train.stage2.reward
         assert reward.keep_moving / 400 - abs(reward.energy) * 12.4 == pytest.approx(7.5, abs=0.2), name
 
@@ -55,22 +56,23 @@ def test_the_torque_speed_band_candidate_adds_a_band_phase_and_keeps_its_speed_f
     phases as they are, then a stage-1 band phase that pays r_v over a stride beyond 2 % of the command, the same
     speed form in both stage-2 phases, whose only other changes are the bonus raised with |E| (a walk nets stage 1's
     D/400 = 7.5 a step for 12.4 J a step), the critics' warm-up and a slower actor (3e-5)."""
-    shipped, mine = _phases("torque.yaml"), _phases("notebook/configs/torque_speed_band.yaml")
+    previous = _phases("notebook/configs/torque_previous.yaml")
+    mine = _phases("notebook/configs/torque_speed_band.yaml")
     assert list(mine) == ["main", "speed", "band", "energy", "energy2"]
     assert [(p.name, p.start) for p in mine.values()][2:] == [
         ("band", "speed/stage1_final.pt"), ("energy", "band/stage1_final.pt"), ("energy2", "energy/stage2_final.pt")]
     for name in ("main", "speed"):
-        assert C.changed_settings(mine[name].config, shipped[name].config) == {}, name
+        assert C.changed_settings(mine[name].config, previous[name].config) == {}, name
     band = mine["band"].config.train.stage1
     assert mine["band"].stage == "1" and mine["band"].config.env.prior_weight == 0.0
-    assert set(C.changed_settings(mine["band"].config, shipped["speed"].config)) == {
+    assert set(C.changed_settings(mine["band"].config, previous["speed"].config)) == {
         "train.stage1.reward.speed", "train.stage1.reward.speed_window", "train.stage1.reward.speed_deadband",
         "train.stage1.max_env_steps", "train.stage1.critic_warmup_updates"}  # its targets follow, as in main
     speed_form = {"train.stage2.reward.speed", "train.stage2.reward.speed_window", "train.stage2.reward.speed_deadband",
                   "train.stage2.reward.keep_moving"}
-    assert set(C.changed_settings(mine["energy"].config, shipped["energy"].config)) == speed_form | {
+    assert set(C.changed_settings(mine["energy"].config, previous["energy"].config)) == speed_form | {
         "train.stage2.critic_warmup_updates", "train.stage2.critic_warmup_targets", "train.stage2.actor_lr"}
-    assert set(C.changed_settings(mine["energy2"].config, shipped["energy2"].config)) == speed_form | {
+    assert set(C.changed_settings(mine["energy2"].config, previous["energy2"].config)) == speed_form | {
         "train.stage2.actor_lr"}
     for name in ("energy", "energy2"):
         stage2 = mine[name].config.train.stage2
@@ -103,13 +105,14 @@ def test_the_torque_speed_cap_candidate_keeps_the_band_phase_relative_and_caps_r
     band phase with r_v as a share of the set speed at the same weight at 1.2 m/s, then three stage-2 phases with the
     same r_v (relative, over a stride, no deadband, capped at 15 %) where a walk at the cap still nets 1.5-3 a step
     above a fall: D/400 > |A|·cap² + |E|·12.4 J."""
-    shipped, band = _phases("torque.yaml"), _phases("notebook/configs/torque_speed_band.yaml")
+    previous = _phases("notebook/configs/torque_previous.yaml")
+    band = _phases("notebook/configs/torque_speed_band.yaml")
     mine = _phases("notebook/configs/torque_speed_cap.yaml")
     assert list(mine) == ["main", "speed", "band", "energy", "energy2", "energy3"]
     assert [p.start for p in mine.values()][3:] == [
         "band/stage1_final.pt", "energy/stage2_final.pt", "energy2/stage2_final.pt"]
     for name in ("main", "speed"):
-        assert C.changed_settings(mine[name].config, shipped[name].config) == {}, name
+        assert C.changed_settings(mine[name].config, previous[name].config) == {}, name
     assert set(C.changed_settings(mine["band"].config, band["band"].config)) == {
         "train.stage1.reward.speed", "train.stage1.reward.speed_relative"}
     stage1 = mine["band"].config.train.stage1.reward
@@ -125,6 +128,16 @@ def test_the_torque_speed_cap_candidate_keeps_the_band_phase_relative_and_caps_r
     assert energies == [-0.3, -0.6, -1.2]
     assert [mine[n].config.train.stage2.max_env_steps for n in ("energy", "energy2", "energy3")] == [
         150_000, 50_000, 100_000]
+
+
+def test_the_recipe_is_the_speed_cap_candidate_as_it_was_tried():
+    """configs/torque.yaml is notebook/configs/torque_speed_cap.yaml promoted with nothing changed: the same phases
+    from the same starts with the same settings, so the candidate's seeds are the recipe's."""
+    recipe, candidate = _phases("torque.yaml"), _phases("notebook/configs/torque_speed_cap.yaml")
+    assert [(p.name, p.stage, p.start) for p in recipe.values()] == [
+        (p.name, p.stage, p.start) for p in candidate.values()]
+    for name in recipe:
+        assert C.changed_settings(recipe[name].config, candidate[name].config) == {}, name
 
 
 def test_the_torque_speed_cap_results_were_made_by_its_phases_as_they_resolve_now():
@@ -160,7 +173,7 @@ def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_sp
 
     folders = sorted((ROOT / "notebook" / "results" / "torque_stage1_remade").glob("seed*"))
     assert [f.name for f in folders] == ["seed0", "seed1", "seed2"]
-    recipe = _phases("torque.yaml")
+    recipe = _phases("notebook/configs/torque_previous.yaml")
     for folder in folders:
         phases, _ = C.read_phases(folder)
         assert [p.name for p in phases] == ["main", "speed"] and phases[0].config.train.seed == int(folder.name[4:])
