@@ -308,7 +308,7 @@ def test_the_torque_table_counts_the_walks_and_averages_each_stage_over_the_seed
     assert row["walks in the ±5 % band, no fall (both stages; ideal robot)"] == "5 of 6"
     assert row["electrical J/m, stage 1 (ideal robot)"].startswith("450 ± ")
     assert row["**electrical J/m, stage 2 (ideal robot)**"].startswith("**353 ± ")  # (360 + 400 + 300) / 3
-    assert row[TORQUE_SAVING_ROW.format(robot="ideal robot")].endswith("(lowest 10.0 %)**")  # seed 2 left out
+    assert row[TORQUE_SAVING_ROW.format(robot="ideal robot")].endswith("(lowest 10.0 %)** (2 of 3 seeds)")  # not 2
     assert row[TORQUE_SAVING_ROW.format(robot="ideal robot")].startswith("**15.0 % ± ")  # mean of 10 and 20
     assert row["electrical J/m, the trot controller (H = 0.10 m, ideal robot)"] == "356"
 
@@ -337,11 +337,19 @@ def test_the_torque_tables_fresh_rows_are_those_seeds_check_as_the_table_gives_i
     saving_row = TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS)
     assert row[saving_row] == row["**stage 2's saving against stage 1, electrical per metre (ideal robot)**"]
     assert saving_row in tables["torque_headline"]
+    def counted(speed: float) -> int:
+        return sum(r["both_walk"] for r in check["reductions"]
+                   if r["robot"] == "ideal" and r["speed_command_mps"] == speed)
+
     # seed 6's stage 2 off the band at 1.4 m/s on the ideal robot: its saving there is not counted
+    before = counted(1.4)
     for r in check["reductions"]:
         if r["label"] == "seed6" and r["robot"] == "ideal" and r["speed_command_mps"] == 1.4:
             r["both_walk"] = False
+    assert counted(1.4) == before - 1
     (tmp_path / "torque_check_fresh.json").write_text(json.dumps(check))
     row = {line.split("|")[1].strip(): line.split("|")[2:5]
            for line in make_tables(tmp_path)["torque"].splitlines()[2:]}
-    assert row[saving_row][2].strip().endswith("(4 of 5 seeds)") and "seeds)" not in row[saving_row][0]
+    assert row[saving_row][2].strip().endswith(f"({counted(1.4)} of 5 seeds)")
+    for cell, speed in zip(row[saving_row], (1.0, 1.2, 1.4)):
+        assert ("seeds)" in cell) == (counted(speed) < 5), speed

@@ -55,12 +55,23 @@ def _savings(check: dict, robot: str, speed: float) -> list[float]:
             if r["robot"] == robot and r["speed_command_mps"] == speed and r["both_walk"]]
 
 
+def _saving_cells(check: dict, robot: str, speeds: list[float], checked: int) -> list[str]:
+    """Per speed, stage 2's saving over the seeds whose two stages walk in the band (mean ± 95 % CI, the lowest
+    seed's), saying over how many seeds where fewer than the `checked` ones count."""
+    cells = []
+    for v in speeds:
+        saving = _savings(check, robot, v)
+        fewer = f" ({len(saving)} of {checked} seeds)" if len(saving) < checked else ""
+        cells.append(f"**{_cell(saving, '.1f', ' %', lowest=True)}**{fewer}")
+    return cells
+
+
 def torque_markdown(check: dict, fresh: dict | None = None) -> str:
     """The torque recipe's table from a policy check (`evaluate.py check ... --trot`'s policy_check.json): how many
     of its walks keep the band, each stage's electrical energy per metre (mean ± 95 % CI over the seeds), stage 2's
     saving against stage 1 per metre (and the lowest seed's), and the trot's cost; with `fresh` (the same check of
     seeds the recipe was never tuned on), their band count and their saving on the ideal robot, named by their
-    seeds, where a saving counted over fewer seeds than were checked says over how many."""
+    seeds; a saving counted over fewer seeds than were checked (a stage off the band) says over how many."""
     walks = _policy_walks(check)
     trot = {(w["robot"], w["speed_command_mps"]): w for w in check["walks"] if w["label"] == "trot"}
     speeds = sorted({w["speed_command_mps"] for w in walks})
@@ -85,15 +96,10 @@ def torque_markdown(check: dict, fresh: dict | None = None) -> str:
             cells = [_cell(x, ".0f") for x in values]
             lines.append(line(f"**{label}**", [f"**{c}**" for c in cells]) if stage == 2 else line(label, cells))
         lines.append(line(TORQUE_SAVING_ROW.format(robot=where),
-                          [f"**{_cell(_savings(check, robot, v), '.1f', ' %', lowest=True)}**" for v in speeds]))
+                          _saving_cells(check, robot, speeds, len(_seeds(walks)))))
         if robot == "ideal" and fresh is not None:
-            checked = len(fresh_seeds)
-            cells = []
-            for v in speeds:
-                saving = _savings(fresh, "ideal", v)
-                fewer = f" ({len(saving)} of {checked} seeds)" if len(saving) < checked else ""
-                cells.append(f"**{_cell(saving, '.1f', ' %', lowest=True)}**{fewer}")
-            lines.append(line(TORQUE_FRESH_SAVING_ROW.format(seeds=seeds_named(fresh_seeds)), cells))
+            lines.append(line(TORQUE_FRESH_SAVING_ROW.format(seeds=seeds_named(fresh_seeds)),
+                              _saving_cells(fresh, "ideal", speeds, len(fresh_seeds))))
         if any((robot, v) in trot for v in speeds):
             lines.append(line(f"electrical J/m, the trot controller (H = 0.10 m, {where})",
                               [number(trot[robot, v]["electrical_per_metre_J"], ".0f") if (robot, v) in trot
