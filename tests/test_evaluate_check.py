@@ -110,23 +110,23 @@ def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
 
 
 def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tmp_path):
-    """configs/torque.yaml's seed folder: main (stage 1), speed (stage 1), energy and energy2 (stage 2): the check
-    walks speed's stage-1 actor and energy2's stage-2 actor, labelled by the seed folder; one whose last stage-2
-    phase has not finished is refused (not walked as stage 1 alone); a phase of both stages gives both."""
+    """configs/torque.yaml's seed folder: main, speed, band (stage 1), energy, energy2, energy3 (stage 2): the
+    check walks band's stage-1 actor and energy3's stage-2 actor, labelled by the seed folder; one whose last
+    stage-2 phase has not finished is refused (not walked as stage 1 alone); a phase of both stages gives both."""
     from cyberdog import config as C
     from cyberdog.evaluation.check import run_actors
     from cyberdog.evaluation.cli import UsageError
 
     seed = tmp_path / "seed3"
     C.write_phases(seed, C.load_preset(Path(evaluate.__file__).parent / "configs" / "torque.yaml"), 3)
-    for phase, stage in (("main", 1), ("speed", 1), ("energy", 2), ("energy2", 2)):
+    for phase, stage in (("main", 1), ("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2)):
         (seed / phase).mkdir()
         (seed / phase / f"stage{stage}_final_actor.pt").write_bytes(b"")
-    assert run_actors([seed], "final") == {"seed3": {1: seed / "speed" / "stage1_final_actor.pt",
-                                                     2: seed / "energy2" / "stage2_final_actor.pt"}}
+    assert run_actors([seed], "final") == {"seed3": {1: seed / "band" / "stage1_final_actor.pt",
+                                                     2: seed / "energy3" / "stage2_final_actor.pt"}}
     # its last stage-2 phase interrupted: refused, not walked as stage 1 alone
-    (seed / "energy2" / "stage2_final_actor.pt").unlink()
-    with pytest.raises(UsageError, match="phase energy2 .stage 2. has no stage2_final_actor.pt"):
+    (seed / "energy3" / "stage2_final_actor.pt").unlink()
+    with pytest.raises(UsageError, match="phase energy3 .stage 2. has no stage2_final_actor.pt"):
         run_actors([seed], "final")
     one = tmp_path / "seed4"  # configs/table5.yaml: one phase that trains both stages
     C.write_phases(one, C.load_preset(Path(evaluate.__file__).parent / "configs" / "table5.yaml"), 4)
