@@ -353,3 +353,26 @@ def test_the_torque_tables_fresh_rows_are_those_seeds_check_as_the_table_gives_i
     assert row[saving_row][2].strip().endswith(f"({counted(1.4)} of 5 seeds)")
     for cell, speed in zip(row[saving_row], (1.0, 1.2, 1.4)):
         assert ("seeds)" in cell) == (counted(speed) < 5), speed
+
+
+def test_the_torque_headline_names_the_fresh_seeds_checked_so_far(tmp_path):
+    """A check of two fresh seeds (5 and 6) gives headline rows named "seeds 5–6", equal to the full table's."""
+    import json
+    import shutil
+
+    from cyberdog.analysis.readme_tables import make_tables
+    from cyberdog.analysis.torque_table import TORQUE_FRESH_SAVING_ROW, TORQUE_FRESH_WALKS_ROW
+    source = ROOT / "results" / "figures_input"
+    for f in source.glob("*.json"):
+        shutil.copy(f, tmp_path / f.name)
+    check = json.loads((source / "torque_check.json").read_text())
+    relabel = {"seed0": "seed5", "seed1": "seed6", "trot": "trot"}
+    for key in ("walks", "reductions"):
+        check[key] = [dict(w, label=relabel[w["label"]]) for w in check[key] if w["label"] in relabel]
+    (tmp_path / "torque_check_fresh.json").write_text(json.dumps(check))
+    tables = make_tables(tmp_path)
+    rows = [TORQUE_FRESH_WALKS_ROW.format(seeds="seeds 5–6"), TORQUE_FRESH_SAVING_ROW.format(seeds="seeds 5–6")]
+    full = {line.split("|")[1].strip(): line for line in tables["torque"].splitlines()[2:]}
+    top = {line.split("|")[1].strip(): line for line in tables["torque_headline"].splitlines()[2:]}
+    for row in rows:
+        assert row in full and top[row] == full[row]

@@ -296,16 +296,21 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         matched = results / STIFFNESS_MATCHED_SOURCE
         tables["stiffness"] = stiffness_markdown(json.loads((results / STIFFNESS_SOURCE).read_text()),
                                                  matched=json.loads(matched.read_text()) if matched.is_file() else None)
+    headlines = dict(HEADLINES)
     if (results / TORQUE_CHECK_SOURCE).is_file():
         fresh_check = results / TORQUE_CHECK_FRESH_SOURCE
-        tables["torque"] = torque_markdown(json.loads((results / TORQUE_CHECK_SOURCE).read_text()),
-                                           json.loads(fresh_check.read_text()) if fresh_check.is_file() else None)
+        fresh_torque = json.loads(fresh_check.read_text()) if fresh_check.is_file() else None
+        tables["torque"] = torque_markdown(json.loads((results / TORQUE_CHECK_SOURCE).read_text()), fresh_torque)
+        if fresh_torque is not None:  # its rows are named by the seeds checked so far ("seeds 5–6")
+            named = seeds_named(w["label"] for w in fresh_torque["walks"] if w["label"] != "trot")
+            full, rows = headlines["torque_headline"]
+            headlines["torque_headline"] = (full, tuple(r.replace(FRESH_SEEDS, named) for r in rows))
     if (results / GAINS_SOURCE).is_file():
         stiffness = (json.loads((results / STIFFNESS_SOURCE).read_text())
                      if (results / STIFFNESS_SOURCE).is_file() else [])
         tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"],
                                          default_policy_walks=[w for w in stiffness if w["pd_scale"] == 1.0])
-    tables.update({name: headline(tables[full], rows) for name, (full, rows) in HEADLINES.items() if full in tables})
+    tables.update({name: headline(tables[full], rows) for name, (full, rows) in headlines.items() if full in tables})
     return tables
 
 
