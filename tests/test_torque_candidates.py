@@ -194,3 +194,19 @@ def test_the_remade_torque_stage1_agents_continue_a_candidates_lineage_at_its_sp
 def _with_seed(cfg: C.ExperimentConfig, seed: int) -> C.ExperimentConfig:
     """`cfg` with train.seed = `seed` (to compare two seeds' settings)."""
     return dataclasses.replace(cfg, train=dataclasses.replace(cfg.train, seed=seed))
+
+
+def test_the_capped_stage1_candidate_caps_only_the_recipes_two_stage1_phases_without_the_prior():
+    """notebook/configs/torque_capped_stage1.yaml: configs/torque.yaml with RewardConfig.speed_cap in `speed` and
+    `band` (the stage-1 phases without the prior), each low enough that a walk at the cap still nets the bonus:
+    D/400 > |A|·r_v(cap) at the fastest command (in m/s for `speed`, relative for `band`)."""
+    recipe, mine = _phases("torque.yaml"), _phases("notebook/configs/torque_capped_stage1.yaml")
+    assert [(p.name, p.stage, p.start) for p in mine.values()] == [(p.name, p.stage, p.start) for p in recipe.values()]
+    for name in recipe:
+        changed = set(C.changed_settings(mine[name].config, recipe[name].config))
+        assert changed == ({"train.stage1.reward.speed_cap"} if name in ("speed", "band") else set()), name
+    fastest = max(recipe["main"].config.env.target_speed_range)
+    for name in ("speed", "band"):
+        r = mine[name].config.train.stage1.reward
+        worst = abs(r.speed) * (r.speed_cap * (1.0 if r.speed_relative else fastest)) ** 2
+        assert 0 < r.speed_cap and worst < r.keep_moving / 400, name
