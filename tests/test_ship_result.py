@@ -5,6 +5,8 @@ import importlib.util
 import json
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 spec = importlib.util.spec_from_file_location("ship_result", ROOT / "tools/ship_result.py")
 ship_result = importlib.util.module_from_spec(spec)
@@ -65,6 +67,7 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
     for phase, stage in phases:
         run = seed / phase
         run.mkdir()
+        (run / f"stage{stage}_final.pt").write_bytes(phase.encode())  # the final agent: the phase is done
         (run / f"stage{stage}_final_actor.pt").write_bytes(phase.encode())
         (run / "config.yaml").write_text(yaml.safe_dump({"train": {"seed": 7}, "phase": phase}))
         rows = [{**r, "fell": "0"} for r in episode_rows([1000.0 + 10.0 * i for i in range(5)], stage=stage)]
@@ -111,3 +114,41 @@ def test_a_run_continued_from_a_shipped_actor_records_where_that_actor_is(tmp_pa
     meta = json.loads(Path("results/policy/seed3/metadata.json").read_text())
     assert meta["init_from"] == "results/policy/seed3/band/stage2_actor.pt" and meta["seed"] == 3
     assert Path("results/policy/seed3/stage2_actor.pt").read_bytes() == b"gains" and start.read_bytes() == b"band"
+
+
+def test_a_phase_placed_from_another_folder_ships_without_a_log_and_is_named(tmp_path):
+    """A lineage continued from a kept `main` (its stage1_final.pt copied in, nothing else): the seed ships, the
+    placed phase is listed and has no log or wall time; a lineage missing a phase's final agent does not ship."""
+    import csv
+
+    import yaml
+
+    from cyberdog import config as C
+
+    seed = tmp_path / "seed8"
+    C.write_phases(seed, C.load_preset(ROOT / "configs" / "torque.yaml"), 8)
+    (seed / "main").mkdir(parents=True)
+    (seed / "main" / "stage1_final.pt").write_bytes(b"agent")
+    for phase, stage in (("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2)):
+        run = seed / phase
+        run.mkdir()
+        (run / f"stage{stage}_final.pt").write_bytes(phase.encode())
+        (run / f"stage{stage}_final_actor.pt").write_bytes(phase.encode())
+        (run / "config.yaml").write_text(yaml.safe_dump({"train": {"seed": 8}}))
+        rows = [{**r, "fell": "0"} for r in episode_rows([1000.0, 1010.0], stage=stage)]
+        with open(run / "metrics.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    (seed / "speed" / "stage1_final.pt").unlink()
+    with pytest.raises(SystemExit, match="speed/stage1_final.pt"):
+        ship_result.main([str(seed), "--out", str(tmp_path / "no"), "--all-phases"])
+    assert not (tmp_path / "no").exists()
+    (seed / "speed" / "stage1_final.pt").write_bytes(b"speed")
+    out = tmp_path / "shipped"
+    assert ship_result.main([str(seed), "--out", str(out), "--all-phases"]) == 0
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["placed_phases"] == ["main"] and meta["phases"]["main"] == {"stage": "1", "from": None, "placed": True}
+    assert not (out / "metrics_main.csv").exists() and (out / "metrics_speed.csv").is_file()
+    assert meta["wall_time_s"] == pytest.approx(sum(meta["phases"][p]["stage" + meta["phases"][p]["stage"]]
+                                                    ["wall_time_s"] for p in list(meta["phases"])[1:]))

@@ -197,10 +197,11 @@ def _with_seed(cfg: C.ExperimentConfig, seed: int) -> C.ExperimentConfig:
 
 
 def test_the_capped_stage1_candidate_caps_only_the_recipes_two_stage1_phases_without_the_prior():
-    """notebook/configs/torque_capped_stage1.yaml: configs/torque.yaml with RewardConfig.speed_cap in `speed` and
+    """notebook/configs/torque_capped_stage1.yaml: torque_speed_cap.yaml with RewardConfig.speed_cap in `speed` and
     `band` (the stage-1 phases without the prior), each low enough that a walk at the cap still nets the bonus:
     D/400 > |A|·r_v(cap) at the fastest command (in m/s for `speed`, relative for `band`)."""
-    recipe, mine = _phases("torque.yaml"), _phases("notebook/configs/torque_capped_stage1.yaml")
+    recipe = _phases("notebook/configs/torque_speed_cap.yaml")
+    mine = _phases("notebook/configs/torque_capped_stage1.yaml")
     assert [(p.name, p.stage, p.start) for p in mine.values()] == [(p.name, p.stage, p.start) for p in recipe.values()]
     for name in recipe:
         changed = set(C.changed_settings(mine[name].config, recipe[name].config))

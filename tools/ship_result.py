@@ -11,7 +11,9 @@ git commit of the code, the source run). Checkpoints with replay buffers are not
 
 A seed folder ships its last phase's run, or with --all-phases the recipe's two actors: stage<N>_actor.pt from
 the last phase that ends with stage N, config.yaml and metrics.csv of the last phase, recipe_phases.yaml (every
-phase's resolved settings), metrics_<phase>.csv of each phase and, in metadata.json, each phase's summary.
+phase's resolved settings), metrics_<phase>.csv of each phase and, in metadata.json, each phase's summary. A
+phase whose final agent was copied into the seed folder from another (a lineage continued from a kept `main`)
+has no log there: metadata.json lists it under placed_phases, and its wall time is not in the seed's.
 """
 from __future__ import annotations
 
@@ -125,16 +127,21 @@ def ship_lineage(args) -> int:
         sys.exit(f"{args.run_dir} is not a preset's seed folder (no phases.yaml): --all-phases needs one")
     phases = read_phases(args.run_dir)[0]
     runs = {p.name: args.run_dir / p.name for p in phases}
-    missing = [f"{p.name}/stage{p.last_stage}_final_actor.pt" for p in phases
-               if not (runs[p.name] / f"stage{p.last_stage}_final_actor.pt").is_file()]
+    shipped = {stage: next((p for p in reversed(phases) if p.last_stage == stage), None) for stage in (1, 2)}
+    missing = [p.final_agent for p in phases if not (args.run_dir / p.final_agent).is_file()]
+    missing += [f"{p.name}/stage{stage}_final_actor.pt" for stage, p in shipped.items()
+                if p is not None and not (runs[p.name] / f"stage{stage}_final_actor.pt").is_file()]
     if missing:
         sys.exit(f"{args.run_dir} is not a finished lineage: missing {missing}")
+    # a phase whose final agent was copied in from another folder (the lineage skips it) has no log of its own
+    placed = [p.name for p in phases if not (runs[p.name] / "metrics.csv").is_file()]
+    if phases[-1].name in placed:
+        sys.exit(f"{args.run_dir}: its last phase {phases[-1].name} has no metrics.csv (it was not trained here)")
     if args.out.exists() and not args.force:
         sys.exit(f"{args.out} exists; pass --force to replace it")
     args.out.mkdir(parents=True, exist_ok=True)
     actors = {}
-    for stage in (1, 2):
-        last = next((p for p in reversed(phases) if p.last_stage == stage), None)
+    for stage, last in shipped.items():
         if last is not None:
             shutil.copy2(runs[last.name] / f"stage{stage}_final_actor.pt", args.out / f"stage{stage}_actor.pt")
             actors[f"stage{stage}_actor.pt"] = f"{last.name}/stage{stage}_final_actor.pt"
@@ -145,6 +152,9 @@ def ship_lineage(args) -> int:
     shutil.copy2(args.run_dir / "phases.yaml", args.out / "recipe_phases.yaml")
     summaries = {}
     for p in phases:
+        if p.name in placed:
+            summaries[p.name] = {"stage": p.stage, "from": p.start, "placed": True}
+            continue
         shutil.copy2(runs[p.name] / "metrics.csv", args.out / f"metrics_{p.name}.csv")
         rows = _rows(runs[p.name])
         summary = {s: stage_summary(rows, s) for s in (1, 2)}
@@ -153,7 +163,7 @@ def ship_lineage(args) -> int:
     wall = sum(ph[k]["wall_time_s"] for ph in summaries.values() for k in ("stage1", "stage2") if k in ph)
     meta = {"seed": yaml.safe_load((final / "config.yaml").read_text())["train"]["seed"],
             "source_run": portable_path(args.run_dir), "git_commit": git_commit(), "actors": actors,
-            "phases": summaries, "wall_time_s": round(wall, 1), "note": args.note}
+            "phases": summaries, "wall_time_s": round(wall, 1), "placed_phases": placed, "note": args.note}
     return write_metadata(args.out, meta)
 
 
