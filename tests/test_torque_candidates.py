@@ -211,3 +211,22 @@ def test_the_capped_stage1_candidate_caps_only_the_recipes_two_stage1_phases_wit
         r = mine[name].config.train.stage1.reward
         worst = abs(r.speed) * (r.speed_cap * (1.0 if r.speed_relative else fastest)) ** 2
         assert 0 < r.speed_cap and worst < r.keep_moving / 400, name
+
+
+def test_the_capped_stage1_results_were_made_by_its_phases_and_their_checks_hold_every_seed():
+    """notebook/results/torque_capped_stage1/seed<N>/recipe_phases.yaml records the phases its two actors came from:
+    the candidate's as it resolves today, but for the seed; each seed has a check of its actors."""
+    import json
+
+    recipe = C.load_preset(NOTEBOOK / "torque_capped_stage1.yaml").phases
+    kept = ROOT / "notebook" / "results" / "torque_capped_stage1"
+    folders = sorted(kept.glob("seed*"))
+    assert folders
+    for folder in folders:
+        phases = C.read_phases(folder / "recipe_phases.yaml")[0]
+        assert [(p.name, p.stage, p.start) for p in phases] == [(p.name, p.stage, p.start) for p in recipe]
+        for made, now in zip(phases, recipe):
+            assert set(C.changed_settings(made.config, now.config)) <= {"train.seed"}, (folder.name, made.name)
+        assert (folder / "stage1_actor.pt").is_file() and (folder / "stage2_actor.pt").is_file()
+    labels = {w["label"] for f in kept.glob("policy_check*.json") for w in json.loads(f.read_text())["walks"]}
+    assert {f.name for f in folders} <= labels
