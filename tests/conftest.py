@@ -29,6 +29,15 @@ def tiny(*sets) -> C.ExperimentConfig:
     return C.override(C.load(C.ExperimentConfig, TINY), flat)
 
 
+def assert_made_by(phases_file: Path, recipe: list) -> None:
+    """The phases recorded in `phases_file` (a lineage's phases.yaml, or a shipped recipe_phases.yaml) are
+    `recipe`'s (a preset's resolved phases) in order, from the same starts, with the same settings but the seed."""
+    made = C.read_phases(phases_file)[0]
+    assert [(p.name, p.stage, p.start) for p in made] == [(p.name, p.stage, p.start) for p in recipe]
+    for mine, now in zip(made, recipe):
+        assert set(C.changed_settings(mine.config, now.config)) <= {"train.seed"}, (str(phases_file), mine.name)
+
+
 def metrics_rows(run_dir: Path) -> list[dict]:
     """A run's metrics.csv rows (the package's one reader, `cyberdog.metrics_csv`) without the timing columns,
     which differ between identical reruns."""

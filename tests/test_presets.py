@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from cyberdog import config as C
+from conftest import assert_made_by
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOK = ROOT / "notebook" / "configs"
@@ -64,10 +65,7 @@ def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resol
     shipped = sorted((ROOT / "results" / "torque" / "policy").glob("seed*"))
     assert shipped
     for folder in shipped:
-        phases = C.read_phases(folder / "recipe_phases.yaml")[0]
-        assert [(p.name, p.stage, p.start) for p in phases] == [(p.name, p.stage, p.start) for p in recipe]
-        for made, now in zip(phases, recipe):
-            assert set(C.changed_settings(made.config, now.config)) <= {"train.seed"}, (folder.name, made.name)
+        assert_made_by(folder / "recipe_phases.yaml", recipe)
 
 
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from cyberdog import config as C
+from conftest import assert_made_by
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOK = ROOT / "notebook" / "configs"
@@ -149,10 +150,7 @@ def test_the_torque_speed_cap_results_were_made_by_its_phases_as_they_resolve_no
     folders = sorted((ROOT / "notebook" / "results" / "torque_speed_cap").glob("seed*"))
     assert [f.name for f in folders] == ["seed0", "seed1", "seed2", "seed3", "seed4"]
     for folder in folders:
-        phases = C.read_phases(folder / "phases.yaml")[0]
-        assert [(p.name, p.stage, p.start) for p in phases] == [(p.name, p.stage, p.start) for p in recipe]
-        for made, now in zip(phases, recipe):
-            assert set(C.changed_settings(made.config, now.config)) <= {"train.seed"}, (folder.name, made.name)
+        assert_made_by(folder / "phases.yaml", recipe)
         assert (folder / "stage1_actor.pt").is_file() and (folder / "stage2_actor.pt").is_file()
     labels = set()
     for name in ("policy_check.json", "policy_check_seeds3-4.json"):
@@ -223,10 +221,7 @@ def test_the_capped_stage1_results_were_made_by_its_phases_and_their_checks_hold
     folders = sorted(kept.glob("seed*"))
     assert folders
     for folder in folders:
-        phases = C.read_phases(folder / "recipe_phases.yaml")[0]
-        assert [(p.name, p.stage, p.start) for p in phases] == [(p.name, p.stage, p.start) for p in recipe]
-        for made, now in zip(phases, recipe):
-            assert set(C.changed_settings(made.config, now.config)) <= {"train.seed"}, (folder.name, made.name)
+        assert_made_by(folder / "recipe_phases.yaml", recipe)
         assert (folder / "stage1_actor.pt").is_file() and (folder / "stage2_actor.pt").is_file()
     labels = {w["label"] for f in kept.glob("policy_check*.json") for w in json.loads(f.read_text())["walks"]}
     assert {f.name for f in folders} <= labels
