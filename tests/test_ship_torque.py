@@ -1,0 +1,87 @@
+"""tools/ship_torque.py: the torque recipe's re-make runs its steps in order and ships only what they produced."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("ship_torque", ROOT / "tools/ship_torque.py")
+ship_torque = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(ship_torque)
+
+
+def after(cmd: list, flag: str) -> list[str]:
+    """The arguments that follow `flag` up to the next option."""
+    i = cmd.index(flag) + 1
+    out = []
+    while i < len(cmd) and not str(cmd[i]).startswith("--"):
+        out.append(str(cmd[i]))
+        i += 1
+    return out
+
+
+@pytest.fixture
+def fake_steps(monkeypatch):
+    """Each step records its command and writes the file the real one would, as far as the re-make reads it."""
+    calls = []
+
+    def step(cmd):
+        cmd = [str(c) for c in cmd]
+        calls.append(cmd)
+        if "evaluate.py" in cmd:
+            out = Path(after(cmd, "--out")[0])
+            out.mkdir(parents=True, exist_ok=True)
+            name = {"check": "policy_check.json", "compare": "comparison.json", "prototype": "prototype.json"}
+            (out / name[cmd[2]]).write_text(json.dumps({"step": cmd[2]}))
+
+    def extract(cmd, cwd=None):  # seed 2's policy has no cycle in the band: no path, a non-zero exit
+        cmd = [str(c) for c in cmd]
+        calls.append(cmd)
+        learned = Path(after(cmd, "--out")[0]) / "learned"
+        learned.mkdir(parents=True)
+        for seed in (0, 10):
+            (learned / f"seed{seed}.json").write_text("{}")
+            (learned / f"seed{seed}_cycles.csv").write_text("")
+        return subprocess.CompletedProcess(cmd, 1)
+
+    monkeypatch.setattr(ship_torque, "run", step)
+    monkeypatch.setattr(ship_torque.subprocess, "run", extract)
+    return calls
+
+
+def test_the_remake_ships_each_seed_and_only_the_paths_the_extraction_found(tmp_path, fake_steps):
+    runs, results = tmp_path / "runs", tmp_path / "results"
+    for name in ("seed10", "seed2", "seed0", "notes"):
+        (runs / name).mkdir(parents=True)
+    old_paths = results / "torque" / "paths"
+    old_paths.mkdir(parents=True)
+    (old_paths / "seed2.json").write_text("{}")  # shipped before: must not outlive a re-make without it
+    (results / "figures_input").mkdir()
+
+    assert ship_torque.main([str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
+
+    steps = [c[1] if c[1].startswith("tools") else c[2] for c in fake_steps]
+    assert steps == ["tools/ship_result.py"] * 3 + ["check", "extract", "compare", "prototype"]
+    assert [Path(c[2]).name for c in fake_steps[:3]] == ["seed0", "seed2", "seed10"]  # by seed, not by name
+    check = fake_steps[3]
+    assert [Path(r).name for r in after(check, "--runs")] == ["seed0", "seed2", "seed10"]
+    assert after(check, "--robots") == ["ideal", "hardware:0", "hardware:1"]
+    assert sorted(p.name for p in old_paths.iterdir()) == ["seed0.json", "seed10.json"]
+    prototype = fake_steps[-1]
+    assert [Path(a).parent.name for a in after(prototype, "--closed-loop")] == ["seed0", "seed10"]
+    for name, step in [("torque_check.json", "check"), ("comparison_torque.json", "compare"),
+                       ("prototype_torque.json", "prototype")]:
+        assert json.loads((results / "figures_input" / name).read_text()) == {"step": step}
+
+
+def test_the_remake_refuses_a_folder_without_seeds_and_work_inside_the_runs(tmp_path, fake_steps):
+    (tmp_path / "runs" / "notes").mkdir(parents=True)
+    with pytest.raises(SystemExit, match="no seed<N> folders"):
+        ship_torque.main([str(tmp_path / "runs"), "--work", str(tmp_path / "work")])
+    with pytest.raises(SystemExit, match="outside the run folder"):
+        ship_torque.main([str(tmp_path / "runs"), "--work", str(tmp_path / "runs" / "ship")])
+    assert fake_steps == []

@@ -1,0 +1,122 @@
+#!/usr/bin/env python
+"""Re-make everything results/ ships for the torque recipe from its trained seeds, in one command.
+
+    python train.py --config configs/torque.yaml --seeds 0-4 --run-dir runs/torque
+    python tools/ship_torque.py runs/torque --work runs/torque_ship --workers 2
+
+In order, each step an existing command (printed before it runs):
+1. each seed folder's actors, logs and phase settings into results/torque/policy/seed<N>/
+   (tools/ship_result.py --all-phases);
+2. the walk check of every shipped actor, the policy alone for 10 s on the ideal robot and hardware-like draws 0
+   and 1, with the trot controller's cost beside it (evaluate.py check → figures_input/torque_check.json);
+3. the paper's extraction of each seed's measured foot path (evaluate.py extract → results/torque/paths/); a seed
+   whose stage-2 policy has no cycle within the band has no path, and is named;
+4. Table 5's torque rows for those paths (evaluate.py compare → figures_input/comparison_torque.json) and the
+   prototype's protocol for the paths and, closed loop, their policies (evaluate.py prototype →
+   figures_input/prototype_torque.json);
+5. the README's and docs/results.md's tables (tools/make_readme_tables.py --write).
+
+Each evaluate.py step writes its own folder under --work (refused if it holds results, unless --force); results/
+is written only from a step that succeeded. ~1 h on 2 workers for five seeds.
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+SEED_FOLDER = re.compile(r"seed(\d+)$")
+
+
+def run(cmd: list[str]) -> None:
+    """Run one step from the repository root, stopping the whole re-make at the first that fails."""
+    shown = " ".join(str(c) for c in cmd)
+    print(f"\n$ {shown}", flush=True)
+    t0 = time.monotonic()
+    done = subprocess.run([str(c) for c in cmd], cwd=REPO)
+    if done.returncode != 0:
+        sys.exit(f"failed (exit {done.returncode}): {shown}")
+    print(f"  ({(time.monotonic() - t0) / 60:.1f} min)", flush=True)
+
+
+def seed_folders(runs: Path) -> list[Path]:
+    folders = sorted((p for p in runs.iterdir() if p.is_dir() and SEED_FOLDER.match(p.name)),
+                     key=lambda p: int(SEED_FOLDER.match(p.name).group(1)))
+    if not folders:
+        sys.exit(f"{runs}: no seed<N> folders (train.py --config configs/torque.yaml --seeds ... --run-dir {runs})")
+    return folders
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("runs", type=Path, help="the recipe's run folder (train.py --run-dir), holding seed<N>/")
+    p.add_argument("--work", type=Path, required=True,
+                   help="folder for the evaluate.py outputs (check/, paths/, compare/, prototype/)")
+    p.add_argument("--results", type=Path, default=REPO / "results",
+                   help="the results folder to write torque/ and figures_input/ into (default: the repository's)")
+    p.add_argument("--workers", type=int, default=2, help="walk processes at once (default 2)")
+    p.add_argument("--force", action="store_true", help="replace earlier outputs under --work")
+    args = p.parse_args(argv)
+    runs, work, results = args.runs.resolve(), args.work.resolve(), args.results.resolve()
+    if not runs.is_dir():
+        sys.exit(f"{args.runs}: no such folder")
+    if work == runs or runs in work.parents:
+        sys.exit("--work must be outside the run folder (its seed<N> folders are the inputs)")
+    py, force = sys.executable, ["--force"] if args.force else []
+    workers = ["--workers", str(args.workers)]
+    policy_root, paths_root = results / "torque" / "policy", results / "torque" / "paths"
+    figures = results / "figures_input"
+
+    # 1. the actors: a shipped seed is replaced only by its own re-made lineage
+    shipped = []
+    for folder in seed_folders(runs):
+        out = policy_root / folder.name
+        run([py, "tools/ship_result.py", folder, "--all-phases", "--out", out, "--force"])
+        shipped.append(out)
+
+    # 2. do they walk, alone, in the band (and what the trot costs at the same speeds)
+    run([py, "evaluate.py", "check", "--runs", *shipped, "--robots", "ideal", "hardware:0", "hardware:1", "--trot",
+         "--out", work / "check", *workers, *force])
+    shutil.copyfile(work / "check" / "policy_check.json", figures / "torque_check.json")
+
+    # 3. the paper's extraction; --workers > 1 keeps going past a seed without a cycle in the band
+    extract = [py, "evaluate.py", "extract", "--sweep", policy_root, "--out", work / "paths",
+               "--workers", str(max(2, args.workers)), *force]
+    print(f"\n$ {' '.join(str(c) for c in extract)}", flush=True)
+    failed = subprocess.run([str(c) for c in extract], cwd=REPO).returncode != 0
+    paths = sorted((work / "paths" / "learned").glob("seed*.json"))
+    if not paths:
+        sys.exit("the extraction found no path in the band for any seed")
+    missing = sorted({f.name for f in shipped} - {q.stem for q in paths})
+    if failed or missing:
+        print(f"  no path (no cycle in the band): {', '.join(missing) or 'see the log above'}", flush=True)
+    if paths_root.exists():
+        shutil.rmtree(paths_root)  # a seed without a path now must not keep the old one
+    paths_root.mkdir(parents=True)
+    for q in paths:
+        shutil.copyfile(q, paths_root / q.name)
+
+    # 4. Table 5's torque rows and the prototype's protocol, for the seeds with a path
+    run([py, "evaluate.py", "compare", "--learned", paths_root, "--out", work / "compare", *workers, *force])
+    shutil.copyfile(work / "compare" / "comparison.json", figures / "comparison_torque.json")
+    actors = [policy_root / q.stem / "stage2_actor.pt" for q in paths]
+    run([py, "evaluate.py", "prototype", "--learned", paths_root, "--closed-loop", *actors,
+         "--no-prototype-reference", "--out", work / "prototype", *workers, *force])
+    shutil.copyfile(work / "prototype" / "prototype.json", figures / "prototype_torque.json")
+
+    # 5. the tables
+    if results == (REPO / "results").resolve():
+        run([py, "tools/make_readme_tables.py", "--write"])
+    print(f"\nshipped: {policy_root}, {paths_root} ({len(paths)} paths), "
+          f"{figures}/torque_check.json, comparison_torque.json, prototype_torque.json")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
