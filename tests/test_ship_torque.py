@@ -57,6 +57,8 @@ def test_the_remake_ships_each_seed_and_only_the_paths_the_extraction_found(tmp_
     runs, results = tmp_path / "runs", tmp_path / "results"
     for name in ("seed10", "seed2", "seed0", "notes"):
         (runs / name).mkdir(parents=True)
+    for name in ("metadata.json", "recipe_phases.yaml", "stage2_actor.pt"):  # seed 2 was shipped before: kept
+        (runs / "seed2" / name).write_text("seed 2")
     old_paths = results / "torque" / "paths"
     old_paths.mkdir(parents=True)
     (old_paths / "seed2.json").write_text("{}")  # shipped before: must not outlive a re-make without it
@@ -65,9 +67,10 @@ def test_the_remake_ships_each_seed_and_only_the_paths_the_extraction_found(tmp_
     assert ship_torque.main([str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
 
     steps = [c[1] if c[1].startswith("tools") else c[2] for c in fake_steps]
-    assert steps == ["tools/ship_result.py"] * 3 + ["check", "extract", "compare", "prototype"]
-    assert [Path(c[2]).name for c in fake_steps[:3]] == ["seed0", "seed2", "seed10"]  # by seed, not by name
-    check = fake_steps[3]
+    assert steps == ["tools/ship_result.py"] * 2 + ["check", "extract", "compare", "prototype"]
+    assert [Path(c[2]).name for c in fake_steps[:2]] == ["seed0", "seed10"]  # by seed, not by name
+    assert (results / "torque" / "policy" / "seed2" / "stage2_actor.pt").read_text() == "seed 2"
+    check = fake_steps[2]
     assert [Path(r).name for r in after(check, "--runs")] == ["seed0", "seed2", "seed10"]
     assert after(check, "--robots") == ["ideal", "hardware:0", "hardware:1"]
     assert sorted(p.name for p in old_paths.iterdir()) == ["seed0.json", "seed10.json"]

@@ -6,7 +6,7 @@
 
 In order, each step an existing command (printed before it runs):
 1. each seed folder's actors, logs and phase settings into results/torque/policy/seed<N>/
-   (tools/ship_result.py --all-phases);
+   (tools/ship_result.py --all-phases; a seed folder it already wrote, a kept result, is copied as it is);
 2. the walk check of every shipped actor, the policy alone for 10 s on the ideal robot and hardware-like draws 0
    and 1, with the trot controller's cost beside it (evaluate.py check → figures_input/torque_check.json);
 3. the paper's extraction of each seed's measured foot path (evaluate.py extract → results/torque/paths/); a seed
@@ -52,10 +52,17 @@ def seed_folders(runs: Path) -> list[Path]:
     return folders
 
 
+def is_shipped(folder: Path) -> bool:
+    """A folder tools/ship_result.py --all-phases wrote (actors, logs, metadata.json), not a lineage to ship."""
+    return (folder / "metadata.json").is_file() and (folder / "recipe_phases.yaml").is_file() \
+        and not (folder / "phases.yaml").is_file()
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("runs", type=Path, help="the recipe's run folder (train.py --run-dir), holding seed<N>/")
+    p.add_argument("runs", type=Path, help="the recipe's run folder (train.py --run-dir), holding seed<N>/; a seed "
+                   "folder that tools/ship_result.py --all-phases already wrote is copied as it is")
     p.add_argument("--work", type=Path, required=True,
                    help="folder for the evaluate.py outputs (check/, paths/, compare/, prototype/)")
     p.add_argument("--results", type=Path, default=REPO / "results",
@@ -77,7 +84,13 @@ def main(argv: list[str] | None = None) -> int:
     shipped = []
     for folder in seed_folders(runs):
         out = policy_root / folder.name
-        run([py, "tools/ship_result.py", folder, "--all-phases", "--out", out, "--force"])
+        if is_shipped(folder):  # shipped elsewhere before (a kept result): copied as it is
+            print(f"\n{folder} is a shipped folder: copied to {out}", flush=True)
+            if out.resolve() != folder:
+                shutil.rmtree(out, ignore_errors=True)
+                shutil.copytree(folder, out)
+        else:
+            run([py, "tools/ship_result.py", folder, "--all-phases", "--out", out, "--force"])
         shipped.append(out)
 
     # 2. do they walk, alone, in the band (and what the trot costs at the same speeds)
