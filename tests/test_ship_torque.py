@@ -25,9 +25,10 @@ def after(cmd: list, flag: str) -> list[str]:
 
 
 @pytest.fixture
-def fake_steps(monkeypatch):
+def fake_steps(monkeypatch, tmp_path):
     """Each step records its command and writes the file the real one would, as far as the re-make reads it."""
     calls = []
+    monkeypatch.chdir(tmp_path)  # the re-make moves to the repository: back here after each test
 
     def step(cmd):
         cmd = [str(c) for c in cmd]
@@ -46,6 +47,7 @@ def fake_steps(monkeypatch):
         for seed in (0, 10):
             (learned / f"seed{seed}.json").write_text("{}")
             (learned / f"seed{seed}_cycles.csv").write_text("")
+            (learned / f"seed{seed}_cycles.json").write_text("{}")  # every cycle: not a path
         return subprocess.CompletedProcess(cmd, 1)
 
     monkeypatch.setattr(ship_torque, "run", step)

@@ -131,10 +131,10 @@ def test_the_torque_speed_cap_candidate_keeps_the_band_phase_relative_and_caps_r
         150_000, 50_000, 100_000]
 
 
-def test_the_recipe_is_the_speed_cap_candidate_as_it_was_tried():
-    """configs/torque.yaml is notebook/configs/torque_speed_cap.yaml promoted with nothing changed: the same phases
-    from the same starts with the same settings, so the candidate's seeds are the recipe's."""
-    recipe, candidate = _phases("torque.yaml"), _phases("notebook/configs/torque_speed_cap.yaml")
+def test_the_recipe_is_the_capped_stage1_candidate_as_it_was_tried():
+    """configs/torque.yaml is notebook/configs/torque_capped_stage1.yaml promoted with nothing changed: the same
+    phases from the same starts with the same settings, so the candidate's seeds are the recipe's."""
+    recipe, candidate = _phases("torque.yaml"), _phases("notebook/configs/torque_capped_stage1.yaml")
     assert [(p.name, p.stage, p.start) for p in recipe.values()] == [
         (p.name, p.stage, p.start) for p in candidate.values()]
     for name in recipe:

@@ -22,6 +22,7 @@ is written only from a step that succeeded. ~1 h on 2 workers for five seeds.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
@@ -52,6 +53,10 @@ def seed_folders(runs: Path) -> list[Path]:
     return folders
 
 
+def repo_relative(path: Path) -> Path:
+    return path.relative_to(REPO) if path.is_relative_to(REPO) else path
+
+
 def is_shipped(folder: Path) -> bool:
     """A folder tools/ship_result.py --all-phases wrote (actors, logs, metadata.json), not a lineage to ship."""
     return (folder / "metadata.json").is_file() and (folder / "recipe_phases.yaml").is_file() \
@@ -70,7 +75,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=2, help="walk processes at once (default 2)")
     p.add_argument("--force", action="store_true", help="replace earlier outputs under --work")
     args = p.parse_args(argv)
-    runs, work, results = args.runs.resolve(), args.work.resolve(), args.results.resolve()
+    # inside the repository, paths are given to each step relative to it: the shipped files record them
+    runs, work, results = (repo_relative(a.resolve()) for a in (args.runs, args.work, args.results))
+    os.chdir(REPO)  # as each step runs
     if not runs.is_dir():
         sys.exit(f"{args.runs}: no such folder")
     if work == runs or runs in work.parents:
@@ -86,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
         out = policy_root / folder.name
         if is_shipped(folder):  # shipped elsewhere before (a kept result): copied as it is
             print(f"\n{folder} is a shipped folder: copied to {out}", flush=True)
-            if out.resolve() != folder:
+            if out.resolve() != folder.resolve():
                 shutil.rmtree(out, ignore_errors=True)
                 shutil.copytree(folder, out)
         else:
@@ -103,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
                "--workers", str(max(2, args.workers)), *force]
     print(f"\n$ {' '.join(str(c) for c in extract)}", flush=True)
     failed = subprocess.run([str(c) for c in extract], cwd=REPO).returncode != 0
-    paths = sorted((work / "paths" / "learned").glob("seed*.json"))
+    paths = sorted(q for q in (work / "paths" / "learned").glob("seed*.json") if SEED_FOLDER.match(q.stem))
     if not paths:
         sys.exit("the extraction found no path in the band for any seed")
     missing = sorted({f.name for f in shipped} - {q.stem for q in paths})
@@ -124,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     shutil.copyfile(work / "prototype" / "prototype.json", figures / "prototype_torque.json")
 
     # 5. the tables
-    if results == (REPO / "results").resolve():
+    if results == Path("results"):
         run([py, "tools/make_readme_tables.py", "--write"])
     print(f"\nshipped: {policy_root}, {paths_root} ({len(paths)} paths), "
           f"{figures}/torque_check.json, comparison_torque.json, prototype_torque.json")
