@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -30,28 +29,26 @@ def fake_steps(monkeypatch, tmp_path):
     calls = []
     monkeypatch.chdir(tmp_path)  # the re-make moves to the repository: back here after each test
 
-    def step(cmd):
+    def step(cmd, stop_on_failure=True):
         cmd = [str(c) for c in cmd]
         calls.append(cmd)
-        if "evaluate.py" in cmd:
-            out = Path(after(cmd, "--out")[0])
-            out.mkdir(parents=True, exist_ok=True)
-            name = {"check": "policy_check.json", "compare": "comparison.json", "prototype": "prototype.json"}
-            (out / name[cmd[2]]).write_text(json.dumps({"step": cmd[2]}))
-
-    def extract(cmd, cwd=None):  # seed 2's policy has no cycle in the band: no path, a non-zero exit
-        cmd = [str(c) for c in cmd]
-        calls.append(cmd)
-        learned = Path(after(cmd, "--out")[0]) / "learned"
-        learned.mkdir(parents=True)
-        for seed in (0, 10):
-            (learned / f"seed{seed}.json").write_text("{}")
-            (learned / f"seed{seed}_cycles.csv").write_text("")
-            (learned / f"seed{seed}_cycles.json").write_text("{}")  # every cycle: not a path
-        return subprocess.CompletedProcess(cmd, 1)
+        if "evaluate.py" not in cmd:
+            return True
+        out = Path(after(cmd, "--out")[0])
+        if cmd[2] == "extract":  # seed 2's policy has no cycle in the band: no path, a failed step
+            assert not stop_on_failure  # the other seeds' paths are still shipped
+            (out / "learned").mkdir(parents=True)
+            for seed in (0, 10):
+                (out / "learned" / f"seed{seed}.json").write_text("{}")
+                (out / "learned" / f"seed{seed}_cycles.csv").write_text("")
+                (out / "learned" / f"seed{seed}_cycles.json").write_text("{}")  # every cycle: not a path
+            return False
+        out.mkdir(parents=True, exist_ok=True)
+        name = {"check": "policy_check.json", "compare": "comparison.json", "prototype": "prototype.json"}
+        (out / name[cmd[2]]).write_text(json.dumps({"step": cmd[2]}))
+        return True
 
     monkeypatch.setattr(ship_torque, "run", step)
-    monkeypatch.setattr(ship_torque.subprocess, "run", extract)
     return calls
 
 
