@@ -91,6 +91,23 @@ def test_the_cheapest_cycle_within_the_speed_band_is_extracted():
     json.dumps(rows)
 
 
+def test_skipped_cycles_give_the_next_cheapest_in_band_and_none_left_raises():
+    """A cycle whose path was rejected is skipped: the next cheapest in the band is taken, and when every
+    in-band cycle was skipped, the error says so (rather than taking one outside the band)."""
+    levels = [5.0, 4.0, 1.0, 3.0, 2.0, 2.5]
+    speeds = [1.0, 1.02, 0.8, 0.99, 1.03, 1.0]  # in band: 0, 1, 3, 4, 5; by energy 4, 5, 3, 1, 0
+    tr = synthetic_traces(levels, speeds)
+    gait = C.GaitConfig(lift_height=H)
+    order = []
+    for _ in range(5):
+        ex = extract_trajectory(tr, DT, 1.0, gait=gait, settle_time=0.0, skip_cycles=order)
+        assert ex.trajectory.provenance["cycles_skipped"] == sorted(order)
+        order.append(ex.chosen.index)
+    assert order == [4, 5, 3, 1, 0]
+    with pytest.raises(ExtractionError, match="all 5 gait cycles .* tried and rejected"):
+        extract_trajectory(tr, DT, 1.0, gait=gait, settle_time=0.0, skip_cycles=order)
+
+
 def test_extracted_trajectory_round_trips_with_provenance(tmp_path):
     tr = synthetic_traces([2.0, 1.0, 3.0], [1.0, 1.0, 1.0])
     ex = extract_trajectory(tr, DT, 1.0, gait=C.GaitConfig(lift_height=H), settle_time=0.0,

@@ -47,6 +47,7 @@ def test_evaluate_extract_from_a_policy(tmp_path, capsys):
     assert p["policy"] == portable_path(actor) and not p["policy"].startswith("/")  # provenance that travels
     assert p["seed"] == 0 and p["speed_command_mps"] == 1.0
     assert abs(p["cycle_speed_mps"] - 1.0) <= 0.3 and p["speed_tolerance"] == 0.3
+    assert p["replay_check"]["status"] == "ok" and p["replay_check"]["speeds_mps"] == [1.0]  # it walks open loop
     assert 0.07 < traj.lift_height < 0.13  # the env's trot lifts 0.10 m
     rows = json.loads((out / "learned" / "seed0_cycles.json").read_text())
     chosen = [r for r in rows if r["chosen"]]
@@ -90,7 +91,8 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     assert evaluate.main([*args, "--candidates", "1", "--out", str(tmp_path / "ex")]) == 0
     prov = CommandedPath.load(tmp_path / "ex" / "learned" / "seed0_1mps.json").provenance
     assert prov["cycle"] == "cheapest" and prov["rollout_seed"] == 0  # the other cycle choice of the same rollout
-    assert prov["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle": "mean", "status": "speed miss (0.911 m/s)"}]
+    assert prov["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle": "mean",
+                                                 "status": "speed miss (0.911 m/s)"}]
     from cyberdog.analysis import replay_check as rc
     assert prov["replay_check"]["spread_seeds"] == list(rc.SPREAD_CHECK_SEEDS)  # what the check walked, recorded
     assert prov["replay_check"]["hardware_like_pd_scales"] == list(rc.HARDWARE_CHECK_PD_SCALES)
@@ -100,6 +102,45 @@ def test_a_commanded_path_that_does_not_replay_is_rejected_for_the_next_candidat
     err = capsys.readouterr().err
     assert "no candidate path passes the replay check" in err and "cheapest of env seed 1: fell at 2.50 s" in err
     assert not (tmp_path / "none" / "learned" / "seed0_1mps.json").exists()
+
+
+def test_a_measured_path_that_does_not_replay_at_every_speed_gives_way_to_the_next_cheapest_cycle(
+        tmp_path, capsys, monkeypatch):
+    """The paper's measured path is one cycle rescaled to every speed: the cheapest in-band cycle whose replay
+    walks the band at each speed is kept (here a stand-in walk misses at 1.2 m/s for the first cycle tried), the
+    rejected cycle is recorded, and when no cycle replays no path is kept."""
+    import evaluate
+    from cyberdog.evaluation import extraction
+
+    _zero_actor_file(tmp_path / "stage2_actor.pt", target_speed_range=(1.0, 1.4))
+    walked = []
+
+    def stand_in(path, speed, cfg):  # the first cycle tried misses at 1.2 m/s, every later one walks
+        first = path.path.provenance["cycle_index"] if not walked else walked[0][0]
+        walked.append((path.path.provenance["cycle_index"], speed))
+        miss = speed == 1.2 and path.path.provenance["cycle_index"] == first
+        return SimpleNamespace(fell=False, duration=10.0, speed_ok=not miss, mean_speed=1.03 if miss else speed)
+
+    monkeypatch.setattr(extraction, "replay_walk", stand_in)
+    args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "1.2", "--rollout-duration", "2.6",
+            "--speed-tolerance", "0.3"]
+    assert evaluate.main([*args, "--out", str(tmp_path / "ex")]) == 0
+    first, second = walked[0][0], walked[-1][0]
+    assert first != second and walked == [(first, 1.0), (first, 1.2), (second, 1.0), (second, 1.2)]
+    p = SampledTrajectory.load(tmp_path / "ex" / "learned" / "seed0.json").provenance
+    assert p["cycle_index"] == second and p["cycles_skipped"] == [first]
+    assert p["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle_index": first,
+                                              "status": "1.2 m/s: speed miss (1.030 m/s)"}]
+    assert p["replay_check"]["speeds_mps"] == [1.0, 1.2]
+    rows = json.loads((tmp_path / "ex" / "learned" / "seed0_cycles.json").read_text())
+    by_index = {r["cycle"]: r for r in rows}
+    assert by_index[first]["energy_J"] <= by_index[second]["energy_J"]  # the cheapest was tried first
+    assert f"rejected: cycle {first} of env seed 0 does not replay" in capsys.readouterr().out
+    monkeypatch.setattr(extraction, "replay_walk", lambda path, speed, cfg: SimpleNamespace(
+        fell=True, duration=2.5, speed_ok=False, mean_speed=0.4))
+    assert evaluate.main([*args, "--replay-attempts", "1", "--out", str(tmp_path / "none")]) == 2
+    assert "no measured path replays in the band" in capsys.readouterr().err
+    assert not (tmp_path / "none" / "learned" / "seed0.json").exists()
 
 
 def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys, monkeypatch):
@@ -278,7 +319,7 @@ def test_extraction_over_worker_processes_saves_what_extraction_in_turn_saves(tm
     from cyberdog.evaluation.cli import build_parser
     args = build_parser().parse_args(["extract", "--policy", str(tmp_path / "s0"), "--rollout-duration", "3.0",
                                       "--speed-tolerance", "0.0001", "--no-replay-check"])
-    result = extraction._extraction_job((tmp_path / "s0" / "stage2_actor.pt", "commanded", "seed0", 1.0), args,
+    result = extraction._extraction_job((tmp_path / "s0" / "stage2_actor.pt", "commanded", "seed0", 1.0, (1.0,)), args,
                                             tmp_path / "failing", None)
     assert isinstance(result, str) and "1 m/s" in result
     assert not list((tmp_path / "failing").glob("learned/*.json"))

@@ -16,7 +16,8 @@ the trained stage-2 policy (`cyberdog.rl.rollout.rollout`):
 3. each cycle's energy by Eq. (7), E = Σ_ij ∫|τ_ij·θ̇_ij| dt over the cycle (all 12 joints), and its speed,
    the body's forward displacement over the cycle divided by its duration;
 4. among the cycles whose speed is within ±`speed_tolerance` (5 %) of the command (and that start after
-   `settle_time`, last a plausible time and contain one lift-off), the cheapest one is taken;
+   `settle_time`, last a plausible time and contain one lift-off), the cheapest one is taken (or the cheapest
+   not in `skip_cycles`: evaluation's extraction skips a cycle whose path does not replay in the band);
 5. its foot path becomes a `SampledTrajectory`: phase 0 at the recorded lift-off, the end-to-start gap
    spread linearly over the cycle (closing the loop), z shifted so the contact level is 0, resampled at
    `n_points` equal phases. It is normalised by the step length the policy's controller was commanded,
@@ -28,6 +29,7 @@ the trained stage-2 policy (`cyberdog.rl.rollout.rollout`):
 """
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -183,14 +185,15 @@ def _cycle_path(xz: np.ndarray, contacts: np.ndarray, chosen: Cycle, n_points: i
 def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: RobotConfig | None = None,
                        gait: GaitConfig | None = None, leg: str = "LF", speed_tolerance: float = SPEED_TOLERANCE,
                        settle_time: float = 1.0, n_points: int = 100, min_run_s: float = 0.01,
-                       provenance: dict | None = None) -> Extraction:
+                       provenance: dict | None = None, skip_cycles: Collection[int] = ()) -> Extraction:
     """The cheapest in-band gait cycle of a rollout as a `SampledTrajectory` (see the module docstring).
 
     traces: t, q, tau, dq (n, 12), contacts (n, 4), base_position (n, 3) at the physics rate dt (s).
     speed_command: m/s, the speed the policy was commanded. robot, gait: the rollout's robot geometry and
     trot (period, swing time and lift height of the policy's env; defaults: RobotConfig(), GaitConfig()).
     leg: the reference foot (the paper shows LF). provenance: merged into the trajectory's provenance.
-    Raises ExtractionError when no cycle qualifies, listing the cycles' speeds.
+    skip_cycles: indices of cycles not to take (ones whose path was tried and rejected): the cheapest of the
+    others is taken. Raises ExtractionError when no cycle qualifies, listing the cycles' speeds.
     """
     robot = robot or RobotConfig()
     gait = gait or GaitConfig()
@@ -208,7 +211,11 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
             f"no gait cycle of {leg} within ±{speed_tolerance:.0%} of {speed_command:g} m/s: {len(cycles)} cycles "
             f"in {n * dt:.2f} s, {len(valid)} valid (after {settle_time:g} s, one lift-off, plausible duration); "
             f"their speeds (m/s): {speeds}")
-    chosen = min(usable, key=lambda c: c.energy)
+    left = [c for c in usable if c.index not in set(skip_cycles)]
+    if not left:
+        raise ExtractionError(f"all {len(usable)} gait cycles of {leg} within ±{speed_tolerance:.0%} of "
+                              f"{speed_command:g} m/s were tried and rejected")
+    chosen = min(left, key=lambda c: c.energy)
     contacts = debounce(np.asarray(traces["contacts"], dtype=bool)[:, li], max(1, int(round(min_run_s / dt))))
     cp = _cycle_path(foot_paths(traces["q"], robot)[:, li, :], contacts, chosen, n_points)
     phase, x, z, grid, xs, zs = cp["phase"], cp["x"], cp["z"], cp["grid"], cp["xs"], cp["zs"]
@@ -223,7 +230,7 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
         "cycle_t_start_s": chosen.t_start, "cycle_duration_s": chosen.duration,
         "cycle_energy_J": chosen.energy, "cycle_speed_mps": chosen.speed,
         "speed_tolerance": float(speed_tolerance), "settle_time_s": float(settle_time),
-        "cycles_total": len(cycles), "cycles_in_band": len(usable),
+        "cycles_total": len(cycles), "cycles_in_band": len(usable), "cycles_skipped": sorted(set(skip_cycles)),
         "period_s": gait.period, "swing_time_s": gait.swing_time, "controller_lift_height_m": gait.lift_height,
         "step_length_basis": "commanded: speed_command * stance_time", "step_length_m": step_length,
         "measured_x_range_m": float(np.ptp(xs)), "measured_lift_height_m": lift_height,
@@ -237,12 +244,13 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
 
 
 def extract_from_rollout(rollout, env_config, leg: str = "LF", speed_tolerance: float = SPEED_TOLERANCE,
-                         settle_time: float = 1.0, n_points: int = 100, provenance: dict | None = None
-                         ) -> Extraction:
+                         settle_time: float = 1.0, n_points: int = 100, provenance: dict | None = None,
+                         skip_cycles: Collection[int] = ()) -> Extraction:
     """`extract_trajectory` on a policy rollout (a WalkResult of `cyberdog.rl.rollout.rollout`) in `env_config`."""
     prov = rollout_provenance(rollout, env_config, provenance)
     return extract_trajectory(rollout.traces, rollout.trace_dt, rollout.speed_command, env_config.walk.robot,
-                              env_config.walk.gait, leg, speed_tolerance, settle_time, n_points, provenance=prov)
+                              env_config.walk.gait, leg, speed_tolerance, settle_time, n_points, provenance=prov,
+                              skip_cycles=skip_cycles)
 
 
 __all__ = ["Extraction", "debounce", "extract_from_rollout", "extract_trajectory", "find_cycles", "foot_paths",

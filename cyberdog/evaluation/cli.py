@@ -216,12 +216,13 @@ def _extraction_options() -> argparse.ArgumentParser:
     g.add_argument("--rollout-seed", type=int, default=0, help="env seed of the extraction rollout")
     g.add_argument("--no-replay-check", dest="replay_check", action="store_false",
                    default=EXTRACT_DEFAULTS["replay_check"],
-                   help="keep a commanded path without replaying it first (as --sweep of a recipe whose extract: "
-                        "says replay_check: false does, configs/table5.yaml's; by default a path that falls or misses "
-                        "the speed in a 10 s and a 100 m replay on the ideal robot, in 100 m walks on six "
+                   help="keep a path without replaying it first (as --sweep of a recipe whose extract: says "
+                        "replay_check: false does, configs/table5.yaml's). By default a commanded path that falls or "
+                        "misses the speed in a 10 s and a 100 m replay on the ideal robot, in 100 m walks on six "
                         "hardware-like robots with the PD at 1, 0.7 and 1.4x, or in the prototype's 20 m walk on "
                         "eight more at each of 0.7 and 1.4x, none of them a prototype robot, is rejected for the "
-                        "next candidate: the other --cycle choice, then the rollout of the next env seed)")
+                        "next candidate (the other --cycle choice, then the rollout of the next env seed); a measured "
+                        "path must walk Table 5's 10 s at every speed (else the next cheapest cycle, then rollout)")
     g.add_argument("--replay-attempts", type=positive_int, default=EXTRACT_DEFAULTS["replay_attempts"], metavar="N",
                    help="extraction rollouts (env seeds --rollout-seed, +1, ...) tried per speed before giving up "
                         "(default 3)")

@@ -12,13 +12,17 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.analysis.extract import CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows
 from cyberdog.analysis.extract_measured import extract_from_rollout
-from cyberdog.analysis.replay_check import ReplayCheck, check_settings, replay_check
+from cyberdog.analysis.replay_check import (REPLAY_CHECK_S, ReplayCheck, check_settings, replay_check, replay_walk,
+                                            walk_status)
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
 from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation.learned import load_learned, unique_labels
 from cyberdog.evaluation.recorded_trot import trot_for
 from cyberdog.provenance import portable_path
+
+# in-band cycles of one rollout whose measured path is replayed before the next rollout is tried
+MEASURED_CYCLES_TRIED = 6
 
 
 def take_recipe_extraction(args) -> dict:
@@ -84,17 +88,18 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
     labels = [f"seed{actor.config.train.seed}" for actor in actors]
     if len(set(labels)) < len(labels):  # runs trained with the same seed: name them by their folders
         labels = [p.parent.name or lab for p, lab in zip(paths, labels)]
-    jobs, job_actors = [], []  # (policy file, path kind, label, speed), and its loaded actor
+    # (policy file, path kind, label, speed, the speeds its path must walk at), and its loaded actor
+    jobs, job_actors = [], []
     for path, actor, kind, label in zip(paths, actors, kinds, unique_labels(labels)):
         job_speeds = extraction_speeds(actor.config.env, speeds, args.policy_speed, log)
         for v in job_speeds if kind == "commanded" else job_speeds[:1]:
-            jobs.append((path, kind, label, v))
+            jobs.append((path, kind, label, v, (v,) if kind == "commanded" else tuple(job_speeds)))
             job_actors.append(actor)
     workers = min(getattr(args, "extract_workers", 1) or 1, len(jobs))
     if workers == 1:
         learned = LearnedSet()
-        for (path, kind, label, speed), actor in zip(jobs, job_actors):
-            learned.add(_extract_and_save(actor, path, kind, label, speed, args, out, cfg, log)[0])
+        for (path, kind, label, speed, walks_at), actor in zip(jobs, job_actors):
+            learned.add(_extract_and_save(actor, path, kind, label, speed, walks_at, args, out, cfg, log)[0])
         return learned
     from cyberdog.analysis.parallel import map_in_processes
 
@@ -103,7 +108,7 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
                             on_result=lambda i, r, n: log(f"extraction job {n} of {len(jobs)} ended: "
                                                           f"{jobs[i][2]} at {jobs[i][3]:g} m/s"
                                                           f"{'' if isinstance(r, Path) else ' (failed)'}"))
-    failed = [f"{label} at {speed:g} m/s: {r}" for (_, _, label, speed), r in zip(jobs, done)
+    failed = [f"{label} at {speed:g} m/s: {r}" for (_, _, label, speed, _), r in zip(jobs, done)
               if not isinstance(r, Path)]
     if failed:
         raise UsageError(f"{len(failed)} of {len(jobs)} extraction jobs failed (the others' paths are saved in "
@@ -112,25 +117,28 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
 
 
 def _extraction_job(job: tuple, args, out: Path, cfg: C.WalkConfig | None):
-    """One (policy, kind, label, speed) job in a worker process: the saved path's file, or the error's text
-    (a job that fails must not stop the others). Its log lines carry the job's label and speed."""
+    """One (policy, kind, label, speed, speeds) job in a worker process: the saved path's file, or the error's
+    text (a job that fails must not stop the others). Its log lines carry the job's label and speed."""
     from cyberdog.rl.rollout import load_actor
 
-    path, kind, label, speed = job
+    path, kind, label, speed, walks_at = job
     tag = f"[{label} {speed:g} m/s] "
     try:
-        return _extract_and_save(load_actor(path), path, kind, label, speed, args, out, cfg,
+        return _extract_and_save(load_actor(path), path, kind, label, speed, walks_at, args, out, cfg,
                                  lambda m: print(tag + m, flush=True))[1]
     except UsageError as err:
         return str(err)
 
 
-def _extract_and_save(actor, path: Path, kind: str, label: str, speed: float, args, out: Path, cfg, log):
+def _extract_and_save(actor, path: Path, kind: str, label: str, speed: float, walks_at: tuple[float, ...], args,
+                      out: Path, cfg, log):
     """Extract `actor`'s path at `speed` and save it and its cycles under out/learned/: (the `LearnedPath`,
-    its file)."""
+    its file). `walks_at`: the speeds (m/s) a measured path, rescaled, must replay at (`_extract_measured`)."""
     prov = {"policy": portable_path(path), "seed": actor.config.train.seed, "policy_meta": actor.meta}
-    extract = _extract_commanded if kind == "commanded" else _extract_measured
-    ex = extract(actor, path, speed, args, prov, cfg, log)
+    if kind == "commanded":
+        ex = _extract_commanded(actor, path, speed, args, prov, cfg, log)
+    else:
+        ex = _extract_measured(actor, path, speed, walks_at, args, prov, cfg, log)
     p = LearnedPath(label, ex.path if kind == "commanded" else ex.trajectory)
     file = p.save(out / "learned")
     write_rows(cycle_rows(ex), out / "learned", f"{file.stem}_cycles")
@@ -156,14 +164,60 @@ def _rollout(actor, path: Path, speed: float, args, rollout_seed: int, log):
     return r
 
 
-def _extract_measured(actor, path: Path, speed: float, args, prov: dict, cfg, log):
-    r = _rollout(actor, path, speed, args, args.rollout_seed, log)
-    try:
-        return extract_from_rollout(r, actor.config.env, args.leg, args.speed_tolerance,
-                                    provenance={**prov, "rollout_seed": args.rollout_seed})
-    except ExtractionError as err:
-        raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try --speed-tolerance or "
-                         "--policy-speed)") from None
+def _extract_measured(actor, path: Path, speed: float, walks_at: tuple[float, ...], args, prov: dict, cfg, log):
+    """The measured path: the cheapest in-band cycle of a rollout at `speed` (`extract_from_rollout`) whose path,
+    replayed with IK + PID as Table 5 walks it (the ideal robot, 10 s), walks within the band at every speed of
+    `walks_at` with no fall; else the next cheapest cycle (up to `MEASURED_CYCLES_TRIED` a rollout), then the
+    rollout of the next env seed (--replay-attempts). A path the policy walked need not walk open loop: a cycle
+    cut from a transient (a stride still speeding up) can be the cheapest and replay 10-30 % slow. The choice
+    looks at walking only, as the commanded path's check does; the rejected cycles are in the provenance.
+    Without the replay check (--no-replay-check) the first rollout's cheapest cycle, as the paper took it."""
+    cfg = trot_for(args, cfg or C.WalkConfig(), actor.config.env.walk.controller if args.replay_check else None,
+                   f"the policy {path}", lambda m: log(f"  {m}"), walked="its replay check walks under it")
+    rejected = []
+    for k in range(args.replay_attempts if args.replay_check else 1):
+        seed = args.rollout_seed + k
+        r = _rollout(actor, path, speed, args, seed, log)
+        skipped: list[int] = []
+        while len(skipped) < MEASURED_CYCLES_TRIED:
+            try:
+                ex = extract_from_rollout(r, actor.config.env, args.leg, args.speed_tolerance,
+                                          provenance={**prov, "rollout_seed": seed}, skip_cycles=skipped)
+            except ExtractionError as err:
+                if not args.replay_check:
+                    raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try "
+                                     "--speed-tolerance or --policy-speed)") from None
+                rejected.append({"rollout_seed": seed, "status": f"no path: {err}"})
+                break
+            if not args.replay_check:
+                return ex
+            status = _measured_replay_status(ex, walks_at, cfg, log)
+            if status == "ok":
+                ex.trajectory.provenance["replay_check"] = {
+                    "status": "ok", "rejected": rejected, "walks": "ideal robot, Table 5's walk",
+                    "duration_s": REPLAY_CHECK_S, "speeds_mps": list(walks_at),
+                    "controller": dataclasses.asdict(cfg.controller)}
+                return ex
+            log(f"  rejected: cycle {ex.chosen.index} of env seed {seed} does not replay ({status})")
+            rejected.append({"rollout_seed": seed, "cycle_index": ex.chosen.index, "status": status})
+            skipped.append(ex.chosen.index)
+    tried = "; ".join(f"cycle {c.get('cycle_index', '-')} of env seed {c['rollout_seed']}: {c['status']}"
+                      for c in rejected)
+    raise UsageError(f"extraction from {path} at {speed:g} m/s: no measured path replays in the band ({tried}); "
+                     "more with --replay-attempts, --speed-tolerance, or --no-replay-check to keep the cheapest")
+
+
+def _measured_replay_status(ex, walks_at: tuple[float, ...], cfg: C.WalkConfig, log) -> str:
+    """"ok" when the measured path replays within the band with no fall at every speed of `walks_at`, else the
+    first walk that failed ("1.2 m/s: speed miss (0.740 m/s)")."""
+    path = LearnedPath("", ex.trajectory)
+    for v in walks_at:
+        status = walk_status(replay_walk(path, v, cfg))
+        if status != "ok":
+            return f"{v:g} m/s: {status}"
+    log(f"  cycle {ex.chosen.index} ({ex.chosen.energy:.1f} J, {ex.chosen.speed:.3f} m/s) replays in the band at "
+        f"{', '.join(f'{v:g}' for v in walks_at)} m/s")
+    return "ok"
 
 
 def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, log):
