@@ -231,6 +231,7 @@ def test_a_recipe_sweep_runs_every_phase_of_every_seed_and_extraction_finds_the_
         assert (sweep / f"seed{seed}" / "second" / "stage2_final_actor.pt").is_file()
     assert policy_paths(None, sweep) == [sweep / f"seed{s}" / "second" / "stage2_final_actor.pt" for s in (0, 1)]
     assert "| 1 | 200 |" in (sweep / "aggregate.md").read_text()  # the last phase's stage-2 steps per seed
+    assert "seed 0 attempt 1 started\n" in out.stdout  # a lineage's first start resumes nothing, and says so
 
 
 def test_a_recipe_extraction_setting_is_checked_as_the_command_line_checks_it(tmp_path):

@@ -80,6 +80,27 @@ def test_the_remake_ships_each_seed_and_only_the_paths_the_extraction_found(tmp_
         assert json.loads((results / "figures_input" / name).read_text()) == {"step": step}
 
 
+def test_seed_folders_from_several_inputs_replace_what_was_shipped(tmp_path, fake_steps):
+    """A run folder and a kept seed folder given together ship exactly those seeds: a seed shipped before and not
+    given is removed (the extraction reads every shipped seed), and a seed given twice is refused."""
+    runs, kept, results = tmp_path / "runs", tmp_path / "kept" / "seed4", tmp_path / "results"
+    (runs / "seed0").mkdir(parents=True)
+    kept.mkdir(parents=True)
+    for name in ("metadata.json", "recipe_phases.yaml", "stage2_actor.pt"):
+        (kept / name).write_text("seed 4")
+    stale = results / "torque" / "policy" / "seed7"
+    stale.mkdir(parents=True)
+    (results / "figures_input").mkdir()
+
+    assert ship_torque.main([str(runs), str(kept), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
+    assert not stale.exists()
+    assert Path(after(fake_steps[0], "--out")[0]).name == "seed0"  # re-made by tools/ship_result.py
+    assert (results / "torque" / "policy" / "seed4" / "stage2_actor.pt").read_text() == "seed 4"
+    assert [Path(r).name for r in after(fake_steps[1], "--runs")] == ["seed0", "seed4"]
+    with pytest.raises(SystemExit, match="given twice: seed0"):
+        ship_torque.main([str(runs), str(runs / "seed0"), "--work", str(tmp_path / "w2"), "--results", str(results)])
+
+
 def test_the_remake_refuses_a_folder_without_seeds_and_work_inside_the_runs(tmp_path, fake_steps):
     (tmp_path / "runs" / "notes").mkdir(parents=True)
     with pytest.raises(SystemExit, match="no seed<N> folders"):

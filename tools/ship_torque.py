@@ -4,9 +4,12 @@
     python train.py --config configs/torque.yaml --seeds 0-4 --run-dir runs/torque
     python tools/ship_torque.py runs/torque --work runs/torque_ship --workers 2
 
-In order, each step an existing command (printed before it runs):
+The inputs are recipe run folders (holding seed<N>/) or seed folders themselves, e.g. `runs/torque
+results/torque/policy/seed4` to re-make seeds 0-3 and keep the shipped seed 4. In order, each step an existing
+command (printed before it runs):
 1. each seed folder's actors, logs and phase settings into results/torque/policy/seed<N>/
    (tools/ship_result.py --all-phases; a seed folder it already wrote, a kept result, is copied as it is);
+   a shipped seed not among the inputs is removed: results/torque/ holds what was given, nothing older;
 2. the walk check of every shipped actor, the policy alone for 10 s on the ideal robot and hardware-like draws 0
    and 1, with the trot controller's cost beside it (evaluate.py check → figures_input/torque_check.json);
 3. the paper's extraction of each seed's measured foot path (evaluate.py extract → results/torque/paths/); a seed
@@ -46,12 +49,24 @@ def run(cmd: list, stop_on_failure: bool = True) -> bool:
     return done.returncode == 0
 
 
-def seed_folders(runs: Path) -> list[Path]:
-    folders = sorted((p for p in runs.iterdir() if p.is_dir() and SEED_FOLDER.match(p.name)),
-                     key=lambda p: int(SEED_FOLDER.match(p.name).group(1)))
-    if not folders:
-        sys.exit(f"{runs}: no seed<N> folders (train.py --config configs/torque.yaml --seeds ... --run-dir {runs})")
-    return folders
+def seed_folders(inputs: list[Path]) -> list[Path]:
+    """The seed folders of `inputs` (recipe run folders holding seed<N>/, or seed<N> folders), by seed; a seed
+    given twice is refused."""
+    folders = []
+    for runs in inputs:
+        if SEED_FOLDER.match(runs.name):
+            folders.append(runs)
+            continue
+        found = [p for p in runs.iterdir() if p.is_dir() and SEED_FOLDER.match(p.name)]
+        if not found:
+            sys.exit(f"{runs}: no seed<N> folders (train.py --config configs/torque.yaml --seeds ... "
+                     f"--run-dir {runs})")
+        folders += found
+    names = [p.name for p in folders]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        sys.exit(f"given twice: {', '.join(twice)} ({', '.join(str(p) for p in folders if p.name in twice)})")
+    return sorted(folders, key=lambda p: int(SEED_FOLDER.match(p.name).group(1)))
 
 
 def repo_relative(path: Path) -> Path:
@@ -67,8 +82,9 @@ def is_shipped(folder: Path) -> bool:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("runs", type=Path, help="the recipe's run folder (train.py --run-dir), holding seed<N>/; a seed "
-                   "folder that tools/ship_result.py --all-phases already wrote is copied as it is")
+    p.add_argument("runs", type=Path, nargs="+", help="the recipe's run folders (train.py --run-dir), holding "
+                   "seed<N>/, or seed folders; a seed folder that tools/ship_result.py --all-phases already wrote "
+                   "is copied as it is")
     p.add_argument("--work", type=Path, required=True,
                    help="folder for the evaluate.py outputs (check/, paths/, compare/, prototype/)")
     p.add_argument("--results", type=Path, default=REPO / "results",
@@ -77,20 +93,28 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--force", action="store_true", help="replace earlier outputs under --work")
     args = p.parse_args(argv)
     # inside the repository, paths are given to each step relative to it: the shipped files record them
-    runs, work, results = (repo_relative(a.resolve()) for a in (args.runs, args.work, args.results))
+    runs = [repo_relative(a.resolve()) for a in args.runs]
+    work, results = (repo_relative(a.resolve()) for a in (args.work, args.results))
     os.chdir(REPO)  # as each step runs
-    if not runs.is_dir():
-        sys.exit(f"{args.runs}: no such folder")
-    if work == runs or runs in work.parents:
-        sys.exit("--work must be outside the run folder (its seed<N> folders are the inputs)")
+    for given, folder in zip(args.runs, runs):
+        if not folder.is_dir():
+            sys.exit(f"{given}: no such folder")
+        if work == folder or folder in work.parents:
+            sys.exit("--work must be outside the run folders (their seed<N> folders are the inputs)")
     py, force = sys.executable, ["--force"] if args.force else []
     workers = ["--workers", str(args.workers)]
     policy_root, paths_root = results / "torque" / "policy", results / "torque" / "paths"
     figures = results / "figures_input"
 
     # 1. the actors: a shipped seed is replaced only by its own re-made lineage
+    folders = seed_folders(runs)
+    given = {f.name for f in folders}
+    for old in sorted(policy_root.glob("seed*")) if policy_root.is_dir() else []:
+        if SEED_FOLDER.match(old.name) and old.name not in given:
+            print(f"\n{old}: not among the inputs, removed (the extraction reads every seed shipped)", flush=True)
+            shutil.rmtree(old)
     shipped = []
-    for folder in seed_folders(runs):
+    for folder in folders:
         out = policy_root / folder.name
         if is_shipped(folder):  # shipped elsewhere before (a kept result): copied as it is
             print(f"\n{folder} is a shipped folder: copied to {out}", flush=True)

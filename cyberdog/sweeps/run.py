@@ -179,11 +179,13 @@ class SweepDriver:
             args = attempt_args(self.sweep_dir, self.spec, s)
             if "--resume" not in args:  # a fresh start: earlier metrics were moved aside
                 st.reset_metrics()
+            # a recipe's lineage is always started with --resume (it finds its phase); it resumes only with a checkpoint
+            resuming = "--resume" in args and any(seed_dir(self.sweep_dir, s).rglob("checkpoint.pt"))
             st._started_wall = time.time()
             self.backend.submit(s, args, seed_dir(self.sweep_dir, s).resolve(), st.attempts)
             st.state, st.pid, st.host, st._started = "running", None, None, time.monotonic()
             self.say(f"sweep: seed {s} attempt {st.attempts} started"
-                     + (" (resuming from its checkpoint)" if "--resume" in args else ""))
+                     + (" (resuming from its checkpoint)" if resuming else ""))
             self.status.write()
 
     def collect_ended_attempts(self) -> None:
