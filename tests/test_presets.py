@@ -3,6 +3,7 @@ per seed that resumes mid-phase, and a broken preset is one line."""
 from __future__ import annotations
 
 import argparse
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -60,12 +61,16 @@ def test_a_shipped_phase_resolves_to_the_long_form_it_replaced(preset, phase):
 def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resolve_now():
     """results/torque/policy/seed<N>/recipe_phases.yaml records the settings of every phase its two actors came from
     (tools/ship_result.py --all-phases): they are configs/torque.yaml's phases as it resolves today, but for the
-    seed."""
+    seed, and every phase ran in the seed's own lineage (none placed from another run: the one command, from
+    scratch). The same for the seeds it was never tuned on (results/torque/fresh/), where shipped."""
     recipe = C.load_preset(ROOT / "configs" / "torque.yaml").phases
-    shipped = sorted((ROOT / "results" / "torque" / "policy").glob("seed*"))
-    assert shipped
+    torque = ROOT / "results" / "torque"
+    shipped = sorted((torque / "policy").glob("seed*")) + sorted((torque / "fresh" / "policy").glob("seed*"))
+    assert len(shipped) >= 5
     for folder in shipped:
         assert_made_by(folder / "recipe_phases.yaml", recipe)
+        meta = json.loads((folder / "metadata.json").read_text())
+        assert meta["placed_phases"] == [], folder
 
 
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():

@@ -253,6 +253,45 @@ def test_fresh_seeds_rows_are_those_seeds_walks_as_table5_summarises_them(tmp_pa
     assert row["E, learned, seeds 5–9 (kJ)"] == row["E, learned (kJ)"]
 
 
+def test_the_torque_rows_of_table5_count_the_seeds_trained_and_the_fresh_seeds_stand_apart(tmp_path):
+    """Table 5's torque rows say how many of the seeds the check walked have a path that replays (a seed whose
+    path does not replay has none, so the comparison alone cannot count it); comparison_torque_fresh.json (the
+    seeds never tuned on) gives rows of their own, named by their seeds, equal to the shipped rows' numbers for
+    the same walks relabelled."""
+    import json
+    import shutil
+
+    from cyberdog.analysis.readme_tables import make_tables
+    source = ROOT / "results" / "figures_input"
+    for f in source.glob("*.json"):
+        shutil.copy(f, tmp_path / f.name)
+    walks = json.loads((source / "comparison_torque.json").read_text())
+    check = json.loads((source / "torque_check.json").read_text())
+    with_path = {w["seed"] for w in walks if w.get("seed")}
+    trained = {w["label"] for w in check["walks"] if w["label"] != "trot"}
+    relabel = {f"seed{k}": f"seed{k + 10}" for k in range(10)}
+    (tmp_path / "comparison_torque_fresh.json").write_text(json.dumps(
+        [dict(w, seed=relabel.get(str(w.get("seed")), w.get("seed"))) for w in walks]))
+    (tmp_path / "torque_check_fresh.json").write_text(json.dumps(
+        {key: [dict(w, label=relabel.get(w["label"], w["label"])) for w in check[key]] for key in check}))
+    def table5_rows() -> dict:
+        return {line.split("|")[1].strip(): line.split("|")[2:5]
+                for line in make_tables(tmp_path)["table5"].splitlines()[2:]}
+
+    row = table5_rows()
+    tuned = row["**D_t on E, the paper's agent (joint torques)**"]
+    assert all(c.strip().endswith(f" of {len(trained)})") for c in tuned)
+    assert all(int(c.split("(")[-1].split(" of")[0]) <= len(with_path) for c in tuned)
+    named = f"seeds {min(int(s[4:]) for s in with_path) + 10}–{max(int(s[4:]) for s in with_path) + 10}"
+    fresh = row[f"**D_t on E, the paper's agent, {named} (never tuned on)**"]
+    assert fresh == tuned
+    assert row[f"D_t on the electrical energy, the paper's agent, {named}"] == \
+        row["D_t on the electrical energy, the paper's agent"]
+    (tmp_path / "torque_check_fresh.json").unlink()  # without the fresh check: the seeds with a path
+    fresh = table5_rows()[f"**D_t on E, the paper's agent, {named} (never tuned on)**"]
+    assert all(c.strip().endswith(f" of {len(with_path)})") for c in fresh)
+
+
 def test_fresh_seeds_prototype_rows_are_those_seeds_walks_as_the_prototype_summary_gives_them(tmp_path):
     """With prototype_fresh.json (the battery recipe's paths of seeds it was never tuned on, walked as the
     prototype run) the prototype table gains their battery and saving rows, named by their seeds; the same walks

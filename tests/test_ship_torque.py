@@ -32,17 +32,19 @@ def fake_steps(monkeypatch, tmp_path):
     def step(cmd, stop_on_failure=True):
         cmd = [str(c) for c in cmd]
         calls.append(cmd)
-        if "evaluate.py" not in cmd:
+        if "evaluate.py" not in cmd:  # tools/ship_result.py: the seed's folder
+            Path(after(cmd, "--out")[0]).mkdir(parents=True, exist_ok=True)
             return True
         out = Path(after(cmd, "--out")[0])
         if cmd[2] == "extract":  # seed 2's policy has no cycle in the band: no path, a failed step
             assert not stop_on_failure  # the other seeds' paths are still shipped
-            (out / "learned").mkdir(parents=True)
-            for seed in (0, 10):
-                (out / "learned" / f"seed{seed}.json").write_text("{}")
-                (out / "learned" / f"seed{seed}_cycles.csv").write_text("")
-                (out / "learned" / f"seed{seed}_cycles.json").write_text("{}")  # every cycle: not a path
-            return False
+            (out / "learned").mkdir(parents=True, exist_ok=True)
+            seeds = [p.name for p in Path(after(cmd, "--sweep")[0]).iterdir() if p.name != "seed2"]
+            for seed in seeds:
+                (out / "learned" / f"{seed}.json").write_text("{}")
+                (out / "learned" / f"{seed}_cycles.csv").write_text("")
+                (out / "learned" / f"{seed}_cycles.json").write_text("{}")  # every cycle: not a path
+            return len(seeds) == len(list(Path(after(cmd, "--sweep")[0]).iterdir()))
         out.mkdir(parents=True, exist_ok=True)
         name = {"check": "policy_check.json", "compare": "comparison.json", "prototype": "prototype.json"}
         (out / name[cmd[2]]).write_text(json.dumps({"step": cmd[2]}))
@@ -74,7 +76,8 @@ def test_the_remake_ships_each_seed_and_only_the_paths_the_extraction_found(tmp_
     assert after(check, "--robots") == ["ideal", "hardware:0", "hardware:1"]
     assert sorted(p.name for p in old_paths.iterdir()) == ["seed0.json", "seed10.json"]
     prototype = fake_steps[-1]
-    assert [Path(a).parent.name for a in after(prototype, "--closed-loop")] == ["seed0", "seed10"]
+    # every seed's policy walks the protocol closed loop, seed 2's too, whose path does not replay
+    assert [Path(a).parent.name for a in after(prototype, "--closed-loop")] == ["seed0", "seed2", "seed10"]
     for name, step in [("torque_check.json", "check"), ("comparison_torque.json", "compare"),
                        ("prototype_torque.json", "prototype")]:
         assert json.loads((results / "figures_input" / name).read_text()) == {"step": step}
@@ -99,6 +102,32 @@ def test_seed_folders_from_several_inputs_replace_what_was_shipped(tmp_path, fak
     assert [Path(r).name for r in after(fake_steps[1], "--runs")] == ["seed0", "seed4"]
     with pytest.raises(SystemExit, match="given twice: seed0"):
         ship_torque.main([str(runs), str(runs / "seed0"), "--work", str(tmp_path / "w2"), "--results", str(results)])
+
+
+def test_fresh_seeds_are_shipped_and_evaluated_apart_and_a_remake_without_them_removes_them(tmp_path, fake_steps):
+    runs, fresh, results = tmp_path / "runs", tmp_path / "fresh", tmp_path / "results"
+    for folder in (runs / "seed0", fresh / "seed6", fresh / "seed7"):
+        folder.mkdir(parents=True)
+    (results / "figures_input").mkdir(parents=True)
+    argv = [str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]
+
+    assert ship_torque.main(argv + ["--fresh", str(fresh)]) == 0
+    steps = [c[1] if c[1].startswith("tools") else c[2] for c in fake_steps]
+    assert steps == ["tools/ship_result.py"] * 3 + ["check", "extract", "compare", "prototype"] * 2
+    fresh_check = fake_steps[7]
+    assert [Path(r).name for r in after(fresh_check, "--runs")] == ["seed6", "seed7"]
+    assert all(Path(r).parent == results / "torque" / "fresh" / "policy" for r in after(fresh_check, "--runs"))
+    assert Path(after(fresh_check, "--out")[0]).parent.name == "fresh"  # not the tuning seeds' check folder
+    assert sorted(p.name for p in (results / "torque" / "fresh" / "paths").iterdir()) == ["seed6.json", "seed7.json"]
+    assert sorted(p.name for p in (results / "torque" / "paths").iterdir()) == ["seed0.json"]
+    for name in ship_torque.FRESH_FILES:
+        assert (results / "figures_input" / name).is_file()
+
+    assert ship_torque.main(argv + ["--force"]) == 0
+    assert not (results / "torque" / "fresh").exists()
+    assert not any((results / "figures_input" / name).exists() for name in ship_torque.FRESH_FILES)
+    with pytest.raises(SystemExit, match="given both as tuned and as --fresh: seed0"):
+        ship_torque.main(argv + ["--fresh", str(runs / "seed0")])
 
 
 def test_the_remake_refuses_a_folder_without_seeds_and_work_inside_the_runs(tmp_path, fake_steps):

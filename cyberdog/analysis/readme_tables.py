@@ -72,6 +72,7 @@ OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_WALKS_ROW.format(s
 NAMES = ("table5", "prototype", "stiffness", "gains", "torque", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
+TORQUE_FRESH_SOURCE = "comparison_torque_fresh.json"  # optional: the same of the seeds it was never tuned on
 FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths of seeds it was never tuned on
 # optional: the prototype run of the battery recipe's paths of seeds it was never tuned on
 PROTOTYPE_FRESH_SOURCE = "prototype_fresh.json"
@@ -87,11 +88,15 @@ DOCUMENTS = {"README.md": False, "docs/results.md": True}
 
 
 def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
-                    torque_walks: list[dict] | None = None, fresh_walks: list[dict] | None = None) -> str:
+                    torque_walks: list[dict] | None = None, fresh_walks: list[dict] | None = None,
+                    torque_fresh_walks: list[dict] | None = None,
+                    torque_seeds: tuple[int | None, int | None] = (None, None)) -> str:
     """The README's Table 5 from the walks of `evaluate.py compare` (its comparison.json); with `torque_walks`
     (the same for the paper's torque agent's paths) its D_t at matched lift as rows of its own, with the
-    number of seeds whose path replays (no fall, ±5 % speed) at each speed; with `fresh_walks` (the recipe's
-    paths of seeds it was never tuned on) their E and D_t beside the shipped seeds'."""
+    number of seeds whose path replays (no fall, ±5 % speed) at each speed, of `torque_seeds[0]` (the seeds
+    trained; default: those with a path); with `fresh_walks` (the recipe's paths of seeds it was never tuned
+    on) their E and D_t beside the shipped seeds'; with `torque_fresh_walks` the torque agent's likewise (of
+    `torque_seeds[1]`)."""
     summary = table5.summary_rows(walks)
     same = [r for r in summary if r["set"] == "same_lift"]
     paper = {r["speed_command_mps"]: r for r in summary if r["set"] == "paper"}
@@ -108,12 +113,11 @@ def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
     if fresh_walks:
         lines += _fresh_lines(fresh_walks, speeds)
     if torque_walks:
-        torque = {r["speed_command_mps"]: r for r in table5.summary_rows(torque_walks) if r["set"] == "same_lift"}
-        t = [torque.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
-        lines.append(_line("**D_t on E, the paper's agent (joint torques)**",
-                           [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}** ({r['n_valid']} of {r['n_seeds']})" for r in t]))
-        lines.append(_line("D_t on the electrical energy, the paper's agent",
-                           [mean_ci(r, "D_t_electrical_pct", ".1f", " %") for r in t]))
+        lines += _torque_lines(torque_walks, speeds, " (joint torques)", "", torque_seeds[0])
+    if torque_fresh_walks:
+        named = seeds_named(w.get("seed", "") for w in torque_fresh_walks)
+        lines += _torque_lines(torque_fresh_walks, speeds, f", {named} (never tuned on)", f", {named}",
+                               torque_seeds[1])
     searched = [r.get(f"{REFERENCE}_lift_height_m") for r in same]
     if all(h is not None for h in searched):
         lines.append(_line(f"learned against the direct search's shape at {searched[0]:.3f} m, on E",
@@ -131,6 +135,18 @@ def table5_markdown(walks: list[dict], straight_shape: str = "rectangle",
                         else "" for i in idx]))
     lines.append(_line("*paper: D_t*", [f"{t['decrement_pct'][i]:.0f} %" if i is not None else "" for i in idx]))
     return "\n".join(lines)
+
+
+def _torque_lines(walks: list[dict], speeds: list[float], who: str, whose: str, n_seeds: int | None) -> list[str]:
+    """Table 5's rows of the torque agent's paths: D_t on E and on the electrical energy, with the seeds whose
+    path replays of the `n_seeds` trained (a seed whose path does not replay in the band has none)."""
+    rows = {r["speed_command_mps"]: r for r in table5.summary_rows(walks) if r["set"] == "same_lift"}
+    t = [rows.get(v, {"n_valid": 0, "n_seeds": 0}) for v in speeds]
+    return [_line(f"**D_t on E, the paper's agent{who}**",
+                  [f"**{mean_ci(r, 'D_t_pct', '.1f', ' %')}** ({r['n_valid']} of {n_seeds or r['n_seeds']})"
+                   for r in t]),
+            _line(f"D_t on the electrical energy, the paper's agent{whose}",
+                  [mean_ci(r, "D_t_electrical_pct", ".1f", " %") for r in t])]
 
 
 def _fresh_lines(walks: list[dict], speeds: list[float]) -> list[str]:
@@ -277,6 +293,16 @@ def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "h
     return "\n".join(lines)
 
 
+def _optional(path: Path):
+    """The JSON at `path`, None where it is not shipped."""
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def _checked_seeds(check: dict | None) -> set[str]:
+    """The seeds (labels) of a torque check's policy walks; none without the check."""
+    return {w["label"] for w in check["walks"] if w["label"] != "trot"} if check else set()
+
+
 def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, str]:
     """Both tables from a folder holding comparison.json and prototype.json (and comparison_torque.json, if
     the paper's torque agent's paths were compared)."""
@@ -290,7 +316,11 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     fresh = json.loads((results / FRESH_SOURCE).read_text()) if (results / FRESH_SOURCE).is_file() else None
     fresh_prototype = (json.loads((results / PROTOTYPE_FRESH_SOURCE).read_text())
                        if (results / PROTOTYPE_FRESH_SOURCE).is_file() else None)
-    tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque, fresh),
+    torque_fresh = _optional(results / TORQUE_FRESH_SOURCE)
+    # the torque rows count the seeds whose path replays of the seeds the check walked (every seed trained)
+    torque_seeds = tuple(len(_checked_seeds(_optional(results / name)))
+                         or None for name in (TORQUE_CHECK_SOURCE, TORQUE_CHECK_FRESH_SOURCE))
+    tables = {"table5": table5_markdown(walks["table5"], straight_shape, torque, fresh, torque_fresh, torque_seeds),
               "prototype": prototype_markdown(walks["prototype"], fresh_walks=fresh_prototype)}
     if (results / STIFFNESS_SOURCE).is_file():
         matched = results / STIFFNESS_MATCHED_SOURCE
