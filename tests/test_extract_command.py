@@ -129,18 +129,55 @@ def test_a_measured_path_that_does_not_replay_at_every_speed_gives_way_to_the_ne
     assert first != second and walked == [(first, 1.0), (first, 1.2), (second, 1.0), (second, 1.2)]
     p = SampledTrajectory.load(tmp_path / "ex" / "learned" / "seed0.json").provenance
     assert p["cycle_index"] == second and p["cycles_skipped"] == [first]
-    assert p["replay_check"]["rejected"] == [{"rollout_seed": 0, "cycle_index": first,
+    assert p["replay_check"]["rejected"] == [{"leg": "LF", "rollout_seed": 0, "cycle_index": first,
                                               "status": "1.2 m/s: speed miss (1.030 m/s)"}]
     assert p["replay_check"]["speeds_mps"] == [1.0, 1.2]
     rows = json.loads((tmp_path / "ex" / "learned" / "seed0_cycles.json").read_text())
     by_index = {r["cycle"]: r for r in rows}
     assert by_index[first]["energy_J"] <= by_index[second]["energy_J"]  # the cheapest was tried first
-    assert f"rejected: cycle {first} of env seed 0 does not replay" in capsys.readouterr().out
+    assert f"rejected: cycle {first} of LF in env seed 0 does not replay" in capsys.readouterr().out
     monkeypatch.setattr(extraction, "replay_walk", lambda path, speed, cfg: SimpleNamespace(
         fell=True, duration=2.5, speed_ok=False, mean_speed=0.4))
     assert evaluate.main([*args, "--replay-attempts", "1", "--out", str(tmp_path / "none")]) == 2
-    assert "no measured path replays in the band" in capsys.readouterr().err
+    assert "no measured path of any foot replays in the band" in capsys.readouterr().err
     assert not (tmp_path / "none" / "learned" / "seed0.json").exists()
+
+
+def test_when_no_cycle_of_the_reference_foot_replays_the_other_feet_are_tried_in_turn(tmp_path, capsys, monkeypatch):
+    """A policy's feet need not move alike: when none of LF's cycles replays in any rollout, RF's come next (from
+    the same rollouts), and the path records the foot it is of and every LF cycle rejected; a foot chosen with
+    --leg is tried first."""
+    import evaluate
+    from cyberdog.evaluation import extraction
+
+    _zero_actor_file(tmp_path / "stage2_actor.pt", target_speed_range=(1.0, 1.4))
+    walked, rollouts = [], []
+
+    def stand_in(path, speed, cfg):  # LF's path misses at 1.0 m/s, every other foot's walks
+        leg = path.path.provenance["leg"]
+        walked.append(leg)
+        return SimpleNamespace(fell=False, duration=10.0, speed_ok=leg != "LF",
+                               mean_speed=0.9 if leg == "LF" else speed)
+
+    monkeypatch.setattr(extraction, "replay_walk", stand_in)
+    rollout = extraction._rollout
+    monkeypatch.setattr(extraction, "_rollout", lambda *a: rollouts.append(a[4]) or rollout(*a))
+    args = ["extract", "--policy", str(tmp_path), "--speeds", "1.0", "--rollout-duration", "2.6",
+            "--speed-tolerance", "0.3", "--replay-attempts", "2"]
+    assert evaluate.main([*args, "--out", str(tmp_path / "ex")]) == 0
+    p = SampledTrajectory.load(tmp_path / "ex" / "learned" / "seed0.json").provenance
+    lf = walked.count("LF")
+    assert p["leg"] == "RF" and walked == ["LF"] * lf + ["RF"] and lf >= 2
+    rejected = p["replay_check"]["rejected"]
+    assert {r["leg"] for r in rejected} == {"LF"} and sum("cycle_index" in r for r in rejected) == lf
+    assert {r["rollout_seed"] for r in rejected} == {0, 1}  # both rollouts' LF cycles first
+    assert rollouts == [0, 1]  # each rollout run once, for every foot
+    out = capsys.readouterr().out
+    assert "no cycle of LF replays in the band: the RF foot's cycles next" in out
+    walked.clear()
+    assert evaluate.main([*args, "--leg", "LH", "--out", str(tmp_path / "lh")]) == 0
+    assert walked == ["LH"]
+    assert SampledTrajectory.load(tmp_path / "lh" / "learned" / "seed0.json").provenance["leg"] == "LH"
 
 
 def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys, monkeypatch):

@@ -148,8 +148,8 @@ def _extract_and_save(actor, path: Path, kind: str, label: str, speed: float, wa
             f"{ex.energy:.1f} J per cycle, own H = {p.lift_height:.4f} m -> {file}")
     else:
         c = ex.chosen
-        log(f"{file.stem}: measured path of cycle {c.index} of {len(ex.cycles)} (t = {c.t_start:.2f} s), "
-            f"{c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
+        log(f"{file.stem}: measured path of {ex.trajectory.provenance['leg']}'s cycle {c.index} of {len(ex.cycles)} "
+            f"(t = {c.t_start:.2f} s), {c.energy:.1f} J, {c.speed:.3f} m/s, H = {p.lift_height:.3f} m -> {file}")
     return p, file
 
 
@@ -165,46 +165,56 @@ def _rollout(actor, path: Path, speed: float, args, rollout_seed: int, log):
 
 
 def _extract_measured(actor, path: Path, speed: float, walks_at: tuple[float, ...], args, prov: dict, cfg, log):
-    """The measured path: the cheapest in-band cycle of a rollout at `speed` (`extract_from_rollout`) whose path,
-    replayed with IK + PID as Table 5 walks it (the ideal robot, 10 s), walks within the band at every speed of
-    `walks_at` with no fall; else the next cheapest cycle (up to `MEASURED_CYCLES_TRIED` a rollout), then the
-    rollout of the next env seed (--replay-attempts). A path the policy walked need not walk open loop: a cycle
-    cut from a transient (a stride still speeding up) can be the cheapest and replay 10-30 % slow. The choice
-    looks at walking only, as the commanded path's check does; the rejected cycles are in the provenance.
-    Without the replay check (--no-replay-check) the first rollout's cheapest cycle, as the paper took it."""
+    """The measured path: the cheapest in-band cycle of the reference foot (--leg, the paper's LF) in a rollout at
+    `speed` (`extract_from_rollout`) whose path, replayed with IK + PID as Table 5 walks it (the ideal robot,
+    10 s), walks within the band at every speed of `walks_at` with no fall; else the next cheapest cycle (up to
+    `MEASURED_CYCLES_TRIED` a rollout), then the rollout of the next env seed (--replay-attempts), and only when
+    no cycle of that foot replays, the other feet in turn (a policy's four feet need not move alike: one foot's
+    path can be the one that does not carry the body when all four are driven along it). A path the policy
+    walked need not walk open loop: a cycle cut from a transient (a stride still speeding up) can be the
+    cheapest and replay 10-30 % slow. The choice looks at walking only, as the commanded path's check does; the
+    rejected cycles are in the provenance. Without the replay check (--no-replay-check) the first rollout's
+    cheapest cycle of the reference foot, as the paper took it."""
     cfg = trot_for(args, cfg or C.WalkConfig(), actor.config.env.walk.controller if args.replay_check else None,
                    f"the policy {path}", lambda m: log(f"  {m}"), walked="its replay check walks under it")
-    rejected = []
-    for k in range(args.replay_attempts if args.replay_check else 1):
-        seed = args.rollout_seed + k
-        r = _rollout(actor, path, speed, args, seed, log)
-        skipped: list[int] = []
-        while len(skipped) < MEASURED_CYCLES_TRIED:
-            try:
-                ex = extract_from_rollout(r, actor.config.env, args.leg, args.speed_tolerance,
-                                          provenance={**prov, "rollout_seed": seed}, skip_cycles=skipped)
-            except ExtractionError as err:
+    rejected, rollouts = [], {}
+    legs = (args.leg, *(leg for leg in C.LEG_NAMES if leg != args.leg)) if args.replay_check else (args.leg,)
+    for leg in legs:
+        if leg != args.leg:
+            log(f"  no cycle of {legs[legs.index(leg) - 1]} replays in the band: the {leg} foot's cycles next")
+        for k in range(args.replay_attempts if args.replay_check else 1):
+            seed = args.rollout_seed + k
+            if seed not in rollouts:  # each foot's cycles come from the same rollouts
+                rollouts[seed] = _rollout(actor, path, speed, args, seed, log)
+            skipped: list[int] = []
+            while len(skipped) < MEASURED_CYCLES_TRIED:
+                try:
+                    ex = extract_from_rollout(rollouts[seed], actor.config.env, leg, args.speed_tolerance,
+                                              provenance={**prov, "rollout_seed": seed}, skip_cycles=skipped)
+                except ExtractionError as err:
+                    if not args.replay_check:
+                        raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try "
+                                         "--speed-tolerance or --policy-speed)") from None
+                    rejected.append({"leg": leg, "rollout_seed": seed, "status": f"no path: {err}"})
+                    break
                 if not args.replay_check:
-                    raise UsageError(f"extraction from {path} at {speed:g} m/s failed: {err} (try "
-                                     "--speed-tolerance or --policy-speed)") from None
-                rejected.append({"rollout_seed": seed, "status": f"no path: {err}"})
-                break
-            if not args.replay_check:
-                return ex
-            status = _measured_replay_status(ex, walks_at, cfg, log)
-            if status == "ok":
-                ex.trajectory.provenance["replay_check"] = {
-                    "status": "ok", "rejected": rejected, "walks": "ideal robot, Table 5's walk",
-                    "duration_s": REPLAY_CHECK_S, "speeds_mps": list(walks_at),
-                    "controller": dataclasses.asdict(cfg.controller)}
-                return ex
-            log(f"  rejected: cycle {ex.chosen.index} of env seed {seed} does not replay ({status})")
-            rejected.append({"rollout_seed": seed, "cycle_index": ex.chosen.index, "status": status})
-            skipped.append(ex.chosen.index)
-    tried = "; ".join(f"cycle {c.get('cycle_index', '-')} of env seed {c['rollout_seed']}: {c['status']}"
-                      for c in rejected)
-    raise UsageError(f"extraction from {path} at {speed:g} m/s: no measured path replays in the band ({tried}); "
-                     "more with --replay-attempts, --speed-tolerance, or --no-replay-check to keep the cheapest")
+                    return ex
+                status = _measured_replay_status(ex, walks_at, cfg, log)
+                if status == "ok":
+                    ex.trajectory.provenance["replay_check"] = {
+                        "status": "ok", "rejected": rejected, "walks": "ideal robot, Table 5's walk",
+                        "duration_s": REPLAY_CHECK_S, "speeds_mps": list(walks_at),
+                        "controller": dataclasses.asdict(cfg.controller)}
+                    return ex
+                log(f"  rejected: cycle {ex.chosen.index} of {leg} in env seed {seed} does not replay ({status})")
+                rejected.append({"leg": leg, "rollout_seed": seed, "cycle_index": ex.chosen.index, "status": status})
+                skipped.append(ex.chosen.index)
+    tried = "; ".join(f"{c['leg']} cycle {c.get('cycle_index', '-')} of env seed {c['rollout_seed']}: {c['status']}"
+                      for c in rejected[:8])
+    more = f"; {len(rejected) - 8} more" if len(rejected) > 8 else ""
+    raise UsageError(f"extraction from {path} at {speed:g} m/s: no measured path of any foot replays in the band "
+                     f"({len(rejected)} tried: {tried}{more}); more with --replay-attempts, --speed-tolerance, or "
+                     "--no-replay-check to keep the cheapest")
 
 
 def _measured_replay_status(ex, walks_at: tuple[float, ...], cfg: C.WalkConfig, log) -> str:
