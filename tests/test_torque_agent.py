@@ -328,11 +328,17 @@ def test_imitation_needs_the_reference_and_keeps_it_per_transition(tmp_path):
 
 
 # ---- the shipped torque policies --------------------------------------------------------------------------
-SHIPPED = Path(__file__).resolve().parents[1] / "results" / "torque" / "policy"
+TORQUE = Path(__file__).resolve().parents[1] / "results" / "torque"
+# the tuning seeds' actors and, where shipped, those of the seeds the recipe was never tuned on
+SHIPPED = sorted(TORQUE.glob("policy/seed*")) + sorted(TORQUE.glob("fresh/policy/seed*"))
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
-def test_the_shipped_torque_policies_walk_a_hardware_like_robot_alone_and_stage2_draws_less(seed, monkeypatch):
+def test_the_torque_recipe_ships_seeds_0_to_4():
+    assert [f.name for f in sorted(TORQUE.glob("policy/seed*"))] == [f"seed{k}" for k in range(5)]
+
+
+@pytest.mark.parametrize("folder", SHIPPED, ids=[f"{f.parent.parent.name}-{f.name}" for f in SHIPPED])
+def test_the_shipped_torque_policies_walk_a_hardware_like_robot_alone_and_stage2_draws_less(folder, monkeypatch):
     """configs/torque.yaml's actors walk 10 s at 1.4 m/s on hardware-like draw 0 with no trot controller under
     them, within ±5 % of the command and without falling, and stage 2 draws less electrical energy per metre
     than stage 1 (the prior is exactly 0: no controller is even built a command)."""
@@ -341,7 +347,7 @@ def test_the_shipped_torque_policies_walk_a_hardware_like_robot_alone_and_stage2
     monkeypatch.setattr(TrotController, "command", lambda *a, **k: pytest.fail("a trot controller ran"))
     per_metre = []
     for stage in (1, 2):
-        actor = load_actor(SHIPPED / f"seed{seed}" / f"stage{stage}_actor.pt")
+        actor = load_actor(folder / f"stage{stage}_actor.pt")
         assert actor.config.env.action_mode == "torque" and actor.config.env.randomization.enabled
         env, hardware_robot = robot_env(actor.config.env, "hardware:0")
         r = rollout(actor, speed=1.4, duration=10.0, env_config=env, hardware_robot=hardware_robot)
