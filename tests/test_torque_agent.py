@@ -328,13 +328,13 @@ def test_imitation_needs_the_reference_and_keeps_it_per_transition(tmp_path):
 
 
 # ---- the shipped torque policies --------------------------------------------------------------------------
-TORQUE = Path(__file__).resolve().parents[1] / "results" / "torque"
+TORQUE_RESULTS = Path(__file__).resolve().parents[1] / "results" / "torque"
 # the tuning seeds' actors and, where shipped, those of the seeds the recipe was never tuned on
-SHIPPED = sorted(TORQUE.glob("policy/seed*")) + sorted(TORQUE.glob("fresh/policy/seed*"))
+SHIPPED = sorted(TORQUE_RESULTS.glob("policy/seed*")) + sorted(TORQUE_RESULTS.glob("fresh/policy/seed*"))
 
 
 def test_the_torque_recipe_ships_seeds_0_to_4():
-    assert [f.name for f in sorted(TORQUE.glob("policy/seed*"))] == [f"seed{k}" for k in range(5)]
+    assert [f.name for f in sorted(TORQUE_RESULTS.glob("policy/seed*"))] == [f"seed{k}" for k in range(5)]
 
 
 @pytest.mark.parametrize("folder", SHIPPED, ids=[f"{f.parent.parent.name}-{f.name}" for f in SHIPPED])

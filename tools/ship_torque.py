@@ -24,7 +24,7 @@ and figures_input/*_fresh.json, so that their rows stand beside the tuning seeds
 removes them).
 
 Each evaluate.py step writes its own folder under --work (refused if it holds results, unless --force); results/
-is written only from a step that succeeded. 4 min on 2 workers for five seeds, 2 more for
+is written only from a step that succeeded. 3.3 min on 2 workers for five seeds, 1.9 more for
 three fresh ones (2-core AMD EPYC).
 """
 from __future__ import annotations

@@ -60,7 +60,6 @@ HEADLINES = {
     "gains_headline": ("gains", (GAINS_DEFAULT_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
                                  "kd 2×, as commanded", "**kd 2×, re-commanded**")),
     "torque_headline": ("torque", (TORQUE_WALKS_ROW.format(robots="ideal robot, hardware-like draws 0 and 1"),
-                                   "electrical J/m, stage 1 (ideal robot)",
                                    "**electrical J/m, stage 2 (ideal robot)**",
                                    TORQUE_SAVING_ROW.format(robot="ideal robot"),
                                    TORQUE_FRESH_WALKS_ROW.format(seeds=FRESH_SEEDS),
