@@ -27,5 +27,5 @@ for seed in sys.argv[1:] or ["0", "1", "2", "3", "4"]:
             print(f"seed {seed} {leg}: {err}")
             continue
         print(f"seed {seed} {leg}: swing share {p['measured_swing_share']:.2f}, "
-              f"x range {p['measured_x_range_m']:.3f} m, lift {p['measured_lift_height_m']:.3f} m, cycle {p['cycle_index']} at {p['cycle_speed_mps']:.3f} m/s "
-              f"({p['cycles_in_band']} cycles in the band)")
+              f"x range {p['measured_x_range_m']:.3f} m, lift {p['measured_lift_height_m']:.3f} m, "
+              f"cycle {p['cycle_index']} at {p['cycle_speed_mps']:.3f} m/s ({p['cycles_in_band']} cycles in the band)")
