@@ -110,11 +110,12 @@ def ship_actors(inputs: list[Path], policy_root: Path, py: str) -> list[Path]:
 
 
 def evaluate_seeds(shipped: list[Path], folder: Path, figures: Path, work: Path, suffix: str, py: str,
-                   workers: list[str], force: list[str]) -> tuple[Path, int, int]:
+                   n_workers: int, force: list[str]) -> tuple[Path, int, int]:
     """Steps 2-4 for the seeds shipped in `folder`/policy: their check, their paths into `folder`/paths, Table
     5's rows and the prototype's protocol, each step's output copied to figures/<name><suffix>.json. Returns
     (folder, paths found, seeds)."""
     policy_root, paths_root = folder / "policy", folder / "paths"
+    workers = ["--workers", str(n_workers)]
     # 2. do they walk, alone, in the band (and what the trot costs at the same speeds)
     run([py, "evaluate.py", "check", "--runs", *shipped, "--robots", "ideal", "hardware:0", "hardware:1", "--trot",
          "--out", work / "check", *workers, *force])
@@ -122,7 +123,7 @@ def evaluate_seeds(shipped: list[Path], folder: Path, figures: Path, work: Path,
 
     # 3. the paper's extraction; --workers > 1 keeps going past a seed without a path that replays
     failed = not run([py, "evaluate.py", "extract", "--sweep", policy_root, "--out", work / "paths",
-                      "--workers", str(max(2, int(workers[1]))), *force], stop_on_failure=False)
+                      "--workers", str(max(2, n_workers)), *force], stop_on_failure=False)
     paths = sorted(q for q in (work / "paths" / "learned").glob("seed*.json") if SEED_FOLDER.match(q.stem))
     if not paths:
         sys.exit("the extraction found no path that replays in the band for any seed")
@@ -173,7 +174,6 @@ def main(argv: list[str] | None = None) -> int:
         if work == folder or folder in work.parents:
             sys.exit("--work must be outside the run folders (their seed<N> folders are the inputs)")
     py, force = sys.executable, ["--force"] if args.force else []
-    workers = ["--workers", str(args.workers)]
     policy_root, figures = results / "torque" / "policy", results / "figures_input"
 
     both = {f.name for f in seed_folders(runs)} & ({f.name for f in seed_folders(args.fresh)} if args.fresh else set())
@@ -181,10 +181,10 @@ def main(argv: list[str] | None = None) -> int:
         sys.exit(f"given both as tuned and as --fresh: {', '.join(sorted(both))}")
     tuned = ship_actors(runs, policy_root, py)
     fresh = ship_actors(args.fresh, results / "torque" / "fresh" / "policy", py) if args.fresh else []
-    counts = [evaluate_seeds(tuned, results / "torque", figures, work, "", py, workers, force)]
+    counts = [evaluate_seeds(tuned, results / "torque", figures, work, "", py, args.workers, force)]
     if fresh:
         counts.append(evaluate_seeds(fresh, results / "torque" / "fresh", figures, work / "fresh", "_fresh",
-                                     py, workers, force))
+                                     py, args.workers, force))
     elif (results / "torque" / "fresh").exists():  # fresh seeds of an older recipe must not outlive it
         print(f"\n{results / 'torque' / 'fresh'}: no --fresh seeds given, removed", flush=True)
         shutil.rmtree(results / "torque" / "fresh")

@@ -312,11 +312,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
             raise FileNotFoundError(f"{results / file} not found: the {name} table is made from it "
                                     "(`python evaluate.py` writes it; results/figures_input/ holds the shipped one)")
     walks = {name: json.loads((results / file).read_text()) for name, file in SOURCES.items()}
-    torque = json.loads((results / TORQUE_SOURCE).read_text()) if (results / TORQUE_SOURCE).is_file() else None
-    fresh = json.loads((results / FRESH_SOURCE).read_text()) if (results / FRESH_SOURCE).is_file() else None
-    fresh_prototype = (json.loads((results / PROTOTYPE_FRESH_SOURCE).read_text())
-                       if (results / PROTOTYPE_FRESH_SOURCE).is_file() else None)
-    torque_fresh = _optional(results / TORQUE_FRESH_SOURCE)
+    torque, fresh, fresh_prototype, torque_fresh = (_optional(results / name) for name in (
+        TORQUE_SOURCE, FRESH_SOURCE, PROTOTYPE_FRESH_SOURCE, TORQUE_FRESH_SOURCE))
     # the torque rows count the seeds whose path replays of the seeds the check walked (every seed trained)
     torque_seeds = tuple(len(_checked_seeds(_optional(results / name)))
                          or None for name in (TORQUE_CHECK_SOURCE, TORQUE_CHECK_FRESH_SOURCE))

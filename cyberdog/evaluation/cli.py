@@ -233,8 +233,7 @@ def _extraction_options() -> argparse.ArgumentParser:
                         "replays; the battery preset's shipped paths: 2, of up to 16 rollouts)")
     g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
                    help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
-    g.add_argument("--leg", default="LF", choices=LEG_NAMES,
-                   help="measured path: the foot tried first (the others follow if none of its cycles replays)")
+    g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the foot tried first, then others")
     return p
 
 
