@@ -110,8 +110,8 @@ def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
 
 
 def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tmp_path):
-    """configs/torque.yaml's seed folder: main, speed, band (stage 1), energy, energy2, energy3 (stage 2): the
-    check walks band's stage-1 actor and energy3's stage-2 actor, labelled by the seed folder; one whose last
+    """configs/torque.yaml's seed folder: main, speed, band (stage 1), energy to energy4 (stage 2): the
+    check walks band's stage-1 actor and energy4's stage-2 actor, labelled by the seed folder; one whose last
     stage-2 phase has not finished is refused (not walked as stage 1 alone); a phase of both stages gives both."""
     from cyberdog import config as C
     from cyberdog.evaluation.check import run_actors
@@ -119,14 +119,15 @@ def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tm
 
     seed = tmp_path / "seed3"
     C.write_phases(seed, C.load_preset(Path(evaluate.__file__).parent / "configs" / "torque.yaml"), 3)
-    for phase, stage in (("main", 1), ("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2)):
+    for phase, stage in (("main", 1), ("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2),
+                         ("energy4", 2)):
         (seed / phase).mkdir()
         (seed / phase / f"stage{stage}_final_actor.pt").write_bytes(b"")
     assert run_actors([seed], "final") == {"seed3": {1: seed / "band" / "stage1_final_actor.pt",
-                                                     2: seed / "energy3" / "stage2_final_actor.pt"}}
+                                                     2: seed / "energy4" / "stage2_final_actor.pt"}}
     # its last stage-2 phase interrupted: refused, not walked as stage 1 alone
-    (seed / "energy3" / "stage2_final_actor.pt").unlink()
-    with pytest.raises(UsageError, match="phase energy3 .stage 2. has no stage2_final_actor.pt"):
+    (seed / "energy4" / "stage2_final_actor.pt").unlink()
+    with pytest.raises(UsageError, match="phase energy4 .stage 2. has no stage2_final_actor.pt"):
         run_actors([seed], "final")
     one = tmp_path / "seed4"  # configs/table5.yaml: one phase that trains both stages
     C.write_phases(one, C.load_preset(Path(evaluate.__file__).parent / "configs" / "table5.yaml"), 4)

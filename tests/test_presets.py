@@ -81,7 +81,7 @@ def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_w
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
         ("main", None), ("speed", "main/stage1_final.pt"), ("band", "speed/stage1_final.pt"),
         ("energy", "band/stage1_final.pt"), ("energy2", "energy/stage2_final.pt"),
-        ("energy3", "energy2/stage2_final.pt")]
+        ("energy3", "energy2/stage2_final.pt"), ("energy4", "energy3/stage2_final.pt")]
     assert C.load_preset(ROOT / "configs/battery.yaml").extract == {"replay_attempts": 16, "candidates": 2}
     assert not C.load_preset(ROOT / "configs/tiny.yaml").phased  # a plain two-stage run, as before phases
 

@@ -51,9 +51,8 @@ def test_portable_paths_are_relative_to_the_folder_or_name_the_run():
 
 
 def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every_phases_log(tmp_path):
-    """configs/torque.yaml: main, speed and band end with stage 1, energy, energy2 and energy3 with stage 2: the
-    shipped stage-1 actor is band's, the stage-2 actor energy3's, and each phase's log and summary travel with
-    them."""
+    """configs/torque.yaml: main, speed and band end with stage 1, energy to energy4 with stage 2: the shipped
+    stage-1 actor is band's, the stage-2 actor energy4's, and each phase's log and summary travel with them."""
     import csv
 
     import yaml
@@ -62,7 +61,7 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
 
     seed = tmp_path / "seed7"
     C.write_phases(seed, C.load_preset(ROOT / "configs" / "torque.yaml"), 7)
-    phases = (("main", 1), ("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2))
+    phases = (("main", 1), ("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2), ("energy4", 2))
     assert [(p.name, p.last_stage) for p in C.read_phases(seed)[0]] == list(phases)
     for phase, stage in phases:
         run = seed / phase
@@ -77,12 +76,12 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
             w.writerows(rows)
     out = tmp_path / "shipped"
     assert ship_result.main([str(seed), "--out", str(out), "--all-phases"]) == 0
-    assert (out / "stage1_actor.pt").read_bytes() == b"band" and (out / "stage2_actor.pt").read_bytes() == b"energy3"
-    assert yaml.safe_load((out / "config.yaml").read_text())["phase"] == "energy3"
+    assert (out / "stage1_actor.pt").read_bytes() == b"band" and (out / "stage2_actor.pt").read_bytes() == b"energy4"
+    assert yaml.safe_load((out / "config.yaml").read_text())["phase"] == "energy4"
     assert {f.name for f in out.glob("metrics_*.csv")} == {f"metrics_{name}.csv" for name, _ in phases}
     meta = json.loads((out / "metadata.json").read_text())
     assert meta["seed"] == 7 and list(meta["phases"]) == [name for name, _ in phases]
-    assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 6 * (4 * 10.0 + 8.0)
+    assert meta["phases"]["energy"]["stage2"]["env_steps"] == 2000 and meta["wall_time_s"] == 7 * (4 * 10.0 + 8.0)
     assert C.read_phases(out / "recipe_phases.yaml")[0] == C.read_phases(seed)[0]  # every phase's settings
     assert not C.is_lineage(out)  # not a folder to resume or extract as a lineage
 
@@ -129,7 +128,7 @@ def test_a_phase_placed_from_another_folder_ships_without_a_log_and_is_named(tmp
     C.write_phases(seed, C.load_preset(ROOT / "configs" / "torque.yaml"), 8)
     (seed / "main").mkdir(parents=True)
     (seed / "main" / "stage1_final.pt").write_bytes(b"agent")
-    for phase, stage in (("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2)):
+    for phase, stage in (("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2), ("energy4", 2)):
         run = seed / phase
         run.mkdir()
         (run / f"stage{stage}_final.pt").write_bytes(phase.encode())

@@ -131,14 +131,17 @@ def test_the_torque_speed_cap_candidate_keeps_the_band_phase_relative_and_caps_r
         150_000, 50_000, 100_000]
 
 
-def test_the_recipe_is_the_capped_stage1_candidate_as_it_was_tried():
-    """configs/torque.yaml is notebook/configs/torque_capped_stage1.yaml promoted with nothing changed: the same
-    phases from the same starts with the same settings, so the candidate's seeds are the recipe's."""
+def test_the_recipe_is_the_capped_stage1_candidate_as_it_was_tried_and_energy3_once_more():
+    """configs/torque.yaml is notebook/configs/torque_capped_stage1.yaml promoted with nothing changed (the same
+    phases from the same starts with the same settings, so the candidate's seeds are the recipe's up to energy3),
+    and one phase more: energy4, energy3's settings from energy3's final agent."""
     recipe, candidate = _phases("torque.yaml"), _phases("notebook/configs/torque_capped_stage1.yaml")
     assert [(p.name, p.stage, p.start) for p in recipe.values()] == [
-        (p.name, p.stage, p.start) for p in candidate.values()]
-    for name in recipe:
+        (p.name, p.stage, p.start) for p in candidate.values()] + [("energy4", "2", "energy3/stage2_final.pt")]
+    for name in candidate:
         assert C.changed_settings(recipe[name].config, candidate[name].config) == {}, name
+    assert C.changed_settings(recipe["energy4"].config, recipe["energy3"].config) == {}
+    assert recipe["energy4"].config.train.stage2.reward.energy == -1.2
 
 
 def test_the_torque_speed_cap_results_were_made_by_its_phases_as_they_resolve_now():
