@@ -39,8 +39,8 @@ from cyberdog.analysis.markdown_cells import header as _header
 from cyberdog.analysis.markdown_cells import line as _line
 from cyberdog.analysis.markdown_cells import mean_ci, seeds_named
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
-from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_FRESH_WALKS_ROW, TORQUE_SAVING_ROW,
-                                           TORQUE_WALKS_ROW, torque_markdown)
+from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_SAVING_ROW, TORQUE_WALKS_ROW,
+                                           torque_markdown)
 from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 
 FRESH_SEEDS = "seeds 5–9"  # the seeds the recipes were never tuned on, as their rows name them
@@ -60,15 +60,14 @@ HEADLINES = {
     "gains_headline": ("gains", (GAINS_DEFAULT_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
                                  "kd 2×, as commanded", "**kd 2×, re-commanded**")),
     "torque_headline": ("torque", (TORQUE_WALKS_ROW.format(robots="ideal robot, hardware-like draws 0 and 1"),
+                                   "electrical J/m, stage 1 (ideal robot)",
                                    "**electrical J/m, stage 2 (ideal robot)**",
                                    TORQUE_SAVING_ROW.format(robot="ideal robot"),
-                                   TORQUE_FRESH_WALKS_ROW.format(seeds=FRESH_SEEDS),
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
-OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_WALKS_ROW.format(seeds=FRESH_SEEDS),
-                 TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS)}
+OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS)}
 NAMES = ("table5", "prototype", "stiffness", "gains", "torque", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
