@@ -119,10 +119,9 @@ def test_a_recipes_seed_folder_gives_its_last_stage1_and_stage2_phases_actors(tm
 
     seed = tmp_path / "seed3"
     C.write_phases(seed, C.load_preset(Path(evaluate.__file__).parent / "configs" / "torque.yaml"), 3)
-    for phase, stage in (("main", 1), ("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2),
-                         ("energy4", 2)):
-        (seed / phase).mkdir()
-        (seed / phase / f"stage{stage}_final_actor.pt").write_bytes(b"")
+    for phase in C.read_phases(seed)[0]:  # every phase finished: its final actor written
+        (seed / phase.name).mkdir()
+        (seed / phase.name / f"stage{phase.last_stage}_final_actor.pt").write_bytes(b"")
     assert run_actors([seed], "final") == {"seed3": {1: seed / "band" / "stage1_final_actor.pt",
                                                      2: seed / "energy4" / "stage2_final_actor.pt"}}
     # its last stage-2 phase interrupted: refused, not walked as stage 1 alone

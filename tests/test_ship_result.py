@@ -128,7 +128,7 @@ def test_a_phase_placed_from_another_folder_ships_without_a_log_and_is_named(tmp
     C.write_phases(seed, C.load_preset(ROOT / "configs" / "torque.yaml"), 8)
     (seed / "main").mkdir(parents=True)
     (seed / "main" / "stage1_final.pt").write_bytes(b"agent")
-    for phase, stage in (("speed", 1), ("band", 1), ("energy", 2), ("energy2", 2), ("energy3", 2), ("energy4", 2)):
+    for phase, stage in [(p.name, p.last_stage) for p in C.read_phases(seed)[0]][1:]:  # every phase after main
         run = seed / phase
         run.mkdir()
         (run / f"stage{stage}_final.pt").write_bytes(phase.encode())
