@@ -48,11 +48,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
-import yaml
 from tensordict import TensorDict
 
 import cyberdog.rl.trainer as trainer_module
 from cyberdog import config as C
+from cyberdog.config.preset import load_preset
 from cyberdog.rl.torchrl_env import make_gym_env
 from cyberdog.envs.cyberdog_env import observation_size
 from cyberdog.rl.trainer import ACTION_SIZE, Trainer
@@ -66,11 +66,11 @@ def frames_per_batch(args, num_envs: int = 1) -> int:
 
 
 def experiment(args, collection: str, steps: int, num_envs: int = 1) -> C.ExperimentConfig:
-    """`--config`'s environment; default agent with 3x128 nets; one update per env step, batch 256 and a stage-1
-    budget of `steps`, collected by `num_envs` envs. (Only the env section of the preset is read: the timing does
-    not depend on the other agent settings, and the script keeps working when the preset gains fields.)"""
-    with open(ROOT / args.config) as f:
-        env = C.from_dict(C.EnvConfig, yaml.safe_load(f)["env"])
+    """`--config`'s environment (the preset resolved, `base:` and all); default agent with 3x128 nets; one update
+    per env step, batch 256 and a stage-1 budget of `steps`, collected by `num_envs` envs. (Only the env of the
+    preset is kept: the timing does not depend on the other agent settings.)"""
+    path = Path(args.config)
+    env = load_preset(path if path.is_absolute() else ROOT / path).config.env
     sets = ["train.batch_size=256", "train.updates_per_frame=1", "train.init_random_frames=0",
             f"train.learning_starts={args.learning_starts}", f"train.stage1.max_env_steps={steps}",
             "train.stage1.stop_score=.inf", "train.stage1.save_score=.inf", "train.checkpoint_every=1000000000",
