@@ -1,10 +1,8 @@
-"""The gains table (docs/results.md, the README's headline of it): its rows from `tools/gains_walks.py`'s walks,
-as commanded, re-commanded and the policies closed loop, and the tool that labels each run by its gain."""
+"""The gains table (docs/results.md, the README's headline of it): its rows from `tools/merge_walks.py gains`'s
+walks, as commanded, re-commanded and the policies closed loop (the tool itself: tests/test_merge_walks.py)."""
 from __future__ import annotations
 
 from pathlib import Path
-
-import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -61,31 +59,3 @@ def test_a_gains_run_that_walked_the_policies_gives_their_row_beside_the_default
     assert row["kd 2×, the policy, closed loop"] == row[GAINS_DEFAULT_POLICY_ROW] != row[GAINS_DEFAULT_ROW]
     (tmp_path / "stiffness_walks.json").unlink()  # no default-gains policy walks shipped: no default policy row
     assert GAINS_DEFAULT_POLICY_ROW not in make_tables(tmp_path)["gains"]
-
-
-def test_the_gains_walks_tool_labels_each_run_by_the_one_gain_it_changed(tmp_path):
-    import importlib.util
-    import json
-
-    spec = importlib.util.spec_from_file_location("gains_walks", ROOT / "tools" / "gains_walks.py")
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
-
-    def run(name, pid, matched=False):
-        folder = tmp_path / name
-        folder.mkdir()
-        (folder / "config.yaml").write_text(json.dumps({"pid": pid}))  # (YAML reads JSON)
-        (folder / "prototype.json").write_text(json.dumps([{"trajectory": "learned", "pd_matched": matched},
-                                                           {"trajectory": "cycloid", "pd_matched": matched}]))
-        return folder
-
-    kd2 = run("kd2", {"kd": [4.0, 4.0, 4.0]})
-    kd2m = run("kd2m", {"kd": [4.0, 4.0, 4.0]}, matched=True)
-    walks = tool.gains_walks([kd2, kd2m])
-    assert {(w["gain"], w["gain_scale"], w["pd_matched"]) for w in walks} == {("kd", 2.0, False), ("kd", 2.0, True)}
-    for bad, words in (({"kp": [120.0] * 3, "kd": [4.0] * 3}, "changes"), ({}, "neither"),
-                       ({"kp": [120.0, 60.0, 60.0]}, "not one factor")):
-        with pytest.raises(ValueError, match=words):
-            tool.gains_walks([run(f"bad{len(list(tmp_path.iterdir()))}", bad)])
-    with pytest.raises(ValueError, match="also"):
-        tool.gains_walks([kd2, run("kd2again", {"kd": [4.0, 4.0, 4.0]})])

@@ -18,7 +18,7 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
   (`evaluate.py stiffness`): the battery saving of the replayed paths, the policies and the searched shape at
   each, falls counted; where `stiffness_matched_walks.json` is shipped too (`evaluate.py stiffness
   --pd-matched`), the replayed paths with every command re-solved for the PD, beside them.
-- `gains` (where `gains_walks.json` is shipped, `tools/gains_walks.py`): the same run with the drivers' kp or kd
+- `gains` (where `gains_walks.json` is shipped, `tools/merge_walks.py gains`): the same run with the drivers' kp or kd
   alone scaled, as commanded and re-commanded (`evaluate.py prototype --pd-matched-from-default`), beside the
   default gains' saving; where the runs walked the policies too (`--closed-loop`), the policies' own saving under
   those gains, beside theirs at the default gains (the stiffness run's PD 1× walks).
@@ -77,7 +77,7 @@ FRESH_SOURCE = "comparison_fresh.json"  # optional: the Table 5 recipe's paths o
 PROTOTYPE_FRESH_SOURCE = "prototype_fresh.json"
 STIFFNESS_SOURCE = "stiffness_walks.json"  # optional: `evaluate.py stiffness`'s walks (the PD at several stiffnesses)
 STIFFNESS_MATCHED_SOURCE = "stiffness_matched_walks.json"  # optional: the same with --pd-matched
-GAINS_SOURCE = "gains_walks.json"  # optional: prototype runs with kp or kd alone changed (tools/gains_walks.py)
+GAINS_SOURCE = "gains_walks.json"  # optional: prototype runs with kp or kd alone changed (tools/merge_walks.py gains)
 # optional: `evaluate.py check --runs <the torque recipe's actors> --robots ideal hardware:0 hardware:1 --trot`
 TORQUE_CHECK_SOURCE = "torque_check.json"
 TORQUE_CHECK_FRESH_SOURCE = "torque_check_fresh.json"  # optional: the same check of the seeds never tuned on
@@ -258,7 +258,7 @@ def stiffness_markdown(walks: list[dict], robot: str = "hardware", matched: list
 def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware",
                    default_policy_walks: list[dict] | None = None) -> str:
     """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
-    scaled (`tools/gains_walks.py`'s walks, each labelled `gain`, `gain_scale`, `pd_matched`), as commanded and
+    scaled (`tools/merge_walks.py gains`'s walks, each labelled `gain`, `gain_scale`, `pd_matched`), as commanded and
     re-commanded, beside the default gains' (the prototype run's `default_walks`). Where a run walked the
     policies too (`prototype --closed-loop`), their row follows that factor's: the policy itself under those
     gains, nothing re-solved; `default_policy_walks` (walks at the default gains with the policies among them,

@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""The walks of several `evaluate.py` runs, assembled into the input of one table.
+
+    python tools/merge_walks.py stiffness runs/stiffness_320_s012 runs/stiffness_320_s34 --out runs/stiffness_320_s01234
+    python tools/merge_walks.py gains runs/gains_kp05 runs/gains_kp05_rematched ... --out results/figures_input/gains_walks.json
+
+stiffness: one stiffness table from several `evaluate.py stiffness` runs, seeds walked apart (on other machines,
+  or a seed trained later) summarised together. Every walk of the study is deterministic and belongs to one
+  seed's label (its learned path, its policy, the common trajectories and the searched shape at that path's lift,
+  on the same robots), so the walks of runs over disjoint seeds are exactly the walks one run over all of them
+  makes. Each run's `stiffness_walks.json` is read; a seed that two runs both walked is refused (unless their
+  walks are equal to the last digit: the same seed walked twice), as are runs that differ in their stiffnesses or
+  speeds; the summary is written as `evaluate.py stiffness` writes it (`stiffness.{csv,json,md}`,
+  `stiffness_walks.json`) into a new folder. Exit 1 on a conflict between the runs.
+
+gains: the gains table's walks from `evaluate.py prototype` runs, one per changed gain: each run's walks labelled
+  with the gain it changed and by how much, into one JSON file (`results/figures_input/gains_walks.json` for the
+  gains table, made by `tools/make_readme_tables.py`). A run is one prototype run with the drivers' kp or kd (one
+  of them, the same factor on every joint) set apart from the default (`PIDConfig`), read from its `config.yaml`;
+  its walks were re-commanded for those gains where they say `pd_matched` (`prototype --pd-matched-from-default`).
+  Every walk gets `gain` ("kp" or "kd"), `gain_scale` (the factor) and keeps `pd_matched`. A run that changes both
+  gains, neither, or the two unevenly across joints is refused, as is a gain, factor and kind (as commanded or
+  re-commanded) given twice. Exit 2 on a refused run or an existing --out.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import yaml
+
+from cyberdog.analysis.stiffness import write_stiffness
+from cyberdog.config import PIDConfig
+
+STIFFNESS_WALKS = "stiffness_walks.json"
+WALL_CLOCK = ("wall_s",)  # fields that differ between two walks of the same seed (machine time, not physics)
+
+
+# ---- stiffness ------------------------------------------------------------------------------------------------
+def walk_key(row: dict) -> tuple:
+    return tuple(row.get(k) for k in ("seed", "trajectory", "robot", "draw", "speed_mps", "pd_scale"))
+
+
+def physics(row: dict) -> dict:
+    return {k: v for k, v in row.items() if k not in WALL_CLOCK}
+
+
+def merge_stiffness(runs: list[list[dict]], names: list[str]) -> list[dict]:
+    """The walks of all runs, each once; ValueError on a seed walked differently by two runs, or on runs whose
+    stiffnesses or speeds differ."""
+    grids = {name: (sorted({r["pd_scale"] for r in rows}), sorted({r["speed_mps"] for r in rows}))
+             for name, rows in zip(names, runs)}
+    if len(set(map(str, grids.values()))) > 1:
+        raise ValueError("the runs walk different PD scales or speeds: "
+                         + "; ".join(f"{n}: scales {g[0]}, speeds {g[1]}" for n, g in grids.items()))
+    merged: dict[tuple, dict] = {}
+    owner: dict[tuple, str] = {}
+    for name, rows in zip(names, runs):
+        for row in rows:
+            key = walk_key(row)
+            if key in merged and physics(merged[key]) != physics(row):
+                raise ValueError(f"seed {row.get('seed')!r} ({row.get('trajectory')}, {row.get('speed_mps')} m/s, PD "
+                                 f"{row.get('pd_scale')}x) was walked by {owner[key]} and {name} with different "
+                                 "results: not the same seed's paths")
+            merged.setdefault(key, row)
+            owner.setdefault(key, name)
+    return list(merged.values())
+
+
+def stiffness_command(p: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    if len(args.runs) < 2:
+        p.error("give two runs or more")
+    missing = [str(r) for r in args.runs if not (r / STIFFNESS_WALKS).is_file()]
+    if missing:
+        p.error(f"no {STIFFNESS_WALKS} in {', '.join(missing)}")
+    if args.out.exists() and any(args.out.iterdir()):
+        p.error(f"{args.out} holds files: choose a new --out (results are never overwritten)")
+    try:
+        rows = merge_stiffness([json.loads((r / STIFFNESS_WALKS).read_text()) for r in args.runs],
+                               [str(r) for r in args.runs])
+    except ValueError as err:
+        print(f"merge_walks stiffness: {err}", file=sys.stderr)
+        return 1
+    args.out.mkdir(parents=True, exist_ok=True)
+    seeds = sorted({str(r.get("seed")) for r in rows})
+    print(f"{len(rows)} walks of {len(seeds)} seeds ({', '.join(seeds)}) from {len(args.runs)} runs\n")
+    print(write_stiffness(rows, args.out))
+    print(f"wrote {args.out}/stiffness.{{csv,json,md}} and {STIFFNESS_WALKS}")
+    return 0
+
+
+# ---- gains ----------------------------------------------------------------------------------------------------
+def run_gain(folder: Path) -> tuple[str, float]:
+    """("kp" or "kd", factor over the default) of a prototype run folder's config; ValueError otherwise."""
+    pid = (yaml.safe_load((folder / "config.yaml").read_text()) or {}).get("pid", {})
+    default = PIDConfig()
+    changed = {}
+    for gain in ("kp", "kd"):
+        values, base = [float(v) for v in pid.get(gain, getattr(default, gain))], getattr(default, gain)
+        factors = {round(v / b, 6) for v, b in zip(values, base)}
+        if len(factors) != 1:
+            raise ValueError(f"{folder}: {gain} {values} is not one factor of the default {list(base)}")
+        if factors != {1.0}:
+            changed[gain] = factors.pop()
+    if len(changed) != 1:
+        raise ValueError(f"{folder}: a gains run changes kp or kd alone, this one changes {sorted(changed) or 'neither'}")
+    return next(iter(changed.items()))
+
+
+def gains_walks(folders: list[Path]) -> list[dict]:
+    walks, seen = [], {}
+    for folder in folders:
+        gain, scale = run_gain(folder)
+        rows = json.loads((folder / "prototype.json").read_text())
+        kinds = {bool(r.get("pd_matched")) for r in rows if r["trajectory"] == "learned"}
+        if len(kinds) != 1:
+            raise ValueError(f"{folder}: its learned walks are partly re-commanded")
+        key = (gain, scale, kinds.pop())
+        if key in seen:
+            raise ValueError(f"{folder}: {gain} × {scale:g} ({'re-commanded' if key[2] else 'as commanded'}) "
+                             f"is also {seen[key]}")
+        seen[key] = folder
+        walks += [dict(r, gain=gain, gain_scale=scale) for r in rows]
+    return walks
+
+
+def gains_command(p: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    if args.out.exists() and not args.force:
+        print(f"error: {args.out} exists (--force to overwrite)", file=sys.stderr)
+        return 2
+    try:
+        walks = gains_walks(args.runs)
+    except (ValueError, OSError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(walks, separators=(",", ":")))
+    print(f"{len(walks)} walks of {len(args.runs)} runs -> {args.out}")
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True, metavar="{stiffness,gains}")
+    s = sub.add_parser("stiffness", help="one stiffness table from evaluate.py stiffness runs over other seeds")
+    s.add_argument("runs", type=Path, nargs="+", help=f"output folders of evaluate.py stiffness (with {STIFFNESS_WALKS})")
+    s.add_argument("--out", type=Path, required=True, help="a new folder for the merged table")
+    g = sub.add_parser("gains", help="the gains table's walks from evaluate.py prototype runs, one per changed gain")
+    g.add_argument("runs", type=Path, nargs="+", help="evaluate.py prototype output folders")
+    g.add_argument("--out", type=Path, required=True, help="the JSON file to write (refused if it exists)")
+    g.add_argument("--force", action="store_true", help="overwrite --out")
+    args = p.parse_args(argv)
+    parser = s if args.command == "stiffness" else g
+    return (stiffness_command if args.command == "stiffness" else gains_command)(parser, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
