@@ -67,7 +67,7 @@ def test_vertical_foot_offset_authority():
     env = gym.make("CyberDog-v0", action_mode="foot", foot_offset_scale=0.03, foot_offset_scale_z=0.10)
     env.reset(seed=0)
     env.step(np.tile([1.0, 1.0, -1.0], 4))
-    offsets = np.array(env.unwrapped.controller.last_foot_offsets)  # at the step's last controller period
+    offsets = np.array(env.unwrapped.walker.controller.last_foot_offsets)  # at the step's last controller period
     assert offsets[:, :2] == pytest.approx(0.03) and offsets[:, 2] == pytest.approx(-0.10)
     with pytest.raises(ValueError, match="foot_offset_scale_z"):
         C.EnvConfig(foot_offset_scale_z=-0.1)

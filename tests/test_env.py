@@ -233,14 +233,14 @@ def test_an_unreachable_foot_target_ends_the_episode_as_a_fall(mode, monkeypatch
     env = CyberDogEnv(C.EnvConfig(action_mode=mode, control_dt=0.01, **extra), reward="stage1")
     env.reset(seed=0)
     assert not env.step(np.zeros(12))[2]
-    command = env.controller.command
+    command = env.walker.controller.command
 
     def out_of_reach(*args, **kwargs):
         if env.walker.steps >= 4:  # from the second agent step on
             raise UnreachableFootTarget("unreachable foot target [0.0, 0.0, -0.5]: outside the leg's reach")
         return command(*args, **kwargs)
 
-    monkeypatch.setattr(env.controller, "command", out_of_reach)
+    monkeypatch.setattr(env.walker.controller, "command", out_of_reach)
     obs, reward, terminated, truncated, info = env.step(np.zeros(12))
     assert terminated and not truncated and info["fallen"] and np.isfinite(reward) and np.isfinite(obs).all()
     assert info["fall_reason"].startswith("unreachable foot target")

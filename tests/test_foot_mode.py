@@ -79,7 +79,7 @@ def test_foot_action_ramps_each_offset_to_the_clipped_action_times_the_scale():
     env.reset(seed=0)
     scale = np.array([0.03, 0.03, 0.02])
     period, agent_dt = env.walker.dt, env.cfg.control_dt
-    c, previous = env.controller, np.zeros((4, 3))
+    c, previous = env.walker.controller, np.zeros((4, 3))
     for action in (np.linspace(-1.5, 1.5, 12, dtype=np.float32), np.linspace(0.9, -0.4, 12, dtype=np.float32)):
         start_time = env.walker.time
         env.step(action)

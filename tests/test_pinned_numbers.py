@@ -29,10 +29,10 @@ def _cycloid(speed: float = 1.0) -> C.WalkConfig:
 
 def _env_run(**options) -> list[float]:
     """Up to 40 agent steps (1 s) with a fixed action sequence: Σ Eq. 7 energy, mean speed, Σ reward, Σ|last obs|.
-    Residual mode, Table 3's 50 observations and the fixed 1.0 m/s command unless `options` say otherwise: the
-    env's defaults when these numbers were pinned."""
+    Residual mode, Table 3's 50 observations, the fixed 1.0 m/s command and Eq. 11's reward unless `options` say
+    otherwise."""
     env = CyberDogEnv(**{"action_mode": "residual", "observe_last_action": False, "target_speed_range": (),
-                         **options})
+                         "reward": "stage2", **options})
     try:
         obs, _ = env.reset(seed=3)
         actions = np.random.default_rng(7).uniform(-0.5, 0.5, (40, 12))

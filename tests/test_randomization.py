@@ -10,7 +10,7 @@ from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.sim.hardware_model import RobotDraw, draw_robot
 
 ROOT = Path(__file__).resolve().parents[1]
-BATTERY = ROOT / "notebook/configs/quick_speeds_battery.yaml"
+BATTERY = ROOT / "configs/battery.yaml"
 WIDE = C.RandomizationConfig(joint_friction_scale=(0.5, 1.5), latency_periods=(0, 2), mass_scale=(0.9, 1.1),
                              motor_strength=(0.9, 1.1), kp_factor=(0.8, 1.2), kd_factor=(0.7, 1.3),
                              ground_friction_scale=(0.7, 1.3))
@@ -37,7 +37,7 @@ def test_the_env_draws_one_robot_per_episode_from_its_generator():
         assert len({d["mass_scale"] for d in first}) == 4  # a new robot each episode
         last = RobotDraw(**first[-1])
         # the draw is what the robot walks with
-        robot, walker = env.robot, env.walker
+        robot, walker = env.walker.robot, env.walker
         assert robot.mass_scale == last.mass_scale
         assert robot.actuator.friction_scale == last.joint_friction_scale
         assert robot.actuator.strength == last.motor_strength
@@ -45,8 +45,8 @@ def test_the_env_draws_one_robot_per_episode_from_its_generator():
         assert robot.ground_friction == pytest.approx(env.cfg.walk.sim.ground_friction * last.ground_friction_scale)
         plane = robot.client.getDynamicsInfo(robot.plane_id, -1)
         assert plane[1] == pytest.approx(robot.ground_friction)  # lateral friction as PyBullet holds it
-        np.testing.assert_allclose(env.controller.pid.kp, np.array(env.cfg.walk.pid.kp * 4) * last.kp_factor)
-        np.testing.assert_allclose(env.controller.pid.kd, np.array(env.cfg.walk.pid.kd * 4) * last.kd_factor)
+        np.testing.assert_allclose(env.walker.controller.pid.kp, np.array(env.cfg.walk.pid.kp * 4) * last.kp_factor)
+        np.testing.assert_allclose(env.walker.controller.pid.kd, np.array(env.cfg.walk.pid.kd * 4) * last.kd_factor)
     finally:
         env.close()
 
@@ -57,7 +57,7 @@ def test_without_randomisation_the_env_is_the_configured_robot():
     try:
         _, info = env.reset(seed=0)
         assert "robot_draw" not in info
-        assert env.robot.actuator.friction_scale == 1.0 and env.robot.actuator.strength == 1.0
+        assert env.walker.robot.actuator.friction_scale == 1.0 and env.walker.robot.actuator.strength == 1.0
         assert env.walker.delay.steps == 1  # HARDWARE_LIKE's one period
     finally:
         env.close()
@@ -79,7 +79,7 @@ def test_a_drawn_actuator_scales_friction_and_torque():
 def test_the_battery_preset_contains_the_hardware_like_robot():
     """The prototype's hardware-like robot lies inside the training ranges, so that the evaluation's robot is
     one the policy could have met."""
-    cfg = C.load(C.ExperimentConfig, BATTERY)
+    cfg = C.load_preset(BATTERY).config  # its stage 2 (the stage1 phase is Table 5's, on the ideal robot)
     r, hw = cfg.env.randomization, cfg.env.hardware
     like = C.HARDWARE_LIKE
     assert r.enabled and hw.friction and hw.estimated_velocity and hw.imu_noise
@@ -113,7 +113,7 @@ def test_a_range_left_nominal_keeps_the_hardwares_latency_and_mass_and_a_set_ran
     draw = info["robot_draw"]
     assert draw["latency_periods"] == 1 and draw["mass_scale"] != 1.0
     assert abs(draw["mass_scale"] - 1.0) <= C.HARDWARE_LIKE.mass_uncertainty
-    assert env.walker.delay.steps == 1 and env.robot.mass_scale == draw["mass_scale"]
+    assert env.walker.delay.steps == 1 and env.walker.robot.mass_scale == draw["mass_scale"]
     env.close()
     with pytest.raises(ValueError, match="randomization.latency_periods.*hardware.latency_s"):
         C.EnvConfig(hardware=C.HARDWARE_LIKE, randomization=C.RandomizationConfig(latency_periods=(2, 3)))

@@ -171,12 +171,12 @@ def test_figures_into_their_own_folder_add_to_it_and_say_whose_files_are_whose(t
 
 # ---- a stage that would make no gradient update ----------------------------------------------------------------
 def test_a_stage_without_updates_is_refused_before_any_work(tmp_path):
-    quick = C.load(C.ExperimentConfig, ROOT / "notebook" / "configs" / "quick.yaml")
-    cfg = C.override(quick, ["train.stage1.max_env_steps=800", "train.stage2.max_env_steps=800"])
+    table5 = C.load_preset(ROOT / "configs" / "table5.yaml").config
+    cfg = C.override(table5, ["train.stage1.max_env_steps=800", "train.stage2.max_env_steps=800"])
     with pytest.raises(ValueError, match="train.stage1 would make no gradient update.*learning_starts=2000"):
         Trainer(cfg, tmp_path / "r", progress=False)
     assert not (tmp_path / "r").exists()
-    proc = run([ROOT / "train.py", "--config", ROOT / "notebook" / "configs" / "quick.yaml", "--set",
+    proc = run([ROOT / "train.py", "--config", ROOT / "configs" / "table5.yaml", "--set",
                 "train.stage1.max_env_steps=800", "--set", "train.stage2.max_env_steps=800", "--run-dir",
                 tmp_path / "r", "--no-progress"])
     assert_one_clear_line(proc, "no gradient update", "learning_starts")
@@ -202,18 +202,18 @@ def test_the_update_plan_matches_the_trainer_and_an_untrained_stage_is_not_final
     assert not (tmp_path / "b" / "stage1_final_actor.pt").exists()
 
 
-# ---- stage-final files: no replay buffer, what --init-from and evaluation need, < 2 MB for the quick preset --
-def test_stage_final_file_of_the_quick_preset_is_small_and_serves_init_from_and_evaluation(tmp_path):
+# ---- stage-final files: no replay buffer, what --init-from and evaluation need, < 2 MB for Table 5's preset ---
+def test_stage_final_file_of_the_table5_preset_is_small_and_serves_init_from_and_evaluation(tmp_path):
     from cyberdog.rl.rollout import load_actor
 
-    quick = C.load(C.ExperimentConfig, ROOT / "notebook" / "configs" / "quick.yaml")
-    # the quick preset's networks and buffer capacity, on a budget of one batch with updates
-    cfg = C.override(quick, ["train.learning_starts=0", "train.stage1.max_env_steps=200", "train.batch_size=64",
+    table5 = C.load_preset(ROOT / "configs" / "table5.yaml").config
+    # the preset's networks and buffer capacity, on a budget of one batch with updates
+    cfg = C.override(table5, ["train.learning_starts=0", "train.stage1.max_env_steps=200", "train.batch_size=64",
                              "env.episode_time=0.5"])
     Trainer(cfg, tmp_path / "q", stages=(1,), progress=False).run()
     final = tmp_path / "q" / "stage1_final.pt"
     size = final.stat().st_size
-    print(f"quick preset: stage1_final.pt {size} B, checkpoint.pt {(tmp_path / 'q' / 'checkpoint.pt').stat().st_size} B")
+    print(f"table5 preset: stage1_final.pt {size} B, checkpoint.pt {(tmp_path / 'q' / 'checkpoint.pt').stat().st_size} B")
     assert size < 2_000_000
     state = load_checkpoint(final)
     assert "replay" not in state and "actor_optimizer" not in state["agent"] and state["agent"]["updates"] == 100
@@ -320,7 +320,7 @@ with warnings.catch_warnings(record=True) as caught:
     env = gymnasium.make("CyberDog-v0", render_mode="human")
     env.reset(seed=0)
     env.step(env.action_space.sample())
-    assert env.render() is None and env.unwrapped.robot.gui is False
+    assert env.render() is None and env.unwrapped.walker.robot.gui is False
     env.close()
 assert any("no window for the simulation" in str(w.message) for w in caught), [str(w.message) for w in caught]
 check_env(gymnasium.make("CyberDog-v0").unwrapped)

@@ -19,7 +19,7 @@ def _walk(reward: C.RewardConfig, steps: int, seed: int = 0):
             assert not terminated
             terms.append(info["reward_terms"]["speed"])
             v.append(info["forward_speed_used"])
-            cmd.append(env.controller.commanded_speed(env.t))
+            cmd.append(env.walker.commanded_speed)
         return np.array(terms), np.array(v), np.array(cmd), env
     except BaseException:
         env.close()
@@ -43,7 +43,7 @@ def test_window_restarts_at_reset_and_zero_is_per_step():
     try:
         env.reset(seed=1)
         _, _, _, _, info = env.step(np.zeros(12))
-        first = (env.controller.commanded_speed(env.t) - info["forward_speed_used"]) ** 2
+        first = (env.walker.commanded_speed - info["forward_speed_used"]) ** 2
         assert info["reward_terms"]["speed"] == pytest.approx(first, rel=1e-12)  # no step of the last episode
     finally:
         env.close()
@@ -213,7 +213,7 @@ def _trot_steps(config: C.EnvConfig, reward: C.RewardConfig, columns: tuple[str,
         for _ in range(steps):
             _, _, terminated, _, info = env.step(np.zeros(12))
             assert not terminated
-            row = {**info, "command": env.controller.commanded_speed(env.t), "speed": info["reward_terms"]["speed"]}
+            row = {**info, "command": env.walker.commanded_speed, "speed": info["reward_terms"]["speed"]}
             out.append([row[c] for c in columns])
         return np.array(out, dtype=float)
     finally:

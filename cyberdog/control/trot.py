@@ -6,7 +6,7 @@ the feedforward torque; `cyberdog.core.drivers.JointCommand`); the drivers close
 physics step (`cyberdog.loop.walker.Walker`). `torque` is command and drivers at one instant.
 
 What is added on top of the paper's joint PID, and why (each switchable in `ControllerConfig`; the
-NOTES' measurement on a similar robot found plain PD tracking reached only about half the commanded speed):
+docs/robot.md: on a similar robot plain PD tracking reached only about half the commanded speed):
 - joint-velocity feedforward: the trajectory's foot velocity mapped through the inverse leg Jacobian, so the
   D term tracks the motion instead of braking it;
 - stance gravity compensation: each stance foot pushes down with the body weight shared among the stance
@@ -18,8 +18,7 @@ NOTES' measurement on a similar robot found plain PD tracking reached only about
 - sideways foot placement in proportion to the body's sideways speed (Raibert's foot-placement idea), which
   damps the roll/sway that otherwise topples the trot at 1.2–1.4 m/s;
 - sagittal foot placement, off by default (`sagittal_placement_gain`): each touchdown moved ahead by
-  k·(v − v_cmd), Raibert's rule for the forward speed; measured as a stabiliser of replayed learned paths
-  (notebook/2026-11-27_stiffness.md), not part of the paper's trot;
+  k·(v − v_cmd), Raibert's rule for the forward speed; a stabiliser of replayed paths, not the paper's trot;
 - a start-up ramp of the commanded speed (`speed_ramp_time`, 1 s): stepping from rest to full speed at once
   rolled the body by up to 0.8 rad and toppled the straight-line trot at 1.4 m/s. A learned path's per-leg
   shift (`foot_offset_path`) is blended in over the same ramp, in proportion to the commanded speed.
@@ -82,11 +81,9 @@ class TrotController:
     `torque(t, q, dq, body)` returns the joint torque command (12,) in N·m.
     A custom trajectory (e.g. the learned one) can replace the one named in the config.
 
-    It runs at every controller period, so the per-period path works on Python floats leg by leg (scalar
-    IK, closed-form Jacobian solve) instead of numpy calls on (4, 3) arrays: measured, the four legs' IK and
-    joint velocities take 9 µs as floats and 35 µs as one vectorised numpy call (numpy's per-call overhead
-    on 4-element arrays exceeds the arithmetic). The arithmetic is that of `cyberdog.core.kinematics`' array
-    functions (tests/test_fast_paths.py checks the torque against them).
+    It runs at every controller period, so its path works on Python floats leg by leg (scalar IK, closed-form
+    Jacobian solve; on 4-element arrays numpy's call overhead exceeds the arithmetic): the arithmetic of
+    `cyberdog.core.kinematics`' array functions, which tests/test_fast_paths.py checks it against.
     """
 
     def __init__(self, cfg: WalkConfig, trajectory: FootTrajectory | None = None,
@@ -106,6 +103,7 @@ class TrotController:
         self.foot_offsets: list[tuple[float, float, float]] | None = None  # m, see set_foot_offsets
         self.foot_offset_rates: list[tuple[float, float, float]] | None = None  # m/s
         self.foot_offset_time: float | None = None  # s, when the offsets held `foot_offsets` (None: held still)
+        self._ramp_end = [(0.0, 0.0, 0.0)] * 4  # m, where the last foot-offset ramp ended
         # a periodic shift of each foot target over its phase (a learned trajectory's), on top of the above
         self.foot_offset_path = foot_offset_path
         # what the last call of the per-period path commanded: foot targets (4 × (x, y, z)) m, leg frame, and the
@@ -124,8 +122,12 @@ class TrotController:
         self._placement_swing = [0.0] * 4
         self._was_swinging = [False] * 4
 
-    def reset(self) -> None:
+    def reset(self, kp_factor: float = 1.0, kd_factor: float = 1.0) -> None:
+        """Start a walk: the PID's gains kp × `kp_factor`, kd × `kd_factor` of the configured ones (a robot drawn
+        with other gains; 1 and 1: the configured robot), its integral cleared, no speed correction or shift."""
+        self.pid.set_gain_factors(kp_factor, kd_factor)
         self.pid.reset()
+        self._ramp_end = [(0.0, 0.0, 0.0)] * 4
         self.speed_correction = 0.0
         self.speed_correction_limit = 0.0  # m/s, ± the speed integral's bound at the last command
         self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (the unshifted one went)
@@ -138,10 +140,8 @@ class TrotController:
         """Shift each foot target by `offsets` (4, 3), m, leg frame (x forward, y left, z up), legs LF, RF, LH,
         RH, moving at `rates` (4, 3), m/s (added to the velocity feedforward; None = still), until the next
         call; None removes the shift. With `at_time` (s) the shift is a ramp: `offsets` at that time, then
-        offsets + rates·(t − at_time) at time t (one call per agent step instead of one per controller
-        period); without it the shift stays at `offsets`. This is how a policy modulates the trajectory
-        (`CyberDogEnv`'s action_mode="foot"). A shifted target the leg cannot reach falls back to the
-        unshifted one."""
+        offsets + rates·(t − at_time) at time t; without it the shift stays at `offsets`. A shifted target the
+        leg cannot reach falls back to the unshifted one."""
         self.foot_offset_time = None
         if offsets is None:
             self.foot_offsets = self.foot_offset_rates = None
@@ -162,11 +162,19 @@ class TrotController:
                 raise ValueError(f"a foot offset ramp needs rates and a finite at_time (s), got {at_time!r}")
             self.foot_offset_time = float(at_time)
 
-    def ramp_foot_offsets(self, offsets: list, rates: list, at_time: float) -> None:
-        """`set_foot_offsets(offsets, rates, at_time)` for offsets and rates already as 4 tuples of 3 finite
-        floats each (m, m/s) and a finite time (s), unchecked: the env's per-agent-step path, which has checked
-        the action they come from."""
-        self.foot_offsets, self.foot_offset_rates, self.foot_offset_time = offsets, rates, at_time
+    def ramp_foot_offsets_to(self, end: list, duration: float, at_time: float) -> None:
+        """Shift the foot targets by offsets that ramp linearly from where the last ramp ended (zero after a
+        reset) to `end` (4 tuples of (x, y, z), m, leg frame) over `duration` s from `at_time` s: the first-order
+        hold of a policy's foot targets (`CyberDogEnv`'s foot mode), so that the target path stays continuous.
+        Controller period k after `at_time` holds the ramp's value at its own end, start + rate·(k + 1)·dt, so
+        the last period of the ramp reaches `end`. Unchecked floats: the per-agent-step path, whose action was
+        checked."""
+        start, dt = self._ramp_end, self.cfg.sim.controller_dt
+        rates = [((x1 - x0) / duration, (y1 - y0) / duration, (z1 - z0) / duration)
+                 for (x0, y0, z0), (x1, y1, z1) in zip(start, end)]  # m/s
+        self.foot_offsets = [(x0 + rx * dt, y0 + ry * dt, z0 + rz * dt)
+                             for (x0, y0, z0), (rx, ry, rz) in zip(start, rates)]
+        self.foot_offset_rates, self.foot_offset_time, self._ramp_end = rates, at_time, end
 
     def set_speed(self, speed: float) -> None:
         if not np.isfinite(speed) or speed < 0:

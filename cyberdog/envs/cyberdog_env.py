@@ -21,124 +21,89 @@ from cyberdog.loop.walker import Walker
 from cyberdog.sim.hardware_model import draw_mass_scale, draw_robot, resolve_draw
 
 REWARD_PRESETS = {"stage1": C.STAGE1_REWARD, "stage2": C.STAGE2_REWARD}
+# CyberDog-v0's reward: Eq. 11 with the presets' keep-moving bonus D = 300, under which walking (+70 over an
+# episode) scores above falling (−47); with Eq. 11's D = 25 falling early scores higher (PAPER_REWARD_WARNING)
+TASK_REWARD = C.RewardConfig(keep_moving=300.0)
 PAPER_REWARD_WARNING = (
-    "CyberDog-v0 with the paper's stage-2 reward (Eq. 11: keep-moving bonus D = 25, energy E = -0.2 per J; the "
-    "default) has no fall penalty, and with it falling early scores higher than walking: a policy trained on it "
-    "learns to fall. Train with reward='stage1' first, or with a larger keep-moving bonus (RewardConfig("
-    "keep_moving=300), as configs/table5.yaml's stage 2); see docs/environment.md")
+    "CyberDog-v0 with the paper's stage-2 reward (Eq. 11: keep-moving bonus D = 25, energy E = -0.2 per J; "
+    "EnvConfig's default) has no fall penalty, and with it falling early scores higher than walking: a policy "
+    "trained on it learns to fall. Train with reward='stage1' first, or with a larger keep-moving bonus "
+    "(RewardConfig(keep_moving=300), the task's own, as configs/table5.yaml's stage 2); see docs/environment.md")
 
 class CyberDogEnv(gym.Env):
-    """The CyberDog walks forward at a commanded speed; the paper's reward trades speed, straightness,
-    body height, survival and energy.
+    """The CyberDog walks forward at a commanded speed; the paper's reward (Eq. 10) trades speed, straightness,
+    body height, survival and energy. `CyberDogEnv()` is the registered `CyberDog-v0`.
 
-    **Timing.** The joint controller runs at 400 Hz (`walk.sim.controller_dt`): its command (targets, target
-    speeds, gains, feed-forward) is held over the period, and the motor drivers close their PD on the joint
-    state at every physics step (800 Hz, `walk.sim.physics_dt`); the agent acts every Ts = 25 ms
-    (`control_dt`, 10 controller periods); an episode lasts Tf = 10 s = 400 steps (registered
-    `max_episode_steps=400`, Table 4). All of it runs in the project's one simulation loop
-    (`cyberdog.loop.walker.Walker`, the same as the scripted walks').
+    **Timing.** The agent acts every Ts = 25 ms (`control_dt`); the joint controller's command is held per
+    2.5 ms period (`walk.sim.controller_dt`, 10 per agent step); the motor drivers close their PD at every
+    physics step (`walk.sim.physics_dt`, 800 Hz at the default gains). An episode is Tf = 10 s = 400 steps
+    (the registration's `max_episode_steps`, Table 4). All of it runs in `cyberdog.loop.walker.Walker`, the
+    loop of every scripted walk too.
 
-    **Action** (12,), float32 in [−1, 1], joint order LF, RF, LH, RH × (abad, hip, knee), scaled by
-    `action_scale` = 25 N·m (Table 4), then through the actuator model (clip, torque–speed curve):
-    - `action_mode="torque"` (the paper's, Table 3): the action is the joint torque, held over the agent step;
-      two documented departures can be switched on (both off by default; docs/training.md, the torque recipe):
-      the drivers' damping `joint_damping` (−c·q̇ at every physics step, motor torque that Eq. 7 books), and a
-      prior from the trot controller whose weight decays to exactly 0 during training (`prior_weight`,
-      `prior_decay_steps`; DecAP): τ = 25·a + w·τ_trot, τ_trot computed at the agent step's state and held.
-      `info["prior_weight"]` is the weight the step used; with `trot_reference` (or a prior) `info["trot_action"]`
-      is τ_trot in action units (clipped to ±1), what a learner may pull its actor toward;
-    - `action_mode="residual"` (default): the action is added to the torque of the diagonal trot controller
-      (trajectory + IK + PID), so that a policy learns corrections to a walking gait — practical on a CPU;
-    - `action_mode="foot"`: the action shifts the trot controller's foot targets by up to
-      ±`foot_offset_scale` (0.03 m) per axis (z: `foot_offset_scale_z` if set), (Δx, Δy, Δz) per leg in the
-      same leg order, reached by a linear ramp over the agent step from the last action's; the controller's
-      IK + PID track the shifted
-      path. The policy reshapes the foot trajectory itself (a trajectory-modulating policy, cf. Iscen et al.
-      2018, "Policies Modulating Trajectory Generators"), which a torque residual barely can: the joint PID
-      (60 N·m/rad) pulls the joints back to the path, and the residual policies stayed within 0.5 % of the
-      controller's energy (README).
-    Table 4's joint control range (±45°) is enforced around the standing pose by a virtual end stop: beyond
-    the range a spring-damper torque (`joint_stop_stiffness`, `joint_stop_damping`) pushes the joint back.
-    (The default lift height in the env is 0.10 m so that the trot stays inside that range; the paper's
-    0.15 m needs about 51° of knee flexion.)
+    **Action** (12,), float32 in [−1, 1], legs LF, RF, LH, RH × joints (abad, hip, knee), by `action_mode`:
+
+    | mode | the action is | scale |
+    |---|---|---|
+    | `foot` (default) | a shift of the trot controller's foot targets (Δx, Δy, Δz) per leg, ramped from the last action's over the step; IK + PID track the shifted path | ±`foot_offset_scale` 0.03 m per axis (z: `foot_offset_scale_z` if set) |
+    | `residual` | a torque added to the trot controller's | × `action_scale` N·m |
+    | `torque` | the joint torque, held over the step (the paper's, Table 3) | × `action_scale` 25 N·m |
+
+    In torque mode two departures are available, both off by default (docs/training.md): the drivers' damping
+    `joint_damping` and a trot prior τ = 25·a + w·τ_trot whose weight w decays to 0 over training
+    (`prior_weight`, `prior_decay_steps`); `info["prior_weight"]` is the step's w, `info["trot_action"]` τ_trot
+    in action units with `trot_reference`. Table 4's ±45° joint range is a virtual end stop around the standing
+    pose (`joint_stop_stiffness`, `joint_stop_damping`); the default lift height, 0.10 m, keeps the trot inside it.
 
     **Observation** (50,), (62,) or (63,), float32, clipped to finite bounds (`OBSERVATION_LAYOUT`):
 
     | slice | content | unit |
     |---|---|---|
-    | 0 | body height z | m |
-    | 1 | lateral offset y | m |
+    | 0, 1 | body height z, lateral offset y | m |
     | 2:5 | roll, pitch, yaw | rad |
-    | 5:8 | body linear velocity, body frame (true, or Kalman estimate) | m/s |
+    | 5:8 | body linear velocity, body frame (true, or the Kalman estimate) | m/s |
     | 8:11 | body angular velocity, body frame | rad/s |
-    | 11:23 | joint angles | rad |
-    | 23:35 | joint velocities | rad/s |
-    | 35:47 | joint torques (last controller period) | N·m |
-    | 47 | commanded speed (ramped up over the first `speed_ramp_time`, then the set speed) | m/s |
-    | 48:50 | sin, cos of the gait phase | – |
-    | 50:62 | the previous action, only with `observe_last_action` | action units |
-    | next | the joint PD's stiffness (hip kp / 60 N·m/rad), only with `observe_pd_stiffness` | – |
+    | 11:23, 23:35, 35:47 | joint angles, joint velocities, joint torques (last period) | rad, rad/s, N·m |
+    | 47 | commanded speed (ramped from 0 over `walk.controller.speed_ramp_time`, then the set speed) | m/s |
+    | 48:50 | sin, cos of LF's gait phase | – |
+    | 50:62 | the previous action (`observe_last_action`, on by default) | action units |
+    | last | hip PD stiffness / 60 N·m/rad (`observe_pd_stiffness`) | – |
 
-    The paper's model has 111 observations in these groups (torso position, orientation, joint angles,
-    3-D velocities, angular velocities, joint velocities, joint torques, Section 2); its full list is not
-    given. We keep one entry per physical quantity (no forward position x, which is unbounded) and add the
-    command and phase the policy needs to be speed- and gait-aware.
+    One entry per physical quantity of the paper's groups (Section 2; its 111-entry list is not given), no
+    forward position (unbounded), plus the command and phase a speed- and gait-aware policy needs.
 
-    **Commanded speed.** The robot starts from rest, so the command ramps linearly from 0 to the set speed
-    over `walk.controller.speed_ramp_time` (1 s), as in the scripted walks; the reward's v_cmd and the
-    observed command are that ramped value. (With the set speed in the reward from t = 0, the start-up ramp
-    alone cost about −40 of a 400-step episode's score, and a policy learned to fight the ramp instead of
-    walking straight: measured in `configs/quick_residual.yaml` runs.)
+    **Reward**, Eq. 10: r = A·(v_cmd − v_x)² + B·y² + C·(z − z_nom)² + D·Ts/Tf + E·Σ∫|τ·ω|dt, weights from
+    `reward` (a `RewardConfig`: Eq. 11's (−2, −20, −50, 25, −0.2) by default; `TASK_REWARD`, D = 300, for
+    `CyberDogEnv()`; "stage1" sets E = 0). With Eq. 11's D = 25 falling early scores above walking, and a
+    warning says so unless a reward is chosen. `info["reward_terms"]` (unweighted) and
+    `info["reward_weighted"]` sum to the reward; `step_energy_J` is Eq. 7, `step_electrical_energy_J` the
+    battery's draw when `reward.energy_model="electrical"` puts it in the energy term. The speed term's
+    options (`speed_window`, `speed_deadband`, `speed_at_nominal_stride`, `speed_relative`, `speed_cap`) are
+    documented where `RewardConfig` declares them; `forward_speed`, `forward_speed_used` and
+    `forward_speed_paid` are the true speed, the one the robot's software knows and the one paid.
 
-    **Reward**, Eq. (10): r = A·(v_cmd − v_x)² + B·y² + C·(z − z_nom)² + D·Ts/Tf + E·Σ∫|τ·ω|dt, with
-    (A, B, C, D, E) = (−2, −20, −50, 25, −0.2) (Eq. 11; `reward="stage1"` sets E = 0). `info` carries every
-    term unweighted (`reward_terms`) and weighted (`reward_weighted`), which sum to the reward, plus
-    `step_energy_J` (Eq. 7), `forward_speed` (true) and `forward_speed_used` (what the reward saw). With
-    `reward.energy_model="electrical"` the energy term is the electrical energy drawn over the step (copper
-    loss, friction, driver efficiency: `cyberdog.core.energy.electrical_power`), also in
-    `step_electrical_energy_J` (None otherwise). With `reward.speed_window` > 0, r_v compares the means of the
-    speed and of the command over the last `speed_window` s (the steps since the reset while fewer), so that
-    the within-stride surge of a trot is not paid for (`forward_speed_used` stays the step's own speed); with
-    `reward.speed_deadband`, only the error beyond that share of the command; with
-    `reward.speed_at_nominal_stride`, on the speed the gait would walk at the stride its command asks for
-    (`forward_speed_paid`: v · v_cmd / (v_cmd + the trot's speed-loop correction, `speed_loop_correction`)); with
-    `reward.speed_relative`, on the error as a share of the episode's set speed (`target_speed`); with
-    `reward.speed_cap`, the error counted only up to that share of the command.
+    **Episode end.** `terminated`: the body below `fall_height` (0.15 m) or tilted beyond `fall_tilt_deg`
+    (45°), a non-finite state, or a foot target beyond the leg's reach (`info["fall_reason"]`). `truncated`:
+    only the registration's time limit.
 
-    **Training on the default task.** The registered default is the paper's stage-2 reward, which has no fall
-    penalty: with D = 25 and E = −0.2 per J, the walking trot scores about −205 over 400 steps and an
-    all-ones action that falls after 38 steps about −73, so falling early is the better policy (a warning says
-    so, unless a reward is passed). Train with `reward="stage1"` (walking +18, falling −50) or a larger keep-moving bonus,
-    `RewardConfig(keep_moving=300)` as the presets' stage 2 (walking +70, falling −47).
+    **Options.** `config` (an `EnvConfig`, taken as it is), `reward` ("stage1", "stage2" or a `RewardConfig`),
+    `render_mode` ("rgb_array", or "human": a PyBullet window), and any top-level `EnvConfig` field as a
+    keyword (`target_speed=1.2` alone fixes the command). `reset(options={"target_speed": v})` sets one
+    episode's command; `{"hardware_robot": True}` walks the scripted walks' robot (`hardware.seed`'s draws).
 
-    **Episode end.** `terminated` when the body falls below `fall_height` (0.15 m), tilts beyond
-    `fall_tilt_deg` (45°) in roll or pitch, the state is not finite, or the trot controller (residual mode, or
-    the torque mode's prior) asks for a foot beyond the leg's reach (a robot going down); `info["fall_reason"]`
-    says which. `truncated` only by the time limit of the registration.
-
-    **Options** (keyword arguments of `gymnasium.make("CyberDog-v0", ...)`): `config` (an `EnvConfig`),
-    `reward` ("stage1", "stage2" or a `RewardConfig`), `render_mode` ("rgb_array", or "human": a PyBullet window;
-    on a machine without a display it runs without one, with a warning), and any top-level `EnvConfig` field,
-    e.g. `action_mode="torque"`, `target_speed=1.2` (a speed given alone fixes the command: the task's drawn
-    1.0–1.4 m/s would otherwise win), `hardware=C.HARDWARE_LIKE`.
-
-    **Domain randomisation** (`randomization`, a `RandomizationConfig`, off by default): each episode's robot
-    is drawn from ranges of joint friction, actuation latency, link masses, motor strength, PID gains and
-    ground friction, from the env's generator (same seed, same robots; `info["robot_draw"]` of `reset` says
-    which). `configs/battery.yaml` switches it on around the hardware-like robot.
-
-    **Hardware model** (`hardware`, a `HardwareConfig`, all off by default): joint friction, actuation
-    latency, encoder noise, Kalman speed feedback (simulated IMU + leg odometry) and a mass draw, the same model
-    the prototype walks use. The robot's software sees what its sensors read: with `estimated_velocity` the
-    trot controller, the observation and the reward's v_x use the Kalman estimate; encoder noise reaches the
-    controller and the observation. The mass is drawn per episode; `reset(options={"hardware_robot": True})`
-    walks a scripted walk's robot instead (`hardware.seed`'s mass and sensor streams, no randomisation draw).
+    **Robots.** `hardware` (a `HardwareConfig`, off by default): joint friction, latency, encoder and IMU
+    noise, the Kalman speed, a mass draw, what the prototype walks use; the controller, the observation and
+    the reward's v_x see what the sensors read. `randomization` (a `RandomizationConfig`, off by default): each
+    episode's robot drawn from ranges of friction, latency, mass, motor strength, PID gains and ground friction
+    (`info["robot_draw"]` of `reset`). All randomness comes from the env's generator: the same seed, the same
+    episodes.
     """
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 40}
 
     def __init__(self, config: C.EnvConfig | None = None, reward: str | C.RewardConfig | None = None,
                  render_mode: str | None = None, **overrides: Any):
+        if config is None and reward is None:  # the registered task: EnvConfig's defaults, TASK_REWARD
+            reward = TASK_REWARD
         cfg = config or C.EnvConfig()
         reward_chosen = reward is not None
         if reward is not None:
@@ -171,7 +136,6 @@ class CyberDogEnv(gym.Env):
                              fall_height=cfg.fall_height, fall_tilt=np.deg2rad(cfg.fall_tilt_deg),
                              body_trace=False,  # the env reads the state, not the walk's per-period body trace
                              joint_damping=cfg.joint_damping)
-        self.robot, self.controller = self.walker.robot, self.walker.controller
         layout = observation_layout(cfg)
         low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
         high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in layout])
@@ -208,10 +172,9 @@ class CyberDogEnv(gym.Env):
             draw = draw_robot(cfg.randomization, self.np_random) if cfg.randomization.enabled else None
         if draw is not None:  # one robot: the ranges left nominal keep the hardware's latency and mass draw
             draw = resolve_draw(draw, cfg.randomization, self.walker.latency_steps, mass_scale)
-        self.controller.set_speed(self.target_speed)
+        self.walker.set_speed(self.target_speed)
         self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng, draw=draw)
         self.last_torque = np.zeros(12)
-        self._foot_offset = [(0.0, 0.0, 0.0)] * 4  # m, 4 × (x, y, z): the last action's foot offsets (foot mode)
         self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
         if self._speed_window is not None:
             self._speed_window.reset()
@@ -242,20 +205,13 @@ class CyberDogEnv(gym.Env):
             raise ValueError(f"action must be finite, got {values}")
         clipped = [1.0 if x > 1.0 else -1.0 if x < -1.0 else x for x in values]  # np.clip to [-1, 1]
         self._last_action = np.array(clipped)
-        w, controller, dt = self.walker, self.controller, self.dt
+        w = self.walker
         if self.cfg.action_mode == "foot":  # the action moves the foot targets; the controller's torque is as is
-            # first-order hold: the offset ramps from the last action's to this one's over the agent step, so
-            # that the target path stays continuous (a 25 ms staircase of targets made the PID jerk: lowering
-            # the swing feet by 1-3 cm that way cost 10-75 % more energy, measured)
+            # a first-order hold over the agent step, from the last action's offsets to this one's: a staircase
+            # of targets makes the PID jerk (docs/design.md)
             sx, sy, sz = self._foot_offset_scale.tolist()
-            start, control_dt = self._foot_offset, self.cfg.control_dt
-            self._foot_offset = end = [(clipped[i] * sx, clipped[i + 1] * sy, clipped[i + 2] * sz)
-                                       for i in range(0, 12, 3)]  # m, 4 × (x, y, z)
-            rates = [((x1 - x0) / control_dt, (y1 - y0) / control_dt, (z1 - z0) / control_dt)
-                     for (x0, y0, z0), (x1, y1, z1) in zip(start, end)]  # m/s
-            # the offset of controller period k (from 0) is start + rate·(k + 1)·dt: this action's at the last
-            controller.ramp_foot_offsets([(x0 + rx * dt, y0 + ry * dt, z0 + rz * dt)
-                                          for (x0, y0, z0), (rx, ry, rz) in zip(start, rates)], rates, w.time)
+            w.ramp_foot_offsets_to([(clipped[i] * sx, clipped[i + 1] * sy, clipped[i + 2] * sz)
+                                    for i in range(0, 12, 3)], self.cfg.control_dt)  # m, 4 × (x, y, z)
             tau_action = None
         else:
             tau_action = self._last_action * self.cfg.action_scale
@@ -315,10 +271,10 @@ class CyberDogEnv(gym.Env):
         v_true = float(s.base_linear_velocity_world[0])
         v_used = self._forward_speed_used(s)
         y = float(s.base_position[1] - self.walker.start[1])
-        v_cmd = self.controller.commanded_speed(self.t)  # the ramped command (see the class docstring)
+        v_cmd = self.walker.commanded_speed  # the ramped command (see the class docstring)
         v_paid = v_used
         if cfg.reward.speed_at_nominal_stride:  # the speed at the command's own stride
-            stride = v_cmd + self.controller.speed_correction  # m/s: the speed the trot's stride is set for
+            stride = v_cmd + self.walker.speed_correction  # m/s: the speed the trot's stride is set for
             if stride > 0:
                 v_paid = v_used * v_cmd / stride
         window = self._speed_window
@@ -338,7 +294,7 @@ class CyberDogEnv(gym.Env):
         info = {"reward_terms": terms, "reward_weighted": weighted, "step_energy_J": step_energy,
                 "step_electrical_energy_J": step_electrical,
                 "forward_speed": v_true, "forward_speed_used": v_used, "forward_speed_paid": v_paid,
-                "speed_loop_correction": self.controller.speed_correction, "target_speed": self.target_speed,
+                "speed_loop_correction": self.walker.speed_correction, "target_speed": self.target_speed,
                 "velocity_estimate": self.walker.velocity_estimate_world, "fallen": bool(fallen),
                 "time": self.t, "prior_weight": prior_weight}
         if terminated:
@@ -353,14 +309,14 @@ class CyberDogEnv(gym.Env):
         q, dq = self.walker.sensed_joints(s)
         v_world = self.walker.velocity_estimate_world
         v_body = s.base_linear_velocity_body if v_world is None else s.rotation_matrix.T @ v_world
-        t = self.t
-        phase = 2 * np.pi * self.controller.scheduler.phases_at(t)[0]
+        w = self.walker
+        phase = 2 * np.pi * w.gait_phase
         obs = np.concatenate([
             [s.base_position[2], s.base_position[1] - self.walker.start[1]], s.base_rpy, v_body,
-            s.base_angular_velocity_body, q, dq, self.last_torque, [self.controller.commanded_speed(t)],
+            s.base_angular_velocity_body, q, dq, self.last_torque, [w.commanded_speed],
             [np.sin(phase), np.cos(phase)]]
             + ([self._last_action] if self.cfg.observe_last_action else [])
-            + ([[self.controller.pid.kp[1] / DEFAULT_KP]] if self.cfg.observe_pd_stiffness else [])
+            + ([[w.hip_kp / DEFAULT_KP]] if self.cfg.observe_pd_stiffness else [])
         ).astype(np.float32)
         if not np.isfinite(obs).all():  # rare (a blown-up state): NaN → 0, ±inf → the extremes, then clipped
             obs = np.nan_to_num(obs, nan=0.0)
@@ -368,10 +324,10 @@ class CyberDogEnv(gym.Env):
 
     def render(self):
         if self.render_mode == "rgb_array":
-            return self.robot.render(320, 240)
+            return self.walker.render(320, 240)
         return None
 
     def close(self):
         if getattr(self, "walker", None) is not None:
             self.walker.close()
-            self.walker = self.robot = None
+            self.walker = None

@@ -9,18 +9,19 @@
   penalty, so a robot that falls at once scores above one that walks: trained from scratch, an agent learns
   to fall (docs/training.md, the torque recipe); `gym.make` says so unless a reward is passed.
 
-Both are `CyberDogEnv` (its docstring is the specification), 400 steps of 25 ms (Table 4). A `config` passed to
-`gym.make` is taken as it is (the task's settings then do not apply); keyword options change single fields.
+Both are `CyberDogEnv` (its docstring is the specification; `CyberDogEnv()` is `CyberDog-v0`), 400 steps of 25 ms
+(Table 4). A `config` passed to `gym.make` is taken as it is, its reward included (the task's settings then do
+not apply); keyword options change single fields.
 """
 from __future__ import annotations
 
 import warnings
 
 from cyberdog import config as C
-from cyberdog.envs.cyberdog_env import CyberDogEnv
+from cyberdog.envs.cyberdog_env import TASK_REWARD, CyberDogEnv
 
 SHIPPED_TASK = C.EnvConfig()  # the dataclass defaults are this task's
-SHIPPED_REWARD = C.RewardConfig(keep_moving=300.0)  # Eq. 11 with D = 300: walking +70, falling −47 (measured)
+SHIPPED_REWARD = TASK_REWARD
 PAPER_TASK = C.EnvConfig(action_mode="torque", action_scale=25.0, observe_last_action=False,  # Table 3's 50
                          target_speed_range=())  # a fixed command
 PAPER_TASK_WARNING = (
@@ -31,9 +32,8 @@ PAPER_TASK_WARNING = (
 
 
 def shipped_task(config: C.EnvConfig | None = None, reward=None, render_mode=None, **overrides) -> CyberDogEnv:
-    """`CyberDog-v0`: the shipped agents' task (module docstring); `config` replaces its settings."""
-    return CyberDogEnv(SHIPPED_TASK if config is None else config, SHIPPED_REWARD if reward is None else reward,
-                       render_mode, **overrides)
+    """`CyberDog-v0`: `CyberDogEnv` itself, whose defaults are this task (module docstring)."""
+    return CyberDogEnv(config, reward, render_mode, **overrides)
 
 
 def paper_task(config: C.EnvConfig | None = None, reward=None, render_mode=None, **overrides) -> CyberDogEnv:

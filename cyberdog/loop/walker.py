@@ -24,10 +24,7 @@ or absent for this one:
    contacts and the controller's foot targets; with `gait_metrics` the non-foot ground contacts and the
    feet's positions for foot slip are sampled.
 
-Energy. Over a physics step the torque is constant, so the joint's work is exactly τ·Δq: Eq. (7) is
-Σ_k |τ_k·Δq_k| = Σ_k |τ_k·ω̄_k|·h per joint over the physics steps k (h = `SimConfig.physics_dt`, ω̄ = Δq / h,
-which is the speed PyBullet reports after the step: tests/test_drivers.py). The electrical energy takes the
-same τ_k and ω̄_k. The per-period rows (`tau`, `traces`) are the periods' means of the physics steps'.
+Energy and traces: `cyberdog.loop.books.WalkBooks`, read from the rows the period keeps.
 
 Time is `steps · dt` since the reset.
 """
@@ -40,9 +37,9 @@ import numpy as np
 from cyberdog.config import EnvConfig, HardwareConfig, WalkConfig
 from cyberdog.control.joint_stop import JointStop
 from cyberdog.control.trot import BodyFeedback, TrotController
-from cyberdog.core import energy as en
 from cyberdog.core import kinematics as kin
 from cyberdog.core.drivers import driver_physics_dt
+from cyberdog.loop.books import WalkBooks
 from cyberdog.loop.rows import PeriodEnds, PeriodMean, Rows
 from cyberdog.sim.hardware_model import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
@@ -75,7 +72,7 @@ _NO_TARGET = [(float("nan"),) * 3] * 4
 _NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
 
 
-class Walker:
+class Walker(WalkBooks):
     """The CyberDog under the trot controller at the controller rate, its drivers at the physics rate (see the
     module docstring).
 
@@ -161,10 +158,9 @@ class Walker:
         self.robot.set_mass_scale(1.0 if mass_scale is None else mass_scale)  # the ideal robot: its own mass
         self.robot.actuator.set_scales(d.joint_friction_scale, d.motor_strength)
         self.robot.set_ground_friction(self.cfg.sim.ground_friction * d.ground_friction_scale)
-        self.controller.pid.set_gain_factors(d.kp_factor, d.kd_factor)
         self.joint_damping = self.nominal_joint_damping * d.kd_factor  # the drivers' kd, drawn as the PID's is
         self.robot.reset()
-        self.controller.reset()
+        self.controller.reset(d.kp_factor, d.kd_factor)
         self.delay.reset(d.latency_periods)
         self.reading = self.robot.read()
         self._state = None
@@ -223,6 +219,40 @@ class Walker:
         if self.sensing is None or not self.hardware.estimated_velocity:
             return None
         return self.sensing.velocity_estimate_world
+
+    # what a task (the env) asks of the loop: the command, the gait's clock, the drivers' stiffness, the view
+    def set_speed(self, speed: float) -> None:
+        """Set the trot's speed (m/s) for the next walk: it ramps up to it after the reset."""
+        self.controller.set_speed(speed)
+
+    @property
+    def commanded_speed(self) -> float:
+        """m/s, the trot's command now: the set speed, reached by its start-up ramp."""
+        return self.controller.commanded_speed(self.time)
+
+    @property
+    def speed_correction(self) -> float:
+        """m/s, what the trot's speed loop adds to the commanded stride now."""
+        return self.controller.speed_correction
+
+    @property
+    def gait_phase(self) -> float:
+        """LF's gait phase now, in [0, 1): 0 at its lift-off."""
+        return self.controller.scheduler.phases_at(self.time)[0]
+
+    @property
+    def hip_kp(self) -> float:
+        """N·m/rad, the hip joints' PD stiffness the drivers run now (the robot's draw included)."""
+        return float(self.controller.pid.kp[1])
+
+    def ramp_foot_offsets_to(self, end: list, duration: float) -> None:
+        """Shift the trot's foot targets by offsets ramping from the last ramp's end to `end` (4 × (x, y, z), m)
+        over the next `duration` s (`TrotController.ramp_foot_offsets_to`)."""
+        self.controller.ramp_foot_offsets_to(end, duration, self.time)
+
+    def render(self, width: int, height: int, **camera) -> np.ndarray:
+        """An RGB image (height, width, 3) of the robot now (`Robot.render`'s camera options)."""
+        return self.robot.render(width, height, **camera)
 
     def trot_torque(self, periods: int = 1) -> np.ndarray:
         """N·m (12,): the trot controller's torque (trajectory + IK + PD + feedforward) at the state the robot's
@@ -328,54 +358,6 @@ class Walker:
         roll, pitch, _ = s.base_rpy.tolist()
         tilt = self.fall_tilt
         return bool(s.base_position[2] < self.fall_height or abs(roll) > tilt or abs(pitch) > tilt)
-
-    def joint_speeds(self, since: int = 0) -> np.ndarray:
-        """(n, 12) rad/s, each step's mean joint speed Δq / dt from step `since` on; computed from the joint-angle
-        rows when asked."""
-        q = self.q_rows.view(since)
-        return (q[1:] - q[:-1]) * (1.0 / self.dt)
-
-    def physics_traces(self, since: int = 0) -> dict:
-        """Every physics step's t (s since the reset), tau (the motor torque applied over it, N·m) and dq (the
-        joint's mean speed over it, Δq / physics_dt, rad/s), from controller period `since` on: what Eq. (7) and
-        the electrical energy integrate."""
-        n = self.substeps
-        q = self.physics_q.view(since * n)
-        tau = self.physics_tau.view(since * n)
-        return {"t": (np.arange(len(tau)) + since * n) * self.physics_dt, "tau": tau,
-                "dq": (q[1:] - q[:-1]) * (1.0 / self.physics_dt)}
-
-    def energy_per_joint(self, since: int = 0) -> np.ndarray:
-        """(12,) J, Eq. (7) Σ_k |τ_k·Δq_k| per joint over the physics steps from controller period `since` on."""
-        p = self.physics_traces(since)
-        return en.joint_energy(p["tau"], p["dq"], self.physics_dt)
-
-    def energy(self, since: int = 0) -> float:
-        """J, Eq. (7) Σ∫|τ·ω|dt = Σ_k |τ_k·Δq_k| over the physics steps from controller period `since` to now."""
-        return float(self.energy_per_joint(since).sum())
-
-    def positive_work(self, since: int = 0) -> float:
-        """J, Σ∫max(τ·ω, 0)dt over the physics steps from controller period `since` on."""
-        p = self.physics_traces(since)
-        return en.positive_work(p["tau"], p["dq"], self.physics_dt)
-
-    def electrical_energy(self, since: int = 0) -> float:
-        """J drawn from the battery over the physics steps from controller period `since` (copper loss,
-        friction, driver)."""
-        c, p = self.cfg, self.physics_traces(since)
-        return float(np.sum(en.electrical_power(p["tau"], p["dq"], c.actuator, c.energy))) * self.physics_dt
-
-    def traces(self) -> dict:
-        """Every step's t, tau (its mean motor torque), dq (its mean joint speed), power (its mean of |τ·ω| over
-        its physics steps, so that Σ power·dt is Eq. 7) per joint (and with `record`: q, base_position,
-        contacts, foot_targets, foot_offsets), arrays with the step as the first axis."""
-        tau, dq, p = self.tau.view(), self.joint_speeds(), self.physics_traces()
-        power = np.abs(p["tau"] * p["dq"]).reshape(len(tau), self.substeps, 12).mean(axis=1)
-        out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": power}
-        if self._traces:  # with `record`: q at each step's start is the joint-angle rows but the last
-            out["q"] = self.q_rows.view()[:-1]
-        out.update({name: rows.view() for name, rows in self._traces.items()})
-        return out
 
     def close(self) -> None:
         if self.own_robot:

@@ -108,8 +108,7 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     a scripted walk with that `HardwareConfig` walks, instead of one drawn from the env's generator.
     then_path: (t_s, offsets) hands the walk over at t_s (s, a multiple of the agent step) from the policy to a
     fixed commanded path: from then on the actions are zero (the policy's shift ramps out over one agent step)
-    and the trot controller shifts its targets by `offsets` (a `FootOffsetPath`, as a replayed path does).
-    Whether a fixed path holds the gait the policy walked, started on it: `notebook/tools/replay_orbit.py`."""
+    and the trot controller shifts its targets by `offsets` (a `FootOffsetPath`, as a replayed path does)."""
     _check_walk(speed, duration, distance, run_up)
     cfg = env_config or actor.config.env
     handover_step, path_offsets = _handover(cfg, then_path, duration)
@@ -136,7 +135,7 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
             if goal_x is not None and walker.state.base_position[0] >= goal_x:
                 break
             if k == handover_step:
-                env.controller.foot_offset_path = path_offsets  # the path's shift, at the controller's clock
+                walker.controller.foot_offset_path = path_offsets  # the path's shift, at the controller's clock
             action = actor(obs) if handover_step is None or k < handover_step else np.zeros(12, np.float32)
             obs, reward_t, terminated, _, info = env.step(action)
             score += float(reward_t)
