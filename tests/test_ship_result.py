@@ -1,4 +1,4 @@
-"""tools/ship_result.py: the wall time of a stage in the shipped metadata is the training's, not the calendar's."""
+"""tools/ship.py policy: the wall time of a stage in the shipped metadata is the training's, not the calendar's."""
 from __future__ import annotations
 
 import importlib.util
@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("ship_result", ROOT / "tools/ship_result.py")
-ship_result = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(ship_result)
+spec = importlib.util.spec_from_file_location("ship", ROOT / "tools/ship.py")
+ship = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(ship)
 
 
 def episode_rows(end_times, stage=2, length=400, rate=50.0):
@@ -21,12 +21,12 @@ def episode_rows(end_times, stage=2, length=400, rate=50.0):
 def test_a_resumed_stage_counts_its_pause_as_one_typical_episode():
     steady = [1000.0 + 10.0 * i for i in range(10)]  # 10 s per episode, the first ran 8 s before its end
     resumed = steady + [steady[-1] + 86_400 + 10.0 * i for i in range(1, 6)]  # continued a day later
-    whole = ship_result.stage_summary(episode_rows(steady), 2)
+    whole = ship.stage_summary(episode_rows(steady), 2)
     assert whole["wall_time_s"] == 9 * 10.0 + 8.0 and whole["pauses_excluded"] == 0
-    later = ship_result.stage_summary(episode_rows(resumed), 2)
+    later = ship.stage_summary(episode_rows(resumed), 2)
     assert later["episodes"] == 15 and later["env_steps"] == 6000
     assert later["wall_time_s"] == 14 * 10.0 + 8.0 and later["pauses_excluded"] == 1
-    assert ship_result.stage_summary(episode_rows(steady), 1) == {}
+    assert ship.stage_summary(episode_rows(steady), 1) == {}
 
 
 def test_no_shipped_result_names_a_path_of_the_machine_that_made_it():
@@ -75,7 +75,7 @@ def test_a_recipes_seed_folder_ships_its_last_stage1_and_stage2_phases_and_every
             w.writeheader()
             w.writerows(rows)
     out = tmp_path / "shipped"
-    assert ship_result.main([str(seed), "--out", str(out), "--all-phases"]) == 0
+    assert ship.main(["policy", str(seed), "--out", str(out), "--all-phases"]) == 0
     assert (out / "stage1_actor.pt").read_bytes() == b"band" and (out / "stage2_actor.pt").read_bytes() == b"energy4"
     assert yaml.safe_load((out / "config.yaml").read_text())["phase"] == "energy4"
     assert {f.name for f in out.glob("metrics_*.csv")} == {f"metrics_{name}.csv" for name, _ in phases}
@@ -107,9 +107,9 @@ def test_a_run_continued_from_a_shipped_actor_records_where_that_actor_is(tmp_pa
         w.writeheader()
         w.writerows(rows)
     with pytest.raises(SystemExit, match="no such file"):
-        ship_result.main([str(run), "--out", "results/policy/seed3", "--force", "--init-from", "nowhere.pt"])
+        ship.main(["policy", str(run), "--out", "results/policy/seed3", "--force", "--init-from", "nowhere.pt"])
     assert not Path("results/policy/seed3/stage2_actor.pt").exists()
-    assert ship_result.main([str(run), "--out", "results/policy/seed3", "--force", "--init-from", str(start)]) == 0
+    assert ship.main(["policy", str(run), "--out", "results/policy/seed3", "--force", "--init-from", str(start)]) == 0
     meta = json.loads(Path("results/policy/seed3/metadata.json").read_text())
     assert meta["init_from"] == "results/policy/seed3/band/stage2_actor.pt" and meta["seed"] == 3
     assert Path("results/policy/seed3/stage2_actor.pt").read_bytes() == b"gains" and start.read_bytes() == b"band"
@@ -141,11 +141,11 @@ def test_a_phase_placed_from_another_folder_ships_without_a_log_and_is_named(tmp
             w.writerows(rows)
     (seed / "speed" / "stage1_final.pt").unlink()
     with pytest.raises(SystemExit, match="speed/stage1_final.pt"):
-        ship_result.main([str(seed), "--out", str(tmp_path / "no"), "--all-phases"])
+        ship.main(["policy", str(seed), "--out", str(tmp_path / "no"), "--all-phases"])
     assert not (tmp_path / "no").exists()
     (seed / "speed" / "stage1_final.pt").write_bytes(b"speed")
     out = tmp_path / "shipped"
-    assert ship_result.main([str(seed), "--out", str(out), "--all-phases"]) == 0
+    assert ship.main(["policy", str(seed), "--out", str(out), "--all-phases"]) == 0
     meta = json.loads((out / "metadata.json").read_text())
     assert meta["placed_phases"] == ["main"] and meta["phases"]["main"] == {"stage": "1", "from": None, "placed": True}
     assert not (out / "metrics_main.csv").exists() and (out / "metrics_speed.csv").is_file()

@@ -1,4 +1,4 @@
-"""tools/ship_torque.py: the torque recipe's re-make runs its steps in order and ships only what they produced."""
+"""tools/ship.py torque: the torque recipe's re-make runs its steps in order and ships only what they produced."""
 from __future__ import annotations
 
 import importlib.util
@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("ship_torque", ROOT / "tools/ship_torque.py")
-ship_torque = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(ship_torque)
+spec = importlib.util.spec_from_file_location("ship", ROOT / "tools/ship.py")
+ship = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(ship)
 
 
 def after(cmd: list, flag: str) -> list[str]:
@@ -32,7 +32,7 @@ def fake_steps(monkeypatch, tmp_path):
     def step(cmd, stop_on_failure=True):
         cmd = [str(c) for c in cmd]
         calls.append(cmd)
-        if "evaluate.py" not in cmd:  # tools/ship_result.py: the seed's folder
+        if "evaluate.py" not in cmd:  # tools/ship.py policy: the seed's folder
             Path(after(cmd, "--out")[0]).mkdir(parents=True, exist_ok=True)
             return True
         out = Path(after(cmd, "--out")[0])
@@ -50,7 +50,7 @@ def fake_steps(monkeypatch, tmp_path):
         (out / name[cmd[2]]).write_text(json.dumps({"step": cmd[2]}))
         return True
 
-    monkeypatch.setattr(ship_torque, "run", step)
+    monkeypatch.setattr(ship, "run", step)
     return calls
 
 
@@ -65,11 +65,11 @@ def test_the_remake_ships_each_seed_and_only_the_paths_the_extraction_found(tmp_
     (old_paths / "seed2.json").write_text("{}")  # shipped before: must not outlive a re-make without it
     (results / "figures_input").mkdir()
 
-    assert ship_torque.main([str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
+    assert ship.main(["torque", str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
 
-    steps = [c[1] if c[1].startswith("tools") else c[2] for c in fake_steps]
-    assert steps == ["tools/ship_result.py"] * 2 + ["check", "extract", "compare", "prototype"]
-    assert [Path(c[2]).name for c in fake_steps[:2]] == ["seed0", "seed10"]  # by seed, not by name
+    steps = [" ".join(c[1:3]) if c[1].startswith("tools") else c[2] for c in fake_steps]
+    assert steps == ["tools/ship.py policy"] * 2 + ["check", "extract", "compare", "prototype"]
+    assert [Path(c[3]).name for c in fake_steps[:2]] == ["seed0", "seed10"]  # by seed, not by name
     assert (results / "torque" / "policy" / "seed2" / "stage2_actor.pt").read_text() == "seed 2"
     check = fake_steps[2]
     assert [Path(r).name for r in after(check, "--runs")] == ["seed0", "seed2", "seed10"]
@@ -95,13 +95,13 @@ def test_seed_folders_from_several_inputs_replace_what_was_shipped(tmp_path, fak
     stale.mkdir(parents=True)
     (results / "figures_input").mkdir()
 
-    assert ship_torque.main([str(runs), str(kept), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
+    assert ship.main(["torque", str(runs), str(kept), "--work", str(tmp_path / "work"), "--results", str(results)]) == 0
     assert not stale.exists()
-    assert Path(after(fake_steps[0], "--out")[0]).name == "seed0"  # re-made by tools/ship_result.py
+    assert Path(after(fake_steps[0], "--out")[0]).name == "seed0"  # re-made by tools/ship.py policy
     assert (results / "torque" / "policy" / "seed4" / "stage2_actor.pt").read_text() == "seed 4"
     assert [Path(r).name for r in after(fake_steps[1], "--runs")] == ["seed0", "seed4"]
     with pytest.raises(SystemExit, match="given twice: seed0"):
-        ship_torque.main([str(runs), str(runs / "seed0"), "--work", str(tmp_path / "w2"), "--results", str(results)])
+        ship.main(["torque", str(runs), str(runs / "seed0"), "--work", str(tmp_path / "w2"), "--results", str(results)])
 
 
 def test_fresh_seeds_are_shipped_and_evaluated_apart_and_a_remake_without_them_removes_them(tmp_path, fake_steps):
@@ -109,31 +109,31 @@ def test_fresh_seeds_are_shipped_and_evaluated_apart_and_a_remake_without_them_r
     for folder in (runs / "seed0", fresh / "seed6", fresh / "seed7"):
         folder.mkdir(parents=True)
     (results / "figures_input").mkdir(parents=True)
-    argv = [str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]
+    argv = ["torque", str(runs), "--work", str(tmp_path / "work"), "--results", str(results)]
 
-    assert ship_torque.main(argv + ["--fresh", str(fresh)]) == 0
-    steps = [c[1] if c[1].startswith("tools") else c[2] for c in fake_steps]
-    assert steps == ["tools/ship_result.py"] * 3 + ["check", "extract", "compare", "prototype"] * 2
+    assert ship.main(argv + ["--fresh", str(fresh)]) == 0
+    steps = [" ".join(c[1:3]) if c[1].startswith("tools") else c[2] for c in fake_steps]
+    assert steps == ["tools/ship.py policy"] * 3 + ["check", "extract", "compare", "prototype"] * 2
     fresh_check = fake_steps[7]
     assert [Path(r).name for r in after(fresh_check, "--runs")] == ["seed6", "seed7"]
     assert all(Path(r).parent == results / "torque" / "fresh" / "policy" for r in after(fresh_check, "--runs"))
     assert Path(after(fresh_check, "--out")[0]).parent.name == "fresh"  # not the tuning seeds' check folder
     assert sorted(p.name for p in (results / "torque" / "fresh" / "paths").iterdir()) == ["seed6.json", "seed7.json"]
     assert sorted(p.name for p in (results / "torque" / "paths").iterdir()) == ["seed0.json"]
-    for name in ship_torque.FRESH_FILES:
+    for name in ship.FRESH_FILES:
         assert (results / "figures_input" / name).is_file()
 
-    assert ship_torque.main(argv + ["--force"]) == 0
+    assert ship.main(argv + ["--force"]) == 0
     assert not (results / "torque" / "fresh").exists()
-    assert not any((results / "figures_input" / name).exists() for name in ship_torque.FRESH_FILES)
+    assert not any((results / "figures_input" / name).exists() for name in ship.FRESH_FILES)
     with pytest.raises(SystemExit, match="given both as tuned and as --fresh: seed0"):
-        ship_torque.main(argv + ["--fresh", str(runs / "seed0")])
+        ship.main(argv + ["--fresh", str(runs / "seed0")])
 
 
 def test_the_remake_refuses_a_folder_without_seeds_and_work_inside_the_runs(tmp_path, fake_steps):
     (tmp_path / "runs" / "notes").mkdir(parents=True)
     with pytest.raises(SystemExit, match="no seed<N> folders"):
-        ship_torque.main([str(tmp_path / "runs"), "--work", str(tmp_path / "work")])
+        ship.main(["torque", str(tmp_path / "runs"), "--work", str(tmp_path / "work")])
     with pytest.raises(SystemExit, match="outside the run folder"):
-        ship_torque.main([str(tmp_path / "runs"), "--work", str(tmp_path / "runs" / "ship")])
+        ship.main(["torque", str(tmp_path / "runs"), "--work", str(tmp_path / "runs" / "ship")])
     assert fake_steps == []

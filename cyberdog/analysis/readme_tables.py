@@ -2,7 +2,7 @@
 `results/` cannot disagree).
 
 `python tools/make_readme_tables.py` prints them from `results/figures_input/` (what `python evaluate.py` wrote
-and `tools/ship_result.py` shipped); `--write` puts them into each page of `DOCUMENTS` between its
+and `tools/ship.py` shipped); `--write` puts them into each page of `DOCUMENTS` between its
 `<!-- table:NAME -->` and `<!-- /table:NAME -->` markers: docs/results.md holds every table, the README the ones
 it marks; `tests/test_readme.py` checks that both hold them as made.
 
