@@ -155,3 +155,33 @@ def test_bad_arguments_raise():
         SimulatedIMU(EstimatorConfig(), 0, dt=DT)
     with pytest.raises(ValueError, match="dt"):
         VelocityEstimator(EstimatorConfig(), dt=-1.0)
+
+
+def test_velocity_filter_is_the_kalman_filter_of_its_docstring():
+    """The estimator (filterpy's KalmanFilter) against the docstring's model written out as three independent
+    scalar filters (F = H = I, diagonal P, Q, R): predict v += a·dt, P += (σ_q·dt)²; update with the leg
+    velocity when there is one (Joseph form). Steps of two lengths, some without a foot on the ground."""
+    cfg = EstimatorConfig()
+    rng = np.random.default_rng(8)
+    est = VelocityEstimator(cfg, 0.005)
+    v0 = rng.normal(0, 1, 3)
+    est.reset(v0)
+    x, p = v0.tolist(), [cfg.initial_velocity_std ** 2] * 3
+    r, gravity = cfg.leg_velocity_noise_std ** 2, np.array([0.0, 0.0, -9.81])
+    for k in range(2000):
+        R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        f = rng.normal(0, 5, 3) + [0.0, 0.0, 9.81]
+        leg = None if k % 5 == 0 else rng.normal(0, 1, 3)
+        dt = 0.005 if k % 11 else 0.002
+        got = est.update(f, leg, R, dt)
+        a = R @ f + gravity
+        x = [xi + dt * ai for xi, ai in zip(x, a)]
+        p = [pi + (cfg.process_noise_std * dt) ** 2 for pi in p]
+        if leg is not None:
+            z = R @ leg
+            for i in range(3):
+                gain = p[i] / (p[i] + r)
+                x[i] += gain * (z[i] - x[i])
+                p[i] = (1 - gain) ** 2 * p[i] + gain ** 2 * r
+        np.testing.assert_allclose(got, x, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(est.covariance, np.diag(p), rtol=1e-10, atol=1e-15)

@@ -28,8 +28,6 @@ from cyberdog.core.kinematics import FRONT_REAR, LEFT_RIGHT
 STANDARD_GRAVITY = 9.81  # m/s², default; pass SimConfig.gravity where it differs
 _LEG_SIDE = tuple(LEFT_RIGHT.tolist())  # +1 left, −1 right (Python floats for the per-leg loop)
 _LEG_END = tuple(FRONT_REAR.tolist())  # +1 front, −1 hind
-_IDENTITY = np.eye(3).ravel().tolist()
-_OFF_DIAGONAL = (1, 2, 3, 5, 6, 7)  # flat indices of a 3×3 matrix's off-diagonal entries
 
 
 class ImuReading(NamedTuple):
@@ -149,9 +147,6 @@ class VelocityEstimator:
     The update is skipped when no foot is in contact (leg velocity None or not finite). The accelerometer
     bias is not a state: a constant bias b leaves a lag of about b·τ with τ the filter's time constant
     (≈ 0.2 s with the defaults at 1 kHz, so 0.05 m/s² → 0.01 m/s).
-    With F = H = I and diagonal P, Q, R (as built here) the filter is three independent scalar filters;
-    `update` then computes them in floats (`_diagonal_step`, the same numbers as filterpy's calls, checked
-    bit for bit in tests/test_fast_paths.py) and uses filterpy's predict/update for any other state.
     """
 
     def __init__(self, cfg: EstimatorConfig, dt: float, gravity: float = STANDARD_GRAVITY) -> None:
@@ -163,8 +158,12 @@ class VelocityEstimator:
         self.kf.F = np.eye(3)
         self.kf.H = np.eye(3)
         self.kf.R = np.eye(3) * cfg.leg_velocity_noise_std ** 2
-        self._predict_matrices = (None, None, None)  # ((dt, process_noise_std), B, Q) of the last predict
+        self.kf.B, self.kf.Q = self._input_matrices(self.dt)
         self.reset()
+
+    def _input_matrices(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """B = dt·I (the acceleration integrated over dt) and Q = (process_noise_std·dt)²·I for a step of dt s."""
+        return np.eye(3) * dt, np.eye(3) * (self.cfg.process_noise_std * dt) ** 2
 
     def reset(self, v0: np.ndarray | None = None) -> None:
         """Start from world velocity v0 (m/s; zeros if None) with the configured initial uncertainty."""
@@ -196,38 +195,8 @@ class VelocityEstimator:
             v_leg = np.asarray(leg_velocity, dtype=float).reshape(3)
             if np.all(np.isfinite(v_leg)):
                 z = R @ v_leg
-        if not self._diagonal_step(a_world, z, dt):
-            key = (dt, self.cfg.process_noise_std)
-            if self._predict_matrices[0] != key:  # B = dt·I, Q = (process_noise_std·dt)²·I, kept for the next call
-                q = (self.cfg.process_noise_std * dt) ** 2
-                self._predict_matrices = (key, np.eye(3) * dt, np.eye(3) * q)
-            _, B, Q = self._predict_matrices
-            self.kf.predict(u=a_world.reshape(3, 1), B=B, Q=Q)
-            if z is not None:
-                self.kf.update(z.reshape(3, 1))
-        return self.velocity
-
-    def _diagonal_step(self, a_world: np.ndarray, z: np.ndarray | None, dt: float) -> bool:
-        """filterpy's predict + update written out per axis, when F = H = I and P, R are diagonal (always, as
-        built here: then the three axes are independent filters and every product with an identity or an
-        off-diagonal zero is exact, so the numbers are filterpy's). filterpy's generic calls cost about 30 µs,
-        a good part of an env step at the 5 ms filter rate. Returns False (nothing done) otherwise; sets
-        kf.x and kf.P only (not filterpy's K, S, y, prior/posterior copies)."""
-        kf = self.kf
-        P, Rm, x, a = kf.P.ravel().tolist(), kf.R.ravel().tolist(), kf.x.ravel().tolist(), a_world.tolist()
-        if not (kf.F.ravel().tolist() == _IDENTITY and kf.H.ravel().tolist() == _IDENTITY
-                and getattr(kf, "_alpha_sq", None) == 1.0 and not any(P[i] for i in _OFF_DIAGONAL)
-                and not any(Rm[i] for i in _OFF_DIAGONAL)
-                and math.isfinite(sum(P) + sum(Rm) + sum(x) + sum(a))):  # filterpy's dot() spreads a NaN
-            return False
-        q = (self.cfg.process_noise_std * dt) ** 2
-        x = [xi + dt * ai for xi, ai in zip(x, a)]  # x ← F x + B u
-        P = [P[i] + q for i in (0, 4, 8)]  # P ← F P Fᵀ + Q
+        B, Q = (None, None) if dt == self.dt else self._input_matrices(dt)  # None: the filter's own, for self.dt
+        self.kf.predict(u=a_world.reshape(3, 1), B=B, Q=Q)
         if z is not None:
-            for i, (zi, pi, ri) in enumerate(zip(z.tolist(), P, (Rm[0], Rm[4], Rm[8]))):
-                k = pi * (1.0 / (pi + ri))  # K = P Hᵀ inv(H P Hᵀ + R)
-                x[i] = x[i] + k * (zi - x[i])
-                P[i] = (1.0 - k) * pi * (1.0 - k) + k * ri * k  # Joseph form, as filterpy
-        kf.x = np.array(x).reshape(3, 1)
-        kf.P = np.diag(P)
-        return True
+            self.kf.update(z.reshape(3, 1))
+        return self.velocity
