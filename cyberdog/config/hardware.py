@@ -127,6 +127,9 @@ class RandomizationConfig:
     kp_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's proportional gains [walk-these-ways: 0.8..1.3]
     kd_factor: Tuple[float, float] = (1.0, 1.0)  # × the PID's kd, torque mode's damping [walk-these-ways: 0.5..1.5]
     ground_friction_scale: Tuple[float, float] = (1.0, 1.0)  # × SimConfig.ground_friction [legged_gym: 0.5..1.25 absolute]
+    # True: each drawn robot's physics step is the one its drawn gains need (`driver_physics_dt`, as for a
+    # configured robot with those gains); False: every draw steps at the configured robot's
+    drivers_rate_per_robot: bool = False
 
     RANGES = ("joint_friction_scale", "latency_periods", "mass_scale", "motor_strength", "kp_factor", "kd_factor",
               "ground_friction_scale")
@@ -150,3 +153,6 @@ class RandomizationConfig:
                                 ("kd_factor", 0.1, 3.0), ("ground_friction_scale", 0.05, 5.0)):
             lo, hi = getattr(self, name)
             _check(low <= lo and hi <= high, f"RandomizationConfig.{name}", f"within [{low}, {high}]", (lo, hi))
+        _check(not self.drivers_rate_per_robot or self.kp_factor != (1.0, 1.0) or self.kd_factor != (1.0, 1.0),
+               "RandomizationConfig.drivers_rate_per_robot", "False unless kp_factor or kd_factor is drawn (it "
+               "changes the step only for drawn gains)", self.drivers_rate_per_robot)

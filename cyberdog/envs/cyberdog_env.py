@@ -135,7 +135,8 @@ class CyberDogEnv(gym.Env):
                              drive=cfg.action_mode != "torque", gui=(render_mode == "human"),
                              fall_height=cfg.fall_height, fall_tilt=np.deg2rad(cfg.fall_tilt_deg),
                              body_trace=False,  # the env reads the state, not the walk's per-period body trace
-                             joint_damping=cfg.joint_damping)
+                             joint_damping=cfg.joint_damping,
+                             rate_per_robot=cfg.randomization.drivers_rate_per_robot)
         layout = observation_layout(cfg)
         low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
         high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in layout])

@@ -88,6 +88,8 @@ class Walker(WalkBooks):
     joint_damping: N·m·s/rad, the motor drivers' damping −c·q̇ added at every physics step on the joint speed
         then (the drivers' kd with kp = 0: the torque-mode env's `EnvConfig.joint_damping`); motor torque, so
         the energy books its work. A drawn robot's `kd_factor` scales it, as it scales the PID's kd.
+    rate_per_robot: a robot drawn at `reset` with other gains steps at the physics rate its gains need
+        (`RandomizationConfig.drivers_rate_per_robot`); False: at the configured robot's.
 
     After each step, `reading` holds the robot's state in floats (`Robot.read`, what the controller's per-period
     path uses) and `state` the same as a `RobotState` of arrays, built when first asked.
@@ -97,7 +99,7 @@ class Walker(WalkBooks):
                  hardware: HardwareConfig | None = None, joint_stop: JointStop | None = None, drive: bool = True,
                  record: bool = False, gait_metrics: bool = False, gui: bool = False,
                  fall_height: float = FALL_HEIGHT, fall_tilt: float = FALL_TILT, body_trace: bool = True,
-                 joint_damping: float = 0.0) -> None:
+                 joint_damping: float = 0.0, rate_per_robot: bool = False) -> None:
         if hardware is not None and not isinstance(hardware, HardwareConfig):
             raise TypeError(f"hardware must be a HardwareConfig or None, got {type(hardware).__name__}")
         if not (joint_damping >= 0 and np.isfinite(joint_damping)):
@@ -114,6 +116,7 @@ class Walker(WalkBooks):
         self.nominal_joint_damping = float(joint_damping)  # N·m·s/rad, the configured robot's
         self.joint_damping = self.nominal_joint_damping  # N·m·s/rad, the drivers' damping on the joint speed now
         self.record, self.gait_metrics, self.body_trace = record, gait_metrics, body_trace
+        self.rate_per_robot = rate_per_robot  # a drawn robot steps at the rate its gains need
         self.fall_height, self.fall_tilt = fall_height, fall_tilt
         self.dt = cfg.sim.controller_dt  # s, one `step`
         if self.robot.dt != self.dt:
@@ -159,6 +162,8 @@ class Walker(WalkBooks):
         self.robot.actuator.set_scales(d.joint_friction_scale, d.motor_strength)
         self.robot.set_ground_friction(self.cfg.sim.ground_friction * d.ground_friction_scale)
         self.joint_damping = self.nominal_joint_damping * d.kd_factor  # the drivers' kd, drawn as the PID's is
+        if self.rate_per_robot:
+            self._step_for_gains(d.kp_factor, d.kd_factor)
         self.robot.reset()
         self.controller.reset(d.kp_factor, d.kd_factor)
         self.delay.reset(d.latency_periods)
@@ -183,6 +188,17 @@ class Walker(WalkBooks):
         self.slip_xy: list[np.ndarray] = []  # (4, 2) m, every SLIP_SAMPLE_PERIOD
         self.slip_contacts: list[np.ndarray] = []
         return self.state
+
+    def _step_for_gains(self, kp_factor: float, kd_factor: float) -> None:
+        """The physics step at which the drivers' law converges for the PID's gains × the factors (and the
+        drivers' damping × `kd_factor`): the configured step, halved as `driver_physics_dt` needs."""
+        c = self.cfg
+        kp = [g * kp_factor for g in c.pid.kp] if self.drive else []
+        kd = ([g * kd_factor for g in c.pid.kd] if self.drive else []) + [self.joint_damping]
+        h = driver_physics_dt(c.sim.physics_dt, kp, kd, c.robot.reflected_rotor_inertia)
+        if h != self.robot.physics_dt:
+            self.robot.set_physics_dt(h)
+        self.substeps, self.physics_dt = self.robot.substeps, self.robot.physics_dt
 
     @property
     def time(self) -> float:

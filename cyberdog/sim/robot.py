@@ -2,7 +2,7 @@
 
 One `Robot` owns one `BulletClient` (never the global connection), the ground (`urdf/ground.urdf`) and the
 robot: with its state types (`cyberdog.sim.state`), the only place in the project where pybullet is called. Facts it
-relies on (measured, `shared/robot/NOTES.md`):
+relies on (measured, `docs/robot.md`):
 
 - TORQUE_CONTROL lasts for ONE stepSimulation, and repeated calls within a step add up: `physics_step`
   applies the torque exactly once and steps once. The default velocity motors are disabled at load.
@@ -189,6 +189,15 @@ class Robot:
             c.resetJointState(self.body_id, j, float(angle), 0.0)
         self._joint_cache = None
         self.physics_steps = 0
+
+    def set_physics_dt(self, physics_dt: float) -> None:
+        """Step the physics at `physics_dt` s from the next step on, a whole fraction of the controller period
+        (a walk's robot drawn with other gains than the configured one: `Walker.reset`)."""
+        n = int(round(self.dt / physics_dt))
+        if not (n >= 1 and abs(n * physics_dt - self.dt) <= 1e-9 * self.dt):
+            raise ValueError(f"physics_dt must divide the controller period {self.dt} s, got {physics_dt!r}")
+        self.client.setPhysicsEngineParameter(fixedTimeStep=physics_dt)
+        self.physics_dt, self.substeps = float(physics_dt), n
 
     def physics_step(self, torque_command: list) -> list:
         """Apply joint torque commands (12 numbers, N·m, a list) for one physics step (`physics_dt`) and return
