@@ -101,7 +101,7 @@ def from_dict(cls: type, data: dict | None, _path: str = "") -> Any:
     field (`Class.field (dotted.path)`), the value and what is allowed; missing keys take defaults."""
     if data is None:
         data = {}
-    upgrade = getattr(cls, "upgrade_fields", None)  # a class that reads an earlier file form says how
+    upgrade = getattr(cls, "upgrade_fields", None)  # a class that reads another form of its fields maps it
     if upgrade is not None and isinstance(data, dict):
         data = upgrade(data)
     if not isinstance(data, dict):
@@ -125,7 +125,7 @@ def from_dict(cls: type, data: dict | None, _path: str = "") -> Any:
             # walk, whose trot lifts 0.10 m, not WalkConfig()'s 0.15 m): the file overrides, as --set does
             base = _default_of(defaults[name])
             if isinstance(value, dict) and is_dataclass(base):
-                value = _merged(to_dict(base), value)
+                value = merged(to_dict(base), value)
             kwargs[name] = from_dict(hint, value, path)
         else:
             where = f"{cls.__name__}.{name}" + (f" ({path})" if _path else "")
@@ -142,16 +142,17 @@ def _default_of(f: dataclasses.Field) -> Any:
     return None
 
 
-def _merged(base: dict, changes: dict) -> dict:
+def merged(base: dict, changes: dict) -> dict:
     """`base` with `changes` laid over it, nested mappings merged key by key."""
     out = dict(base)
     for k, v in changes.items():
-        out[k] = _merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+        out[k] = merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
     return out
 
 
-def load(cls: type, path: str | Path) -> Any:
-    """Read a YAML config file; a missing file raises `OSError`, bad YAML or values `ValueError`."""
+def load_fields(cls: type, path: str | Path) -> Any:
+    """Read a YAML file of `cls`'s fields; a missing file raises `OSError`, bad YAML or values `ValueError`.
+    (`cyberdog.config.load` also reads a preset file as its ExperimentConfig.)"""
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"config {path} is a folder, expected a YAML file")
@@ -160,14 +161,6 @@ def load(cls: type, path: str | Path) -> Any:
             data = yaml.safe_load(f)
         except yaml.YAMLError as e:
             raise ValueError(f"config {path} is not valid YAML: {' '.join(str(e).split())}") from None
-    if isinstance(data, dict) and {"base", "summary", "phases", "extract"} & set(data):  # a preset file
-        from cyberdog.config.learning import ExperimentConfig
-        from cyberdog.config.preset import load_preset
-
-        if cls is not ExperimentConfig:
-            raise ValueError(f"{path} is a training preset (train.py --config), not a {cls.__name__} file; allowed "
-                             f"in one: {', '.join(f.name for f in fields(cls))}")
-        return load_preset(path).config
     try:
         return from_dict(cls, data)
     except ValueError as e:

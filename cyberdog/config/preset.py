@@ -10,26 +10,31 @@
       - {name: stage2, stage: 2}                          # this preset's settings; starts from stage1's agent
       - name: band
         stage: 2
-        set: {train: {stage2: {max_env_steps: 30000}}}    # changes to the settings for this phase only
-      - {name: other, stage: 1, from: stage2/stage1_final.pt}  # start from another file of the seed's lineage
+        set: {train: {stage2: {max_env_steps: 30000}}}    # changes to the phase before it (stage2)
+      - {name: other, stage: 1, from: stage2/stage1_final.pt}  # band's settings; starts from another file
     extract: {replay_attempts: 16, candidates: 2}         # evaluate.py extract's settings for this recipe
                                                           # (replay_check: false keeps each policy's first path)
 
-A phase trains in `<seed folder>/<phase name>/` (an ordinary run folder) and starts from the previous phase's
+A phase's `stage` is the part of the two-stage training it runs: 1 (with the `train.stage1` settings), 2 (with
+`train.stage2`) or both. Each phase's settings are those of the phase before it with the phase's `set:` laid over
+them; the first phase's, the preset's own settings (the sections above) with its `set:`. A phase with `preset:`
+trains with that preset's settings (its `set:` laid over them) for itself alone: the phase after it changes the
+settings in force before it. A phase trains in `<seed folder>/<phase name>/` (an ordinary run folder) and starts from the previous phase's
 last final agent (`<previous>/stage<N>_final.pt`) unless `from:` names another file of the same seed folder; the
 first phase starts from nothing. A preset without `phases` or `extract` takes its base's. Sections merge key by
-key over the base (a list replaces the base's list). Every error is one `ValueError` line naming the file.
+key over the base, and a phase's `set:` over the settings it changes (a list replaces the list). Every error is one
+`ValueError` line naming the file.
 """
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from cyberdog.config.io import _merged, from_dict, to_dict
+from cyberdog.config.io import from_dict, load_fields, merged, override, replace, to_dict
 from cyberdog.config.learning import ExperimentConfig
 
 SECTIONS = ("env", "agent", "train")
@@ -80,7 +85,7 @@ class Preset:
 
     @property
     def phased(self) -> bool:
-        """More than the plain two-stage run of one config (the form every run of train.py had before phases)."""
+        """More than the plain two-stage run of one config (train.py's run of a config without phases)."""
         return len(self.phases) > 1 or self.phases[0].start is not None or self.phases[0].name != "train"
 
 
@@ -107,30 +112,28 @@ def read_raw(path: str | Path, _chain: tuple[Path, ...] = ()) -> tuple[dict, tup
         raise ValueError(f"{path}: unknown key(s) {unknown}; a preset has {', '.join(KEYS)}")
     chain = (*_chain, path)
     if data.get("base") is None:
-        merged: dict = {}
+        raw: dict = {}
         bases: tuple[Path, ...] = ()
     else:
         if not isinstance(data["base"], str):
             raise ValueError(f"{path}: base must be a file name beside it, e.g. base: table5.yaml, got {data['base']!r}")
-        merged, bases = read_raw(path.parent / data["base"], chain)
+        raw, bases = read_raw(path.parent / data["base"], chain)
         bases = (path.parent / data["base"], *bases)
     for key in SECTIONS:
         if data.get(key) is not None:
             if not isinstance(data[key], dict):
                 raise ValueError(f"{path}: {key} must be a mapping of settings, got {data[key]!r}")
-            merged[key] = _merged(merged.get(key, {}), data[key])
+            raw[key] = merged(raw.get(key, {}), data[key])
     for key in ("phases", "extract", "summary"):
         if key in data:
-            merged[key] = data[key]
-            merged[f"{key}_from"] = path
-    return merged, tuple(Path(b).resolve() for b in bases)
+            raw[key] = data[key]
+            raw[f"{key}_from"] = path
+    return raw, tuple(Path(b).resolve() for b in bases)
 
 
 def load_preset(path: str | Path, overrides: list[str] = ()) -> Preset:
     """Read and resolve a preset file (module docstring); `overrides` (`section.field=value`, as train.py's
     --set) apply to the settings of every phase."""
-    from cyberdog.config.io import override
-
     path = Path(path)
     raw, bases = read_raw(path)
     body = {k: raw[k] for k in SECTIONS if k in raw}
@@ -146,51 +149,83 @@ def load_preset(path: str | Path, overrides: list[str] = ()) -> Preset:
                   extract=_extract(raw.get("extract"), raw.get("extract_from", path)), bases=bases)
 
 
-def _phases(spec: Any, where: Path, body: dict, overrides: list[str]) -> tuple[Phase, ...]:
-    """The typed phases of a preset's `phases:` list (None: one phase `train`, both stages)."""
-    from cyberdog.config.io import override
+def load(cls: type, path: str | Path) -> Any:
+    """Read a YAML config file of `cls` (`cyberdog.config.load`): a file of its fields, or for ExperimentConfig
+    also a preset file (its settings, `load_preset(path).config`). A missing file raises `OSError`, bad YAML or
+    values `ValueError`."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text()) if path.is_file() else None
+    except yaml.YAMLError:
+        data = None  # load_fields says what is wrong with it
+    if isinstance(data, dict) and {"base", "summary", "phases", "extract"} & set(data):
+        if cls is not ExperimentConfig:
+            raise ValueError(f"{path} is a training preset (train.py --config), not a {cls.__name__} file; allowed "
+                             f"in one: {', '.join(f.name for f in fields(cls))}")
+        return load_preset(path).config
+    return load_fields(cls, path)
 
+
+def _phases(spec: Any, where: Path, body: dict, overrides: list[str]) -> tuple[Phase, ...]:
+    """The typed phases of a preset's `phases:` list (None: one phase `train`, both stages), each phase's settings
+    the previous phase's with its `set:` laid over them (the first phase's: `body`'s)."""
     if spec is None:
         spec = [{"name": "train", "stage": "both"}]
     if not isinstance(spec, list) or not spec:
         raise ValueError(f"{where}: phases must be a non-empty list of {{name, stage, ...}}, got {spec!r}")
     phases: list[Phase] = []
+    in_force = body  # the settings the next phase's `set:` changes
     for i, item in enumerate(spec):
-        if not isinstance(item, dict):
-            raise ValueError(f"{where}: phase {i + 1} must be a mapping with {', '.join(PHASE_KEYS)}, got {item!r}")
-        unknown = sorted(set(item) - set(PHASE_KEYS), key=str)
-        name, stage = item.get("name"), str(item.get("stage", "both"))
-        label = f"{where}: phase {name!r}" if isinstance(name, str) else f"{where}: phase {i + 1}"
-        if unknown:
-            raise ValueError(f"{label}: unknown key(s) {unknown}; a phase has {', '.join(PHASE_KEYS)}")
-        if not isinstance(name, str) or not _NAME.fullmatch(name):
-            raise ValueError(f"{label}: name must be lower-case letters, digits and _ (a folder name), got {name!r}")
-        if name in (p.name for p in phases):
-            raise ValueError(f"{label}: the name is used by an earlier phase")
-        if stage not in STAGES:
-            raise ValueError(f"{label}: stage must be 1, 2 or both, got {item.get('stage')!r}")
-        settings = body
-        if item.get("preset") is not None:
+        label = _phase_label(item, i, where, phases)
+        stage = str(item.get("stage", "both"))
+        settings = in_force
+        if item.get("preset") is not None:  # another preset's settings, for this phase alone
             settings = {k: v for k, v in read_raw(where.parent / str(item["preset"]))[0].items() if k in SECTIONS}
         if item.get("set") is not None:
             if not isinstance(item["set"], dict) or set(item["set"]) - set(SECTIONS):
                 raise ValueError(f"{label}: set must be a mapping of {', '.join(SECTIONS)} sections, got {item['set']!r}")
-            settings = _merged(settings, item["set"])
+            settings = merged(settings, item["set"])
+        if item.get("preset") is None:
+            in_force = settings
         try:
             config = override(from_dict(ExperimentConfig, settings), overrides)
         except ValueError as e:
             raise ValueError(f"{label}: {e}") from None
-        start = item.get("from", phases[-1].final_agent if phases else None)
-        if start is not None:
-            first = str(start).split("/")[0]
-            if first not in (p.name for p in phases):
-                raise ValueError(f"{label}: from {start!r} must be a file of an earlier phase "
-                                 f"({', '.join(p.name for p in phases) or 'none before this one'})")
-        if stage == "2" and start is None:
-            raise ValueError(f"{label}: stage 2 alone starts from an earlier phase's agent; the first phase "
-                             f"trains stage 1 or both")
-        phases.append(Phase(name=name, stage=stage, config=config, start=start))
+        phases.append(Phase(name=item["name"], stage=stage, config=config, start=_phase_start(item, label, phases)))
     return tuple(phases)
+
+
+def _phase_label(item: Any, i: int, where: Path, phases: list[Phase]) -> str:
+    """'<file>: phase <name>' for the errors of phase `i` (`item`), after checking its keys, name and stage."""
+    if not isinstance(item, dict):
+        raise ValueError(f"{where}: phase {i + 1} must be a mapping with {', '.join(PHASE_KEYS)}, got {item!r}")
+    name = item.get("name")
+    label = f"{where}: phase {name!r}" if isinstance(name, str) else f"{where}: phase {i + 1}"
+    unknown = sorted(set(item) - set(PHASE_KEYS), key=str)
+    if unknown:
+        raise ValueError(f"{label}: unknown key(s) {unknown}; a phase has {', '.join(PHASE_KEYS)}")
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ValueError(f"{label}: name must be lower-case letters, digits and _ (a folder name), got {name!r}")
+    if name in (p.name for p in phases):
+        raise ValueError(f"{label}: the name is used by an earlier phase")
+    if str(item.get("stage", "both")) not in STAGES:
+        raise ValueError(f"{label}: stage must be 1, 2 or both, got {item.get('stage')!r}")
+    return label
+
+
+def _phase_start(item: dict, label: str, phases: list[Phase]) -> str | None:
+    """The file (relative to the seed folder) phase `item` starts from: `from:`, else the previous phase's final
+    agent; None for a first phase (which must then train stage 1)."""
+    start = item.get("from", phases[-1].final_agent if phases else None)
+    if start is not None:
+        first = str(start).split("/")[0]
+        if first not in (p.name for p in phases):
+            raise ValueError(f"{label}: from {start!r} must be a file of an earlier phase "
+                             f"({', '.join(p.name for p in phases) or 'none before this one'})")
+    if str(item.get("stage", "both")) == "2" and start is None:
+        raise ValueError(f"{label}: stage 2 alone starts from the agent of a phase before it; the first phase "
+                         f"trains stage 1 or both")
+    return start
 
 
 def _extract(spec: Any, where: Path) -> dict:
@@ -271,8 +306,6 @@ PHASES_FILE = "phases.yaml"
 def write_phases(folder: str | Path, preset: Preset, seed: int) -> Path:
     """`folder`/phases.yaml: every phase's resolved settings for `seed`, so that `train.py --resume folder`
     continues the lineage as it was resolved when it began (the preset file may change since)."""
-    from cyberdog.config.io import replace
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     data = {"preset": str(preset.path), "seed": int(seed), "extract": dict(preset.extract),
