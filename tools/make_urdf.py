@@ -4,10 +4,9 @@ Usage:  python tools/make_urdf.py            (writes cyberdog/urdf/cyberdog.urdf
                                               the top-level urdf/cyberdog.urdf links to)
         python tools/make_urdf.py --check    (exit 1 if the checked-in file differs from what is generated)
 
-Every number below is copied from the project's parameter file `shared/robot/cyberdog1_parameters.yaml`
-(kept outside the repository) with that file's tags: [X] Xiaomi's open-source controller files
-(MiRoboticsLab/cyberdog_locomotion), [X-conv] the same values converted to URDF link frames, [SPEC] the
-marketing spec, [G] a guess. The repository does not read that file at run time.
+Every number below is the robot's parameter table, `docs/robot.md`, with its sources' tags: [X] Xiaomi's
+open-source controller files (MiRoboticsLab/cyberdog_locomotion), [X-conv] the same values converted to URDF
+link frames, [SPEC] the marketing spec, [G] a guess.
 
 Frames (as `cyberdog/core/kinematics.py`): x forward, y left, z up; abad about +x, hip and knee about +y;
 zero angles = leg straight down; hip > 0 swings the thigh backward; knee < 0.
@@ -69,7 +68,7 @@ FOOT_MASS, FOOT_INERTIA = 1e-3, 1e-7  # kg, kg·m²: tiny explicit inertial for 
 
 
 def mirrored(part: dict, sx: int, sy: int, mirror_x: bool) -> tuple[float, np.ndarray, np.ndarray]:
-    """(mass, com, 3x3 inertia) of a left-front part mirrored to another leg (parameter file's rule [X-conv]).
+    """(mass, com, 3x3 inertia) of a left-front part mirrored to another leg (the [X-conv] rule of docs/robot.md).
 
     Right legs mirror y (com_y, Ixy, Iyz negated); hind legs mirror x only for the abad link (com_x, Ixy, Ixz).
     """

@@ -139,7 +139,7 @@ def _run_job(job: _Job) -> dict:
         "range_full_charge_m": en.range_from_percent(r.distance, pct, e_cfg) if ok else float("nan"),
         "peak_torque_Nm": r.peak_torque, "wall_s": time.perf_counter() - t0,
         # how much the body rocked: a gait that keeps its speed and one that falls into a rocking, slower orbit
-        # differ here first (|roll| 0.05 against 0.25 rad, notebook/2026-11-28_command_speed.md)
+        # differ here first (|roll| 0.05 against 0.25 rad)
         "max_roll_rad": r.max_roll, "max_pitch_rad": r.max_pitch,
         # the trot's speed loop: the mean stride it added (% of the command) and the share of the walk it ran at its
         # bound (ControllerConfig.max_speed_correction; a walk that needs more than the bound falls behind)

@@ -10,7 +10,7 @@ last half misses the command by more than 5 % costs its energy plus SPEED_MISS_P
 an invalid gait is never cheaper than a valid one. The walks of one evaluation run in parallel processes.
 The optimiser is scipy's bounded Nelder–Mead in coordinates scaled to [0, 1], started from the cycloid.
 
-Results (notebook/2026-11-22_earlier_results.md): at H = 0.10 m on Eq. (7) about 36 % less than the cycloid,
+Results: at H = 0.10 m on Eq. (7) about 36 % less than the cycloid,
 from a near constant-speed swing that Eq. (7) rewards and the battery does not (foot slip doubles, the torque
 clip is reached); hence `objective="electrical"` and a `hardware` robot, the prototype run's reference row.
 """

@@ -13,7 +13,7 @@ JOINT_NAMES = ("abad", "hip", "knee")  # per leg; joint index = 3 * leg + joint
 
 @dataclass(frozen=True)
 class RobotConfig:
-    """Geometry and mass of the first-generation CyberDog (parameter file, tags [X])."""
+    """Geometry and mass of the first-generation CyberDog (docs/robot.md, tags [X])."""
 
     urdf: str = "urdf/cyberdog.urdf"  # absolute, or relative: the package's shipped file, else the repository root
     abad_offset_x: float = 0.23035  # m, body centre → abad joint, forward (±x per leg)
@@ -75,7 +75,7 @@ class SimConfig:
     200 Hz x physics 0.5 / 1 / 1.25 ms against a 2 kHz reference).
     """
 
-    physics_dt: float = 0.00125  # s, contact solver step (800 Hz; NOTES: 240 Hz makes the abad joints chatter)
+    physics_dt: float = 0.00125  # s, contact solver step (800 Hz; docs/robot.md: at 240 Hz the abad joints chatter)
     controller_dt: float = 0.0025  # s, joint controller period (400 Hz), a whole multiple of physics_dt
     gravity: float = 9.81  # m/s²
     ground_friction: float = 0.8  # lateral friction coefficient of foot on ground [G]

@@ -1,10 +1,10 @@
 """Joint actuator model: torque clip, torque–speed envelope and joint friction. No simulator.
 
 PyBullet does not enforce the URDF effort or velocity limits under TORQUE_CONTROL (measured, see
-`shared/robot/NOTES.md`), so the limits of the CyberDog's actuators are applied here, in one place, before
+`docs/robot.md`), so the limits of the CyberDog's actuators are applied here, in one place, before
 the torque reaches the simulator.
 
-Sources (parameter file `shared/robot/cyberdog1_parameters.yaml`):
+Sources (`docs/robot.md`):
 - torque command limit 25 N·m: the paper's Table 4 (Xiaomi's software limit is 23.9994 N·m [X]);
 - torque–speed envelope: full torque up to n1 = 11.4145 rad/s, falling linearly to zero at n2 = 20.9136 rad/s
   (joint speed; `cyberdog.hpp` [X]); it limits the torque only while the motor drives the joint

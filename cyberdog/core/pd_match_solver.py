@@ -9,7 +9,7 @@ plus the same feedforward torques (gravity compensation) whatever the gains. Wha
 executed motion q(t); the gap d = c − q between command and motion is what a soft PD needs to produce the torque
 the gait takes. With other gains (kp', kd'), e.g. the PD s times as stiff (kp × s, kd × √s:
 `PIDConfig.stiffness_scaled`), the same command is followed more or less closely, the torques change and the
-gait is another one: a learned path found under one PD can then lose its saving (notebook/2026-11-27_stiffness.md).
+gait is another one: a learned path found under one PD can then lose its saving (docs/results.md).
 Here the command is re-solved so that the new PD gives, along the same periodic motion q(φ), the torque the old
 one gave:
 
