@@ -11,7 +11,7 @@ import pytest
 from cyberdog.core.commanded_path import CommandedPath
 from cyberdog.core.foot_offsets import FootOffsetPath
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("smooth_offsets", ROOT / "notebook/tools/smooth_offsets.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)

@@ -9,7 +9,7 @@ from cyberdog.core import path_shape as so
 from cyberdog.core.trajectories import CompositeCycloid
 from conftest import walk_config
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("offset_authority", ROOT / "notebook" / "tools" / "offset_authority.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)

@@ -10,7 +10,7 @@ from cyberdog.core import kinematics as kin
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.kinematics import standing_joint_angles
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("damping_study", ROOT / "notebook" / "tools" / "damping_study.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)

@@ -10,7 +10,7 @@ import pytest
 from cyberdog import config as C
 from conftest import assert_made_by
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOK = ROOT / "notebook" / "configs"
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("extract_at_stiffness", ROOT / "notebook/tools/extract_at_stiffness.py")
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)

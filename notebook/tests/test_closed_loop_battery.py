@@ -12,7 +12,7 @@ from cyberdog import config as C
 from cyberdog.analysis.walk import walk
 from cyberdog.core.learned_set import LearnedSet, learned_files
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 spec = importlib.util.spec_from_file_location("closed_loop_battery", ROOT / "notebook/tools/closed_loop_battery.py")
 closed_loop = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(closed_loop)
