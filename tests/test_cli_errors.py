@@ -144,8 +144,8 @@ def test_a_closed_loop_actor_that_is_no_actor_or_has_no_path_is_one_line_before_
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--closed-loop" in err[0] and not (tmp_path / "p").exists()
     # seed 0's actor with a learned set that holds seed 1's path only: refused
-    assert evaluate.main([command, "--learned", "notebook/results/learned_battery/seed1_1mps.json", "--speeds", "1.0",
-                          "--closed-loop", "notebook/results/policy_battery/stage2_actor.pt",
+    assert evaluate.main([command, "--learned", "results/battery/paths/seed1_1mps.json", "--speeds", "1.0",
+                          "--closed-loop", "results/battery/policy/seed0/stage2_actor.pt",
                           "--out", str(tmp_path / "q")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no learned path of the same seed" in err[0] and "seed0" in err[0]

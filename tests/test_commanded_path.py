@@ -169,7 +169,7 @@ def test_extract_commanded_errors_are_clear():
 
 # ---- the saving survives extraction: closed loop vs replay ----------------------------------------------
 
-SHIPPED = Path(__file__).resolve().parents[1] / "notebook" / "results" / "policy_foot" / "stage2_actor.pt"
+SHIPPED = Path(__file__).resolve().parents[1] / "results" / "table5" / "policy" / "seed0" / "stage2_actor.pt"
 
 
 @pytest.mark.slow

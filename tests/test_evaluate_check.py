@@ -95,12 +95,15 @@ def test_check_and_pd_match_are_listed_and_refuse_each_others_options(capsys):
     assert "unrecognized arguments: --runs" in last and "is an option of: check" in last
 
 
-def test_a_shipped_policy_folder_is_checked_by_its_final_actors():
+def test_a_shipped_policy_folder_is_checked_by_its_final_actors(tmp_path):
     from cyberdog.evaluation.check import run_actors
     from cyberdog.evaluation.cli import UsageError
 
     root = Path(__file__).resolve().parents[1]
-    shipped, run = root / "results/table5/policy/seed0", root / "notebook/results/policy_torque_band/seed0"
+    shipped, run = root / "results/table5/policy/seed0", tmp_path / "seed0"  # run: a training run's folder
+    run.mkdir()
+    for stage in (1, 2):
+        (run / f"stage{stage}_final_actor.pt").write_bytes(b"")
     assert run_actors([shipped], "final")["seed0"] == {1: shipped / "stage1_actor.pt", 2: shipped / "stage2_actor.pt"}
     assert run_actors([run], "final")["seed0"][2] == run / "stage2_final_actor.pt"
     with pytest.raises(UsageError, match="stage1_best_actor.pt"):

@@ -35,7 +35,6 @@ def test_a_path_re_commanded_for_a_stiffer_pd_walks_there_as_it_walked_under_its
         cost[name] = r.energy / r.distance  # J/m, Eq. 7
     # on the prototype's first hardware-like robot, re-commanded, the stiff PD walks the own PD's gait to within a
     # few per cent; the plain command falls into a slower, rocking gait that costs far more
-    # (notebook/2026-11-28_pd_matching.md)
     assert abs(cost["matched"] / cost["own"] - 1) < 0.05, cost
     assert cost["plain"] / cost["own"] > 1.3, cost
     assert evaluate.main(["pd-match", str(SHIPPED), "--pd-scale", "1.4", "--out", str(tmp_path)]) == 2  # never over

@@ -16,7 +16,7 @@ from cyberdog.core import pid as pid_module
 from cyberdog.core.trajectories import SampledTrajectory
 
 ROOT = Path(__file__).resolve().parents[1]
-BATTERY_ACTOR = ROOT / "notebook/results/policy_battery/stage2_actor.pt"  # a foot-mode policy trained with seed 0
+BATTERY_ACTOR = ROOT / "results/battery/policy/seed0/stage2_actor.pt"  # a foot-mode policy trained with seed 0
 
 
 def test_a_stiffer_pd_scales_kp_and_keeps_the_damping_ratio():
@@ -59,7 +59,7 @@ def test_the_policy_walks_the_same_robots_as_its_replayed_path():
     same protocol (run-up left out, the distance reached)."""
     from cyberdog.core.learned_set import LearnedSet, learned_files
 
-    learned = LearnedSet.load(learned_files([ROOT / "notebook/results/learned_battery/seed0_1mps.json"]))
+    learned = LearnedSet.load(learned_files([ROOT / "results/battery/paths/seed0_1mps.json"]))
     rows = proto.run_prototype({}, speeds=(1.0,), distance_m=1.0, modes=("hardware",), learned=learned, draws=2,
                                run_up_s=1.0, workers=1, log=lambda *_: None, policies={"seed0": str(BATTERY_ACTOR)})
     by = {(r["trajectory"], r["draw"]): r for r in rows}
