@@ -5,10 +5,10 @@
   python evaluate.py SUB --help       # SUB: all, baselines, extract, compare, prototype, stiffness, figures,
                                       #      video, check, pd-match
 
-The sub-commands live in `cyberdog/evaluation/`: `cli.py` parses (each sub-command has only its own options),
-`commands.py` runs one sub-command, `learned.py` loads or extracts the learned trajectories, `parts.py` walks,
-tabulates and draws; `check.py` and `pd_match.py` are the check and pd-match sub-commands, options included. The
-last line printed names the output folder.
+The sub-commands live in `cyberdog/evaluation/`: `cli.py` parses (each sub-command has only its own options,
+`parsers.py`), `commands.py` runs one sub-command, `learned.py` and `extraction.py` load or extract the learned
+trajectories, `parts.py` walks, tabulates and draws; `check.py` and `pd_match.py` are the check and pd-match
+sub-commands, options included. The last line printed names the output folder.
 """
 from __future__ import annotations
 

@@ -201,26 +201,34 @@ def run_prototype(trajectories: dict | None = None,
     trajectories = {"cycloid": None, "straight": None} if trajectories is None else dict(trajectories)
     speeds, modes, policies = _checked_inputs(trajectories, speeds, distance_m, modes, hardware, learned, draws,
                                               run_up_s, policies, skip_missing)
+    base_cfg, own_pid = _walked_pd(base_cfg, pd_scale, pd_matched, pd_matched_from)
+    robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
+    jobs = _walk_jobs(trajectories, speeds, base_cfg, robots, hardware, float(distance_m), float(run_up_s), learned,
+                      lift_heights, policies, pd_scale, own_pid, own_trot or {}, skip_missing)
+    rows = map_in_processes(_run_job, jobs, workers, on_result=progress_log(len(jobs), _walk_line, log, every_walk),
+                            describe=lambda j: f"{j.trajectory_name} at {j.speed:g} m/s, {j.mode}, {j.distance_m:g} m")
+    return add_gaps(rows)
+
+
+def _walked_pd(base_cfg: WalkConfig, pd_scale: float, pd_matched: bool,
+               pd_matched_from: PIDConfig | None) -> tuple[WalkConfig, PIDConfig | None]:
+    """`base_cfg` with its PD scaled by `pd_scale`, and the PD the walks' commands are re-solved from (None: each
+    walks its command as it is): `run_prototype`'s `pd_matched` and `pd_matched_from`."""
     if pd_matched_from is not None and (pd_matched or pd_scale != 1.0):
         raise ValueError("pd_matched_from re-commands for base_cfg.pid itself: give it with pd_scale 1 and no "
                          "pd_matched")
     own_pid = base_cfg.pid if pd_matched and pd_scale != 1.0 else None  # the PD the paths were made under
     if pd_matched_from is not None and pd_matched_from != base_cfg.pid:
         own_pid = pd_matched_from
-    base_cfg = dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale))
-    robots = [(mode, d) for mode in modes for d in (range(draws) if mode == "hardware" else (0,))]
-    jobs = _walk_jobs(trajectories, speeds, base_cfg, robots, hardware, float(distance_m), float(run_up_s), learned,
-                      lift_heights, policies, pd_scale, own_pid, own_trot or {}, skip_missing)
+    return dataclasses.replace(base_cfg, pid=base_cfg.pid.stiffness_scaled(pd_scale)), own_pid
 
-    def line(row: dict) -> str:
-        return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
-                f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "
-                f"E_el={row['electrical_energy_J'] / 1e3:6.2f} kJ  battery {row['battery_used_pct']:.2f} %  "
-                f"fell={row['fell']}")
 
-    rows = map_in_processes(_run_job, jobs, workers, on_result=progress_log(len(jobs), line, log, every_walk),
-                            describe=lambda j: f"{j.trajectory_name} at {j.speed:g} m/s, {j.mode}, {j.distance_m:g} m")
-    return add_gaps(rows)
+def _walk_line(row: dict) -> str:
+    """One walk's progress line."""
+    return (f"{row['trajectory']:10s} {row['speed_mps']:.1f} m/s {row['robot']:8s} {row['distance_m']:6.1f} m "
+            f"in {row['time_s']:6.1f} s  E={row['energy_J'] / 1e3:6.2f} kJ  "
+            f"E_el={row['electrical_energy_J'] / 1e3:6.2f} kJ  battery {row['battery_used_pct']:.2f} %  "
+            f"fell={row['fell']}")
 
 
 def _walk_jobs(trajectories: dict, speeds, base_cfg: WalkConfig, robots: list, hardware: HardwareConfig,

@@ -15,8 +15,8 @@ walk alone at the paper's speeds?
   electrical energy per metre). A seed folder of a recipe (train.py --seeds) gives its last stage-1 and last
   stage-2 phase's actors. Writes policy_check.{md,json}.
 
-`cyberdog.evaluation.cli` imports this module for its help text and options (`LINE`, `PARAGRAPH`, `add_options`):
-it imports neither the simulator nor numpy, nor the command line, until a check runs.
+The command line (`cyberdog.evaluation.parsers`) imports this module for its help text and options (`LINE`,
+`PARAGRAPH`, `add_options`): it imports neither the simulator nor numpy until a check runs.
 """
 from __future__ import annotations
 
@@ -24,6 +24,7 @@ import json
 from pathlib import Path
 
 from cyberdog.config.paper import PAPER_SPEEDS, PAPER_WALK_DURATION
+from cyberdog.evaluation.options import UsageError, positive
 
 PARTS = ("ideal", "spread", "hardware")  # the replay check's parts (`CheckWalk.part`)
 ACTORS = ("final", "best")  # stage<N>_final_actor.pt or stage<N>_best_actor.pt of a run folder
@@ -37,8 +38,6 @@ PARAGRAPH = ("path files (commanded paths, as `extract` writes them; folders of 
 
 def add_options(p) -> None:
     """The options of `check` (besides the shared output folder and --workers)."""
-    from cyberdog.evaluation.cli import positive
-
     p.add_argument("paths", nargs="*", type=Path, metavar="PATH",
                    help="commanded path files (JSON) or folders of them")
     p.add_argument("--parts", nargs="+", choices=PARTS, default=None,
@@ -65,8 +64,6 @@ def add_options(p) -> None:
 
 
 def cmd_check(args, cfg) -> int:
-    from cyberdog.evaluation.cli import UsageError
-
     if bool(args.paths) == bool(args.runs):
         raise UsageError("check needs path files (PATH ...) or --runs RUN ..., one of the two")
     return _check_paths(args, cfg) if args.paths else _check_policies(args)
@@ -109,8 +106,7 @@ def _check_paths(args, cfg) -> int:
     from cyberdog.analysis.parallel import map_in_processes, progress_log
     from cyberdog.analysis.report import json_safe
     from cyberdog.core.learned_set import LearnedSet, learned_files
-    from cyberdog.evaluation.cli import UsageError
-    from cyberdog.evaluation.commands import open_run
+    from cyberdog.evaluation.output import open_run
     from cyberdog.evaluation.recorded_trot import trot_for
 
     given = [o for o, v in (("--speeds", args.speeds), ("--duration", args.duration), ("--actor", args.actor),
@@ -150,8 +146,6 @@ def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
     """{run folder name: {stage: actor file}} of the stages each run has (a shipped folder's stage<N>_actor.pt are
     its run's final actors); a run with neither stage is refused."""
     from cyberdog.config import is_lineage, read_phases
-    from cyberdog.evaluation.cli import UsageError
-
     actors = {}
     for run in runs:
         names = [f"stage{{}}_{actor}_actor.pt"] + (["stage{}_actor.pt"] if actor == "final" else [])
@@ -183,8 +177,7 @@ def _check_policies(args) -> int:
     from cyberdog.analysis.parallel import map_in_processes, progress_log
     from cyberdog.analysis.policy_check import COLUMNS, check_actor, check_jobs, check_trot, stage_reductions
     from cyberdog.analysis.report import json_safe, markdown_table
-    from cyberdog.evaluation.cli import UsageError
-    from cyberdog.evaluation.commands import Run, new_out
+    from cyberdog.evaluation.output import Run, new_out
     from cyberdog.rl.rollout import load_actor
 
     given = [o for o, v in (("--parts", args.parts), ("--config", args.config), ("--set", args.overrides),

@@ -4,70 +4,20 @@ with one line on stderr and exit status 2."""
 from __future__ import annotations
 
 import sys
-import time
-from pathlib import Path
 
 from cyberdog import config as C
 from cyberdog.core.learned_set import LearnedSetError
-from cyberdog.evaluation.check import cmd_check
-from cyberdog.evaluation.cli import UsageError
 from cyberdog.evaluation import learned as L
-from cyberdog.evaluation.extraction import take_recipe_extraction
+from cyberdog.evaluation.check import cmd_check
+from cyberdog.evaluation.extraction import learned_trajectories, take_recipe_extraction
+from cyberdog.evaluation.options import UsageError
+from cyberdog.evaluation.output import Run, open_run
 from cyberdog.evaluation.pd_match import cmd_pd_match
 from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",
                     "cost_of_transport", "peak_torque_Nm", "peak_joint_speed_radps"]
-
-
-class Run:
-    """One evaluate.py run's output folder: refused if it holds results (unless --force), and at the end the
-    list of exactly the files this run wrote (recorded in the folder's outputs.json)."""
-
-    def __init__(self, args, out: Path, append: bool = False):
-        from cyberdog.output_folder import OutputFolder, OutputFolderError
-
-        self.out, self.t0 = out, time.perf_counter()
-        try:
-            self.folder = OutputFolder(out, force=args.force, append=append, command=args.command,
-                                       argv=getattr(args, "argv", ()))
-        except OutputFolderError as err:
-            raise UsageError(str(err)) from None
-        for note in self.folder.notes:
-            print(note)
-        args.run = self  # so that `run` can record this run's files if the command fails
-
-    def abandon(self, status: str) -> None:
-        """Record the files written so far, the run as `status` ("failed", "interrupted")."""
-        self.folder.abandon(status)
-
-    def finish(self, headline: str | None = None) -> int:
-        """Record the run; print the files it wrote (with `headline`, a file of them: only where the headline
-        and the figures are, and how many files in all)."""
-        files = self.folder.finish()
-        print(f"\nwrote {len(files)} files in {self.out}/ ({time.perf_counter() - self.t0:.1f} s)"
-              + ("; every file is listed in outputs.json" if headline else ":"))
-        if headline:
-            print(f"  the headline table:  {self.out / headline}")
-            figures = sorted(p.name for p in files if p.suffix == ".png")
-            if figures:
-                print(f"  the figures:         {self.out}/{{{','.join(figures)}}}")
-        else:
-            for p in files:
-                print(f"  {p}")
-        print(f"output folder: {self.out}/")  # the last line: where to look
-        return 0
-
-
-def new_out() -> Path:
-    """runs/evaluate-<time>, with a suffix if a run in the same second took that name."""
-    base = Path("runs") / time.strftime("evaluate-%Y%m%d-%H%M%S")
-    out, k = base, 1
-    while out.exists():
-        k += 1
-        out = base.with_name(f"{base.name}-{k}")
-    return out
 
 
 def walk_config(args) -> C.WalkConfig:
@@ -83,18 +33,6 @@ def walk_config(args) -> C.WalkConfig:
         return C.override(cfg, [s for s in sets if not s.strip().startswith("hardware.")])
     except (ValueError, OSError) as err:
         raise UsageError(f"config error: {err}") from None
-
-
-def open_run(args, cfg: C.WalkConfig) -> Run:
-    """The output folder of a sub-command that walks: --out (default runs/evaluate-<time>) with config.yaml."""
-    out = args.out or new_out()
-    try:
-        run = Run(args, out)
-        C.save(cfg, run.out / "config.yaml")
-    except OSError as err:  # an unwritable place, or a path through a file
-        raise UsageError(f"cannot write the output folder --out {out}: {err.strerror or err}; choose a folder "
-                         f"you can write") from None
-    return run
 
 
 def trot_of(args, run: Run, cfg: C.WalkConfig, learned, name: str = "config.yaml",
@@ -129,7 +67,7 @@ def cmd_extract(args, cfg: C.WalkConfig) -> int:
     take_recipe_extraction(args)
     L.check_learned_inputs(args)
     run = open_run(args, cfg)
-    L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)  # extracted and saved in run.out/learned/
+    learned_trajectories(args, run.out, args.speeds, cfg=cfg)  # extracted and saved in run.out/learned/
     run_figures(args.draw_figures, run.out, only=("figure7",))
     return run.finish()
 
@@ -140,7 +78,7 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     L.check_learned_inputs(args)
     reference = L.reference_shape(args)
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
+    learned = learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference)
@@ -154,7 +92,7 @@ def cmd_prototype(args, cfg: C.WalkConfig) -> int:
     L.check_learned_inputs(args)
     reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
+    learned = learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
     cfg = trot_of(args, run, cfg, learned)  # the searched shape walks under its own trot (run_prototype_part)
     run_prototype_part(cfg, learned, args.speeds, args.prototype_distance, args.prototype_modes, args.workers,
                        run.out, draws=args.prototype_draws, reference=reference, run_up_s=args.prototype_run_up,
@@ -174,7 +112,7 @@ def cmd_stiffness(args, cfg: C.WalkConfig) -> int:
         raise UsageError(f"--pd-scales: {err}") from None
     reference = L.reference_shape(args, prototype=True)
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
+    learned = learned_trajectories(args, run.out, args.speeds, cfg=cfg, for_prototype=True)
     cfg = trot_of(args, run, cfg, learned)
     trajectories = {"cycloid": None, "straight": None, **({"searched": reference} if reference is not None else {})}
     rows = run_stiffness(scales, trajectories=trajectories, speeds=args.speeds, distance_m=args.prototype_distance,
@@ -196,13 +134,13 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
     proto_reference = None if args.no_prototype else L.reference_shape(args, prototype=True)
     metrics = L.metrics_files(args.metrics, L.policy_paths(args.policies, args.sweep))
     run = open_run(args, cfg)
-    learned = L.learned_trajectories(args, run.out, args.speeds, cfg=cfg)
+    learned = learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     table5_cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_compare(table5_cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
                 reference=reference, brief=True)
     if not args.no_prototype:  # by default the battery preset's paths where shipped (learned.default_learned)
         given = args.learned or L.policy_paths(args.policies, args.sweep)
-        proto_learned = learned if given else L.learned_trajectories(args, run.out, args.speeds, cfg=cfg,
+        proto_learned = learned if given else learned_trajectories(args, run.out, args.speeds, cfg=cfg,
                                                                      for_prototype=True)
         proto_cfg = table5_cfg if given else walk_under_recorded_trot(args, cfg, proto_learned)
         if proto_cfg != table5_cfg:  # the prototype's paths were recorded under another trot than Table 5's
@@ -250,7 +188,7 @@ def cmd_video(args, cfg: C.WalkConfig) -> int:
         L.check_learned_inputs(args)
     run = open_run(args, cfg)
     if args.video_trajectory == "learned":  # a policy is rolled out at the video's speed
-        learned = L.learned_trajectories(args, run.out, [args.video_speed], cfg=cfg)
+        learned = learned_trajectories(args, run.out, [args.video_speed], cfg=cfg)
         cfg = trot_of(args, run, cfg, learned)
     run_video(cfg, learned, args, run.out)
     return run.finish()

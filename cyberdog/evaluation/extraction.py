@@ -1,6 +1,7 @@
 """Extraction from trained policies for `evaluate.py`: each policy rolled out at each of its speeds, its learned
-path (commanded, or measured as the paper does) extracted, replay-checked and saved as it is made; and the
-extraction settings a recipe names (a preset's `extract:`).
+path (commanded, or measured as the paper does) extracted, replay-checked and saved as it is made; the
+extraction settings a recipe names (a preset's `extract:`); and `learned_trajectories`, the learned paths a
+sub-command walks: extracted where policies are given, else loaded.
 """
 from __future__ import annotations
 
@@ -16,8 +17,9 @@ from cyberdog.analysis.replay_check import (REPLAY_CHECK_S, ReplayCheck, check_s
                                             walk_status)
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
-from cyberdog.evaluation.cli import UsageError
-from cyberdog.evaluation.learned import load_learned, unique_labels
+from cyberdog.evaluation.learned import (DEFAULT_LEARNED_BATTERY, default_learned, load_learned, policy_paths,
+                                         unique_labels)
+from cyberdog.evaluation.options import EXTRACT_DEFAULTS, UsageError
 from cyberdog.evaluation.recorded_trot import trot_for
 from cyberdog.provenance import portable_path
 
@@ -29,7 +31,6 @@ def take_recipe_extraction(args) -> dict:
     """For --sweep of a preset's lineages (train.py --config configs/<recipe>.yaml --seeds ...): the preset's
     `extract:` settings, for every option left at its default on the command line (one given wins). Returns
     what was taken."""
-    from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
 
     sweep = getattr(args, "sweep", None)
     lineages = sorted(d for d in sweep.iterdir() if C.is_lineage(d)) if sweep is not None and sweep.is_dir() else []
@@ -45,6 +46,23 @@ def take_recipe_extraction(args) -> dict:
     if taken:
         print(f"extract: the recipe's settings: {', '.join(f'{k}={v}' for k, v in taken.items())}")
     return taken
+
+
+def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None,
+                         for_prototype: bool = False) -> LearnedSet:
+    """Extract from --policies/--sweep when given, else load `default_learned`; the paths used are copied
+    beside the results, into out/learned/ (out/<DEFAULT_LEARNED_BATTERY's name>/ for the battery default)."""
+    paths = policy_paths(args.policies, args.sweep)
+    folder = out / "learned"
+    if paths:
+        learned = extract_policies(paths, args, speeds, out, log, cfg)
+    else:
+        files = default_learned(args, for_prototype)
+        learned = load_learned(files)
+        if files == [DEFAULT_LEARNED_BATTERY]:
+            folder = out / DEFAULT_LEARNED_BATTERY.name
+    learned.save(folder, overwrite=False)
+    return learned
 
 
 def extraction_speeds(env: C.EnvConfig, speeds: list[float], policy_speed: float | None, log=print) -> list[float]:

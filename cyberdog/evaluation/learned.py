@@ -1,5 +1,6 @@
-"""The learned paths `evaluate.py` walks (a `LearnedSet`): loaded from files, or extracted from trained policies
-first. Labels are the provenance's seed ("seed3"), else the file or run folder name.
+"""The learned paths `evaluate.py` walks (a `LearnedSet`) loaded from files, the policies and training logs named
+on the command line, and the reference shapes; `extraction` makes learned paths from trained policies. Labels are
+the provenance's seed ("seed3"), else the file or run folder name.
 """
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 from cyberdog import config as C
 from cyberdog.core.learned_set import LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import SampledTrajectory
-from cyberdog.evaluation.cli import UsageError
+from cyberdog.evaluation.options import UsageError
 from cyberdog.metrics_csv import run_name
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -165,25 +166,6 @@ def default_learned(args, for_prototype: bool = False) -> list[Path]:
     return [DEFAULT_LEARNED_BATTERY if for_prototype and DEFAULT_LEARNED_BATTERY.is_dir() else DEFAULT_LEARNED]
 
 
-def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None,
-                         for_prototype: bool = False) -> LearnedSet:
-    """Extract from --policies/--sweep when given, else load `default_learned`; the paths used are copied
-    beside the results, into out/learned/ (out/<DEFAULT_LEARNED_BATTERY's name>/ for the battery default)."""
-    paths = policy_paths(args.policies, args.sweep)
-    folder = out / "learned"
-    if paths:
-        from cyberdog.evaluation.extraction import extract_policies  # rollouts: torch, only when asked
-
-        learned = extract_policies(paths, args, speeds, out, log, cfg)
-    else:
-        files = default_learned(args, for_prototype)
-        learned = load_learned(files)
-        if files == [DEFAULT_LEARNED_BATTERY]:
-            folder = out / DEFAULT_LEARNED_BATTERY.name
-    learned.save(folder, overwrite=False)
-    return learned
-
-
 def reference_shape(args, log=print, prototype: bool = False) -> SampledTrajectory | None:
     """The reference shape of the matched-lift table: --reference FILE, else the shipped one if it is there;
     None with --no-reference or --no-same-lift. With `prototype`, the prototype run's: --prototype-reference
@@ -222,4 +204,4 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
 
 __all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
            "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned",
-           "learned_trajectories", "load_learned", "metrics_files", "policy_paths", "reference_shape"]
+           "load_learned", "metrics_files", "policy_paths", "reference_shape"]

@@ -12,7 +12,7 @@ from cyberdog.analysis import compare as cmp
 from cyberdog.analysis import table5 as t5
 from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.core.learned_set import LearnedSet
-from cyberdog.evaluation.cli import UsageError
+from cyberdog.evaluation.options import UsageError
 
 FIGURES = ("figure4", "figure6", "figure7", "figure10", "figure13")
 
@@ -105,20 +105,9 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     from cyberdog.analysis.prototype_summary import REFERENCE, summary_rows
 
     trajectories = {"cycloid": None, "straight": None, **({REFERENCE: reference} if reference is not None else {})}
-    robots = sum(draws if m == "hardware" else 1 for m in modes)
     policies = dict(policies or {})
-    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
-    if skip_missing and missing:
-        log("prototype: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
-            + ": those speeds' rows are over the other seeds")
-    pairs = len(learned) * len(speeds) - (len(missing) if skip_missing else 0)
-    log(f"prototype: {(pairs * (len(trajectories) + 1) + len(policies) * len(speeds)) * robots} walks of "
-        f"{distance_m:g} m "
-        f"{f'after a {run_up_s:g} s run-up ' if run_up_s > 0 else 'from a stand '}"
-        f"({len(learned)} learned seeds, each with the common trajectories"
-        f"{' and the searched shape' if reference is not None else ''} at its lift height"
-        f"{f', {len(policies)} policies closed loop' if policies else ''}; "
-        f"{draws} hardware-like robot{'s' * (draws > 1)})")
+    _log_prototype_walks(learned, speeds, distance_m, modes, len(trajectories), draws, run_up_s, policies,
+                         skip_missing, searched=reference is not None, log=log)
     rows = run_prototype(trajectories, speeds=speeds, distance_m=distance_m, modes=modes, workers=workers,
                          base_cfg=cfg, log=log, every_walk=not brief, learned=learned, draws=draws,
                          run_up_s=run_up_s, policies=policies, hardware=hardware,
@@ -130,24 +119,51 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
               f"run-up (paper: 100 m from a stand)\n")
         print(prototype_table(rows))
         return rows
-    summary = summary_rows(rows)
     print(f"\nPrototype run, {len(learned)} seeds x {draws} hardware-like robots (battery % per 100 m, Eq. 13, "
           f"mean ± 95 % CI across seeds; {distance_m:g} m walks after a {run_up_s:g} s run-up; in full: "
           f"prototype.md):")
+    _print_prototype_summary(summary_rows(rows), modes, [*(["policy"] if policies else []), *trajectories],
+                             speeds, searched=reference is not None)
+    return rows
+
+
+def _log_prototype_walks(learned: LearnedSet, speeds: list[float], distance_m: float, modes: list[str],
+                         n_trajectories: int, draws: int, run_up_s: float, policies: dict, skip_missing: bool,
+                         searched: bool, log) -> None:
+    """The prototype run's plan in one line (how many walks of what, `n_trajectories` beside each learned path),
+    after the seeds and speeds it skips."""
+    robots = sum(draws if m == "hardware" else 1 for m in modes)
+    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
+    if skip_missing and missing:
+        log("prototype: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
+            + ": those speeds' rows are over the other seeds")
+    pairs = len(learned) * len(speeds) - (len(missing) if skip_missing else 0)
+    log(f"prototype: {(pairs * (n_trajectories + 1) + len(policies) * len(speeds)) * robots} walks of "
+        f"{distance_m:g} m "
+        f"{f'after a {run_up_s:g} s run-up ' if run_up_s > 0 else 'from a stand '}"
+        f"({len(learned)} learned seeds, each with the common trajectories"
+        f"{' and the searched shape' if searched else ''} at its lift "
+        f"height{f', {len(policies)} policies closed loop' if policies else ''}; "
+        f"{draws} hardware-like robot{'s' * (draws > 1)})")
+
+
+def _print_prototype_summary(summary: list[dict], modes: list[str], others: list[str], speeds: list[float],
+                             searched: bool) -> None:
+    """Per robot, the battery per 100 m of the learned paths and of `others` (rows) at each speed, and the learned
+    paths' saving."""
     for mode in modes:
         cells = [f"{name} " + " / ".join(f"{r['battery_pct_per_100m_mean']:.2f}" for r in summary
                                          if r["trajectory"] == name and r["robot"] == mode)
-                 for name in ("learned", *(["policy"] if policies else []), *trajectories)]
+                 for name in ("learned", *others)]
         print(f"  {mode:8s} " + "   ".join(cells) + f"  at {' / '.join(f'{v:g}' for v in speeds)} m/s")
         saving = [r for r in summary if r["trajectory"] == "learned" and r["robot"] == mode]
         print(f"  {'':8s} learned saves " + " / ".join(
             f"{r['battery_saving_pct_mean']:.1f} ± {r['battery_saving_pct_ci95']:.1f} %" for r in saving)
               + " of the battery against the cheaper common trajectory at its lift"
               + ("; against the searched shape " + " / ".join(
-                  f"{r['battery_vs_searched_pct_mean']:.1f} %" for r in saving) if reference is not None else "")
+                  f"{r['battery_vs_searched_pct_mean']:.1f} %" for r in saving) if searched else "")
               + "".join(f"; {r['walks'] - r['counted']} learned walk(s) at {r['speed_mps']:g} m/s did not count "
                         f"({r['fell']} fell)" for r in saving if r["counted"] < r["walks"]))
-    return rows
 
 
 def run_figures(draw, results_dir: Path, out: Path | None = None, *, metrics: dict | None = None, learned=None,

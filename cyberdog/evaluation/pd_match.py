@@ -11,15 +11,16 @@ was recorded with; the method in docs/evaluation.md, "Re-commanded for the PD").
     python evaluate.py prototype --learned runs/my_pd/learned --set "pid.kp=[84,84,84]" "pid.kd=[2.4,2.4,2.4]"
 
 (`--pd-scale S` instead: kp × S, kd × √S, `PIDConfig.stiffness_scaled`; the trot the paths record is applied by
-evaluate.py unless --set changes the controller). `cyberdog.evaluation.cli` imports this module for its help
-text and options (`LINE`, `PARAGRAPH`, `add_options`): it imports neither the simulator nor numpy, nor the
-command line, until it runs.
+evaluate.py unless --set changes the controller). The command line (`cyberdog.evaluation.parsers`) imports this
+module for its help text and options (`LINE`, `PARAGRAPH`, `add_options`): it imports neither the simulator nor
+numpy until it runs.
 """
 from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
 
+from cyberdog.evaluation.options import UsageError, non_negative, positive
 
 LINE = "re-command learned paths for another joint PD (--pd-scale S, or --kp/--kd) and write them"
 PARAGRAPH = ("each commanded path file (or folder of them) walks on the ideal robot under the walk config's PD and "
@@ -31,8 +32,6 @@ PARAGRAPH = ("each commanded path file (or folder of them) walks on the ideal ro
 
 def add_options(p) -> None:
     """The options of `pd-match` (besides the shared walk config and output folder)."""
-    from cyberdog.evaluation.cli import non_negative, positive
-
     p.add_argument("paths", nargs="+", type=Path, metavar="PATH",
                    help="commanded path files (<label>_<v>mps.json) or folders of them")
     gains = p.add_mutually_exclusive_group(required=True)
@@ -53,8 +52,7 @@ def cmd_pd_match(args, cfg) -> int:
     from cyberdog.analysis.pd_match_recording import RECORD_S, SETTLE_S, pd_matched_foot_offsets
     from cyberdog.core.commanded_path import CommandedPath
     from cyberdog.core.learned_set import LearnedSet, learned_files
-    from cyberdog.evaluation.cli import UsageError
-    from cyberdog.evaluation.commands import new_out, open_run
+    from cyberdog.evaluation.output import new_out, open_run
     from cyberdog.evaluation.recorded_trot import trot_for
 
     if args.kd is not None and args.kp is None:
