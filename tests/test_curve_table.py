@@ -74,3 +74,14 @@ def test_the_table_and_the_command_line(tmp_path, capsys):
     with pytest.raises(SystemExit):
         tool.main([str(tmp_path / "other.csv")])
     assert "not a train.py metrics.csv" in capsys.readouterr().err
+
+
+def test_a_log_older_than_the_fell_column_reads_as_not_logged(tmp_path):
+    with open(tmp_path / "metrics.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow([c for c in FIELDS if c != "fell"])
+        for i, (stage, steps, length, score, _, wall) in enumerate(EPISODES, 1):
+            w.writerow([stage, i, steps, length, score, wall])
+    stages = tool.read_metrics(tmp_path / "metrics.csv")
+    assert [r["falls"] for r in tool.curve_rows(stages[1], every=100)] == ["not logged"] * 3
+    assert [r["episodes"] for r in tool.curve_rows(stages[2], every=100)] == [1, 1]

@@ -23,13 +23,13 @@ from cyberdog.metrics_csv import read_rows, read_stages
 
 COLUMNS = ("env steps", "episodes", "mean length (steps)", "longest", "falls", "mean score", "wall (min)")
 PAUSE_S = 600.0  # s; no episode takes this long (400 agent steps), so a longer gap is a stop between runs
-NEEDED = ("stage", "env_steps", "length", "score", "fell", "wall_time_s")
+NEEDED = ("stage", "env_steps", "length", "score", "wall_time_s")  # and `fell` where logged (NaN where not)
 
 
 def read_metrics(path: Path) -> dict[int, dict[str, np.ndarray]]:
-    """Per stage, the log's columns (the package's reader, `cyberdog.metrics_csv`; an empty cell, as in `fell`
-    of an older log, reads as NaN) plus `stage_steps`: the env steps counted within the stage (`env_steps` is
-    the run's total, so a stage's count starts at the previous stage's last)."""
+    """Per stage, the log's columns (the package's reader, `cyberdog.metrics_csv`; an empty cell reads as NaN, and
+    so does `fell` of a log older than that column) plus `stage_steps`: the env steps counted within the stage
+    (`env_steps` is the run's total, so a stage's count starts at the previous stage's last)."""
     stages = read_stages(path)
     if not stages:
         rows = read_rows(path)  # why nothing: a file of other columns, or a log with no episode yet
@@ -41,6 +41,7 @@ def read_metrics(path: Path) -> dict[int, dict[str, np.ndarray]]:
         raise ValueError(f"{path}: not a train.py metrics.csv (no column {', '.join(missing)})")
     before = 0.0
     for d in stages.values():
+        d.setdefault("fell", np.full(len(d["length"]), np.nan))
         d["stage_steps"] = d["env_steps"] - before
         before = float(d["env_steps"][-1])
     return stages

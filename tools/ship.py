@@ -64,6 +64,10 @@ OPTIONAL = {"stage1_final_actor.pt"}  # a stage-2 run started with --init-from h
 MAX_BYTES = 2_000_000  # the shipped folder stays under 2 MB
 SEED_FOLDER = re.compile(r"seed(\d+)$")
 FRESH_FILES = ("torque_check_fresh.json", "comparison_torque_fresh.json", "prototype_torque_fresh.json")
+# torque --quick: each evaluate.py step at one speed with short walks, a check that the chain runs (not a result)
+QUICK = {"check": ["--speeds", "1.0", "--duration", "2"], "extract": ["--speeds", "1.0"],
+         "compare": ["--speeds", "1.0", "--duration", "2"],
+         "prototype": ["--speeds", "1.0", "--prototype-distance", "2", "--prototype-draws", "1"]}
 
 
 def stage_summary(rows: list[dict], stage: int) -> dict:
@@ -252,20 +256,21 @@ def ship_actors(inputs: list[Path], policy_root: Path, py: str) -> list[Path]:
 
 
 def evaluate_seeds(shipped: list[Path], folder: Path, figures: Path, work: Path, suffix: str, py: str,
-                   n_workers: int, force: list[str]) -> tuple[Path, int, int]:
+                   n_workers: int, force: list[str], quick: bool = False) -> tuple[Path, int, int]:
     """Steps 2-4 for the seeds shipped in `folder`/policy: their check, their paths into `folder`/paths, Table
-    5's rows and the prototype's protocol, each step's output copied to figures/<name><suffix>.json. Returns
-    (folder, paths found, seeds)."""
+    5's rows and the prototype's protocol, each step's output copied to figures/<name><suffix>.json (with
+    `quick`, each step on the budgets of QUICK). Returns (folder, paths found, seeds)."""
     policy_root, paths_root = folder / "policy", folder / "paths"
     workers = ["--workers", str(n_workers)]
+    small = QUICK if quick else {}
     # 2. do they walk, alone, in the band (and what the trot costs at the same speeds)
     run([py, "evaluate.py", "check", "--runs", *shipped, "--robots", "ideal", "hardware:0", "hardware:1", "--trot",
-         "--out", work / "check", *workers, *force])
+         "--out", work / "check", *workers, *force, *small.get("check", [])])
     shutil.copyfile(work / "check" / "policy_check.json", figures / f"torque_check{suffix}.json")
 
     # 3. the paper's extraction; --workers > 1 keeps going past a seed without a path that replays
     failed = not run([py, "evaluate.py", "extract", "--sweep", policy_root, "--out", work / "paths",
-                      "--workers", str(max(2, n_workers)), *force], stop_on_failure=False)
+                      "--workers", str(max(2, n_workers)), *force, *small.get("extract", [])], stop_on_failure=False)
     paths = sorted(q for q in (work / "paths" / "learned").glob("seed*.json") if SEED_FOLDER.match(q.stem))
     if not paths:
         sys.exit("the extraction found no path that replays in the band for any seed")
@@ -280,11 +285,12 @@ def evaluate_seeds(shipped: list[Path], folder: Path, figures: Path, work: Path,
 
     # 4. Table 5's torque rows for the seeds with a path; the prototype's protocol for those paths and, closed
     # loop, for every seed's policy (a policy whose path does not replay still walks the protocol itself)
-    run([py, "evaluate.py", "compare", "--learned", paths_root, "--out", work / "compare", *workers, *force])
+    run([py, "evaluate.py", "compare", "--learned", paths_root, "--out", work / "compare", *workers, *force,
+         *small.get("compare", [])])
     shutil.copyfile(work / "compare" / "comparison.json", figures / f"comparison_torque{suffix}.json")
     actors = [f / "stage2_actor.pt" for f in shipped]
     run([py, "evaluate.py", "prototype", "--learned", paths_root, "--closed-loop", *actors,
-         "--no-prototype-reference", "--out", work / "prototype", *workers, *force])
+         "--no-prototype-reference", "--out", work / "prototype", *workers, *force, *small.get("prototype", [])])
     shutil.copyfile(work / "prototype" / "prototype.json", figures / f"prototype_torque{suffix}.json")
     return folder, len(paths), len(shipped)
 
@@ -301,18 +307,21 @@ def ship_torque(args) -> int:
             sys.exit(f"{given}: no such folder")
         if work == folder or folder in work.parents:
             sys.exit("--work must be outside the run folders (their seed<N> folders are the inputs)")
+    if args.quick and results == Path("results"):
+        sys.exit("--quick makes no result to ship: give it a --results folder of its own")
     py, force = sys.executable, ["--force"] if args.force else []
     policy_root, figures = results / "torque" / "policy", results / "figures_input"
+    figures.mkdir(parents=True, exist_ok=True)
 
     both = {f.name for f in seed_folders(runs)} & ({f.name for f in seed_folders(args.fresh)} if args.fresh else set())
     if both:  # before anything is written
         sys.exit(f"given both as tuned and as --fresh: {', '.join(sorted(both))}")
     tuned = ship_actors(runs, policy_root, py)
     fresh = ship_actors(args.fresh, results / "torque" / "fresh" / "policy", py) if args.fresh else []
-    counts = [evaluate_seeds(tuned, results / "torque", figures, work, "", py, args.workers, force)]
+    counts = [evaluate_seeds(tuned, results / "torque", figures, work, "", py, args.workers, force, args.quick)]
     if fresh:
         counts.append(evaluate_seeds(fresh, results / "torque" / "fresh", figures, work / "fresh", "_fresh",
-                                     py, args.workers, force))
+                                     py, args.workers, force, args.quick))
     elif (results / "torque" / "fresh").exists():  # fresh seeds of an older recipe must not outlive it
         print(f"\n{results / 'torque' / 'fresh'}: no --fresh seeds given, removed", flush=True)
         shutil.rmtree(results / "torque" / "fresh")
@@ -357,6 +366,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="the results folder to write torque/ and figures_input/ into (default: the repository's)")
     t.add_argument("--workers", type=int, default=2, help="walk processes at once (default 2)")
     t.add_argument("--force", action="store_true", help="replace earlier outputs under --work")
+    t.add_argument("--quick", action="store_true", help="each step at 1.0 m/s alone with short walks (2 s; 2 m, "
+                   "one hardware-like draw): a check that the chain runs, into a --results folder other than the "
+                   "repository's")
     args = p.parse_args(argv)
     return ship_policy(args) if args.command == "policy" else ship_torque(args)
 
