@@ -1,5 +1,6 @@
-"""Every relative link of the log's pages (notebook/*.md) reaches a file, and every anchor a heading of that file: the
-product's rule (tests/test_doc_links.py) on the log's pages."""
+"""Every relative link of the log's pages (notebook/*.md), and every link of the product's pages into the log, reaches
+a file, and every anchor a heading of that file: the product's rule (tests/test_doc_links.py), which leaves the
+product's links into the log out."""
 from __future__ import annotations
 
 import importlib.util
@@ -19,6 +20,6 @@ def test_the_log_has_pages():
     assert len(PAGES) > 1
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+@pytest.mark.parametrize("page", PAGES + _links.PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_relative_link_and_anchor_resolves(page):
     assert _links.broken_links(page) == []
