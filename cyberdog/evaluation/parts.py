@@ -91,7 +91,8 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
                        hardware: C.HardwareConfig = C.HARDWARE_LIKE, skip_missing: bool = False,
                        pd_matched_from: C.PIDConfig | None = None) -> list[dict]:
     """Section 4.2 in simulation, at scale: every learned seed's paths and both common trajectories at their
-    lift heights, on the ideal robot and on `draws` hardware-like robots → prototype.*, prototype_summary.*.
+    lift heights, on the robots of `modes` (the ideal one; `draws` hardware-like ones) → prototype.*,
+    prototype_summary.*.
     `reference`: a searched shape (SampledTrajectory) walked beside them as the row "searched", under the trot it
     was searched under.
     `run_up_s`: s walked from the stand before the measured `distance_m` (`run_prototype`).
