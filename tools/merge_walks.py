@@ -2,7 +2,8 @@
 """The walks of several `evaluate.py` runs, assembled into the input of one table.
 
     python tools/merge_walks.py stiffness runs/stiffness_320_s012 runs/stiffness_320_s34 --out runs/stiffness_320_s01234
-    python tools/merge_walks.py gains runs/gains_kp05 runs/gains_kp05_rematched ... --out results/figures_input/gains_walks.json
+    python tools/merge_walks.py gains runs/gains_kp05 runs/gains_kp05_rematched ... \
+        --out results/figures_input/gains_walks.json
 
 stiffness: one stiffness table from several `evaluate.py stiffness` runs, seeds walked apart (on other machines,
   or a seed trained later) summarised together. Every walk of the study is deterministic and belongs to one
@@ -105,7 +106,8 @@ def run_gain(folder: Path) -> tuple[str, float]:
         if factors != {1.0}:
             changed[gain] = factors.pop()
     if len(changed) != 1:
-        raise ValueError(f"{folder}: a gains run changes kp or kd alone, this one changes {sorted(changed) or 'neither'}")
+        raise ValueError(f"{folder}: a gains run changes kp or kd alone, this one changes "
+                         f"{sorted(changed) or 'neither'}")
     return next(iter(changed.items()))
 
 
@@ -145,7 +147,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True, metavar="{stiffness,gains}")
     s = sub.add_parser("stiffness", help="one stiffness table from evaluate.py stiffness runs over other seeds")
-    s.add_argument("runs", type=Path, nargs="+", help=f"output folders of evaluate.py stiffness (with {STIFFNESS_WALKS})")
+    s.add_argument("runs", type=Path, nargs="+",
+                   help=f"output folders of evaluate.py stiffness (with {STIFFNESS_WALKS})")
     s.add_argument("--out", type=Path, required=True, help="a new folder for the merged table")
     g = sub.add_parser("gains", help="the gains table's walks from evaluate.py prototype runs, one per changed gain")
     g.add_argument("runs", type=Path, nargs="+", help="evaluate.py prototype output folders")
