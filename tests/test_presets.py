@@ -42,7 +42,7 @@ def test_a_shipped_phase_resolves_to_the_settings_its_shipped_actors_trained_wit
 
 def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resolve_now():
     """results/torque/policy/seed<N>/recipe_phases.yaml records the settings of every phase its two actors came from
-    (tools/ship_result.py --all-phases): they are configs/torque.yaml's phases as it resolves today, but for the
+    (tools/ship.py policy --all-phases): they are configs/torque.yaml's phases as it resolves today, but for the
     seed, and every phase ran in the seed's own lineage (none placed from another run: the one command, from
     scratch). The same for the seeds it was never tuned on (results/torque/fresh/), where shipped."""
     recipe = C.load_preset(ROOT / "configs" / "torque.yaml").phases
