@@ -53,7 +53,7 @@ def stop_after(trainer, env_steps: int) -> None:
     bookkeep = trainer._bookkeep
 
     def interrupted(*args):
-        if trainer.c["env_steps"] > env_steps:
+        if trainer.progress.env_steps > env_steps:
             raise Interrupt
         bookkeep(*args)
 

@@ -8,42 +8,46 @@ from tensordict import TensorDict
 from conftest import tiny
 from rl_helpers import batch as _batch
 from cyberdog import config as C
-from cyberdog.rl.agent import Agent
 from cyberdog.rl.checkpoint import load_checkpoint, load_torch_file
-from cyberdog.rl.td3 import StageSettings, with_penalties
+from cyberdog.rl.td3 import TD3, UpdateSettings
 from cyberdog.rl.trainer import Trainer
 
 
-def _actions(agent: Agent, obs: torch.Tensor) -> torch.Tensor:
+def _anchored(agent: TD3, weight: float) -> UpdateSettings:
+    """A stage that pulls toward the actor it starts from with `weight`, begun now."""
+    settings = UpdateSettings.of(agent.cfg, C.StageConfig(actor_anchor=weight))
+    agent.begin_stage(settings)
+    return settings
+
+
+def _actions(agent: TD3, obs: torch.Tensor) -> torch.Tensor:
     with torch.no_grad():
         return agent.actor(TensorDict({"observation": obs}, [obs.shape[0]]))["action"]
 
 
 def test_the_anchor_term_is_the_distance_to_the_frozen_actor():
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16,), action_l2=0.0), 50, 12)
+    agent = TD3(C.AgentConfig(hidden_sizes=(16,), action_l2=0.0), 50, 12)
     b = _batch(8)
     start = _actions(agent, b["observation"])
-    agent.set_anchor()
+    anchored = _anchored(agent, 3.0)
     with torch.no_grad():  # the actor moves on; the anchor does not
         for p in agent.actor_net.parameters():
             p.add_(0.05 * torch.randn_like(p))
     now = _actions(agent, b["observation"])
     assert not torch.allclose(now, start)
-    anchored = StageSettings.of(agent.cfg).replace(actor_anchor=3.0)
-    got = with_penalties(agent, anchored, torch.tensor(1.5), b, now)
-    assert float(got) == pytest.approx(1.5 + 3.0 * float(((now - start) ** 2).mean()), rel=1e-6)
-    assert float(with_penalties(agent, StageSettings.of(agent.cfg), torch.tensor(1.5), b, now)) == pytest.approx(1.5)
+    with torch.no_grad():
+        pulled = agent.actor_loss(b, anchored) - agent.actor_loss(b, UpdateSettings.of(agent.cfg))
+    assert float(pulled) == pytest.approx(3.0 * float(((now - start) ** 2).mean()), rel=1e-5)
 
 
 @pytest.mark.parametrize("anchor", [0.0, 1000.0])
 def test_a_strong_anchor_holds_the_actor_where_it_started(anchor):
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(32, 32), policy_delay=1, actor_lr=3e-3, action_l2=0.0), 50, 12)
+    agent = TD3(C.AgentConfig(hidden_sizes=(32, 32), policy_delay=1, actor_lr=3e-3, action_l2=0.0), 50, 12)
     b = _batch(32)
     start = _actions(agent, b["observation"])
-    agent.set_anchor()
-    settings = StageSettings.of(agent.cfg).replace(actor_anchor=anchor)
+    settings = _anchored(agent, anchor)
     for _ in range(200):
         agent.update(b, settings)
     moved = float((_actions(agent, b["observation"]) - start).abs().mean())
@@ -52,17 +56,17 @@ def test_a_strong_anchor_holds_the_actor_where_it_started(anchor):
 
 def test_the_anchor_is_saved_with_the_agent_and_restored():
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
-    agent.set_anchor()
+    agent = TD3(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
+    _anchored(agent, 1.0)
     frozen = {k: v.clone() for k, v in agent.anchor.named().items()}
     with torch.no_grad():
         for p in agent.actor_net.parameters():
             p.add_(1.0)
-    other = Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
+    other = TD3(C.AgentConfig(hidden_sizes=(16,)), 50, 12)
     other.load_state_dict(agent.state_dict())
     assert other.anchor is not None
     assert all(torch.equal(v, frozen[k]) for k, v in other.anchor.named().items())
-    assert Agent(C.AgentConfig(hidden_sizes=(16,)), 50, 12).anchor is None  # none until a stage asks for one
+    assert TD3(C.AgentConfig(hidden_sizes=(16,)), 50, 12).anchor is None  # none until a stage asks for one
 
 
 def test_a_stage_from_an_actor_file_is_pulled_toward_that_actor(tmp_path):
@@ -119,15 +123,15 @@ def test_an_observed_stiffness_is_the_drivers_kp_over_the_default():
 
 def test_an_actor_of_fewer_inputs_is_widened_and_acts_as_before():
     torch.manual_seed(0)
-    narrow = Agent(C.AgentConfig(hidden_sizes=(16,)), 62, 12)
-    wide = Agent(C.AgentConfig(hidden_sizes=(16,)), 63, 12)
+    narrow = TD3(C.AgentConfig(hidden_sizes=(16,)), 62, 12)
+    wide = TD3(C.AgentConfig(hidden_sizes=(16,)), 63, 12)
     assert wide.load_actor(narrow.actor.state_dict()) == 16 + 1  # a column of 16 weights, one input scale
     obs = torch.randn(6, 62)
     for extra in (0.0, 1.4, 3.0):  # the new input does not change the action until training uses it
         widened = torch.cat([obs, torch.full((6, 1), extra)], 1)
         assert torch.allclose(_actions(wide, widened), _actions(narrow, obs), atol=1e-6)
     with pytest.raises(ValueError, match="has shape"):  # another hidden size is not widened
-        Agent(C.AgentConfig(hidden_sizes=(32,)), 63, 12).load_actor(narrow.actor.state_dict())
+        TD3(C.AgentConfig(hidden_sizes=(32,)), 63, 12).load_actor(narrow.actor.state_dict())
 
 
 def test_fresh_critics_start_a_stage_from_a_final_agent_as_from_its_actor_file(tmp_path):

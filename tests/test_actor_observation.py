@@ -14,7 +14,7 @@ from tensordict import TensorDict
 
 from cyberdog import config as C
 from cyberdog.envs.cyberdog_env import actor_observation_scale, observation_layout, observation_typical_magnitude
-from cyberdog.rl.agent import Agent
+from cyberdog.rl.td3 import TD3, UpdateSettings
 from cyberdog.rl.trainer import Trainer
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,8 +57,8 @@ def test_updates_leave_the_actor_blind_and_the_critics_seeing():
     n_obs = len(observation_typical_magnitude())
     cfg = C.AgentConfig(hidden_sizes=(16, 16), policy_delay=1, actor_lr=1e-2,
                         action_smoothness=1.0, actor_observation=SEEN)
-    agent = Agent(cfg, n_obs, 12, observation_scale=observation_typical_magnitude(),
-                  actor_observation_scale=actor_observation_scale(None, SEEN))
+    agent = TD3(cfg, n_obs, 12, observation_scale=observation_typical_magnitude(),
+                actor_observation_scale=actor_observation_scale(None, SEEN))
     g = torch.Generator().manual_seed(1)
     n = 64
     data = TensorDict({"observation": torch.randn(n, n_obs, generator=g), "action": torch.rand(n, 12) * 2 - 1,
@@ -66,7 +66,7 @@ def test_updates_leave_the_actor_blind_and_the_critics_seeing():
                                 "done": torch.zeros(n, 1, dtype=torch.bool),
                                 "terminated": torch.zeros(n, 1, dtype=torch.bool)}}, [n])
     for _ in range(20):
-        metrics = agent.update(data)
+        metrics = agent.update(data, UpdateSettings.of(cfg))
     assert all(torch.isfinite(v) for v in metrics.values())
     obs = data["observation"][:8]
     mask = seen_mask()

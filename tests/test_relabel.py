@@ -49,7 +49,7 @@ def test_relabelled_buffer_carries_stage1_experience_with_stage2_rewards(tmp_pat
     per_step = (d2 - 25.0) * cfg.env.control_dt / cfg.env.episode_time  # stage 1 keeps the paper's D = 25
     assert torch.allclose(after["next", "reward"].reshape(-1),
                           before["next", "reward"].reshape(-1) + e2 * energy + per_step)
-    assert trainer.c["stage_updates"] > 0
+    assert trainer.progress.stage_updates > 0
     assert not changed(stored["actor"], snapshot(trainer.agent), "actor_network_params"), \
         "within critic_warmup_updates the actor waits"
     with pytest.raises(ValueError, match="buffer_between_stages"):

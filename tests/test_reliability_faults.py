@@ -47,7 +47,7 @@ def install(mode, n):
 
     def die(where):
         t = state["trainer"]
-        steps = t.c["env_steps"] if t is not None else 0
+        steps = t.progress.env_steps if t is not None else 0
         print(f"KILLED {mode} {n} at env_steps={steps} last_checkpoint_done={state['done']} in {where}",
               file=sys.stderr, flush=True)
         os.kill(os.getpid(), signal.SIGKILL)
@@ -80,7 +80,7 @@ def install(mode, n):
             die(f"rename to {os.path.basename(str(dst))}")
         real_replace(src, dst, *a, **k)
         if ours and os.path.basename(str(dst)) == "checkpoint.pt" and state["trainer"] is not None:
-            state["done"] = state["trainer"].c["last_checkpoint"]
+            state["done"] = state["trainer"].progress.last_checkpoint
         if ours and mode == "save-after" and count["save"] == n:
             die(f"just after the rename to {os.path.basename(str(dst))}")
     os.replace = dying_replace

@@ -1,17 +1,23 @@
-"""Unit tests of the rl layer: agent updates, exploration, replay buffer, checkpoints and guards."""
+"""Unit tests of the rl layer: the agent's updates, exploration, replay buffer, checkpoints and guards."""
 from __future__ import annotations
+
+import ast
+import dataclasses
+import graphlib
+from pathlib import Path
 
 import pytest
 import torch
 from tensordict import TensorDict
 
+import cyberdog.rl
 from cyberdog import config as C
-from cyberdog.rl.agent import Agent, NonFiniteError, metrics_to_float
 from cyberdog.rl.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector
 from cyberdog.rl.networks import Net, QCritic, TanhActor, critic_forward, make_actor, make_critics
-from cyberdog.rl.td3 import StageSettings
 from cyberdog.rl.replay import buffer_state, load_buffer_state, make_replay_buffer, sample_batches
+from cyberdog.rl.run_state import Progress
+from cyberdog.rl.td3 import TD3, NonFiniteError, UpdateSettings, metrics_to_float
 from cyberdog.rl.trainer import Trainer
 from rl_helpers import ACT, OBS, batch, changed, snapshot, tiny_config
 
@@ -19,12 +25,12 @@ from rl_helpers import ACT, OBS, batch, changed, snapshot, tiny_config
 @pytest.mark.parametrize("algorithm", ["td3", "ddpg"])
 def test_update_schedule_changes_the_right_weights(algorithm):
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(algorithm=algorithm, hidden_sizes=(16, 16, 16), policy_delay=2), OBS, ACT)
+    agent = TD3(C.AgentConfig(algorithm=algorithm, hidden_sizes=(16, 16, 16), policy_delay=2), OBS, ACT)
     critic = "qvalue_network_params" if algorithm == "td3" else "value_network_params"
-    b = batch()
+    b, settings = batch(), UpdateSettings.of(agent.cfg)
     for update in (1, 2, 3, 4):
         before = snapshot(agent)
-        metrics = agent.update(b)
+        metrics = agent.update(b, settings)
         after = snapshot(agent)
         actor_turn = algorithm == "ddpg" or update % 2 == 0
         assert changed(before, after, critic), "critics learn at every update"
@@ -36,23 +42,23 @@ def test_update_schedule_changes_the_right_weights(algorithm):
 
 
 def test_td3_has_twin_critics():
-    agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    agent = TD3(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
     w = agent.critic.layers[0][0]
     assert w.shape[0] == 2 and not torch.equal(w[0], w[1])
 
 
 @pytest.mark.parametrize("exploration", ["gaussian", "ou"])
 def test_exploration_stays_in_bounds(exploration):
-    agent = Agent(C.AgentConfig(exploration=exploration, exploration_sigma=2.0, hidden_sizes=(8,)), OBS, ACT)
+    agent = TD3(C.AgentConfig(exploration=exploration, exploration_sigma=2.0, hidden_sizes=(8,)), OBS, ACT)
     td = TensorDict({"observation": torch.randn(OBS), "is_init": torch.ones(1, dtype=torch.bool)}, [])
     a = agent.policy(td)["action"]
     assert a.shape == (ACT,) and a.abs().max() <= 1.0
 
 
 def test_non_finite_loss_raises():
-    agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    agent = TD3(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
     with pytest.raises(NonFiniteError, match="not finite"):
-        agent.update(batch(reward=float("nan")))
+        agent.update(batch(reward=float("nan")), UpdateSettings.of(agent.cfg))
 
 
 def test_replay_buffer_round_trip_keeps_order_and_cursor(tmp_path):
@@ -183,8 +189,9 @@ def test_sample_batches_draws_independent_batches_from_the_buffer():
 
 def test_update_returns_tensors_and_metrics_average_them():
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
-    m1, m2 = agent.update(batch()), agent.update(batch())
+    agent = TD3(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    settings = UpdateSettings.of(agent.cfg)
+    m1, m2 = agent.update(batch(), settings), agent.update(batch(), settings)
     assert all(isinstance(v, torch.Tensor) and v.dim() == 0 for v in m1.values())
     avg = metrics_to_float([m1, m2])
     assert avg["critic_loss"] == pytest.approx((float(m1["critic_loss"]) + float(m2["critic_loss"])) / 2)
@@ -195,21 +202,22 @@ def test_update_returns_tensors_and_metrics_average_them():
 
 def test_optimizers_stay_fused_after_loading_an_unfused_state():
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
-    agent.update(batch())
+    agent = TD3(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    settings = UpdateSettings.of(agent.cfg)
+    agent.update(batch(), settings)
     state = agent.state_dict()
     for opt in ("actor_optimizer", "critic_optimizer"):  # as written by the per-tensor Adam of older code
         for group in state[opt]["param_groups"]:
             group["fused"], group["foreach"] = None, None
-    other = Agent(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
+    other = TD3(C.AgentConfig(hidden_sizes=(8,)), OBS, ACT)
     other.load_state_dict(state)
     assert all(g["fused"] for g in other.critic_optimizer.param_groups + other.actor_optimizer.param_groups)
-    other.update(batch())  # and they still step
+    other.update(batch(), settings)  # and they still step
 
 
 def test_collector_process_reports_worker_errors():
     cfg = C.ExperimentConfig()
-    collector = ProcessCollector(None, C.STAGE1_REWARD, 0, cfg.agent, Agent(cfg.agent, OBS, ACT).policy, OBS,
+    collector = ProcessCollector(None, C.STAGE1_REWARD, 0, cfg.agent, TD3(cfg.agent, OBS, ACT).policy, OBS,
                                  ACT, 10, 0)  # no env config: the worker fails while building the env
     try:
         with pytest.raises(RuntimeError, match="collector process failed"):
@@ -225,9 +233,9 @@ def test_action_penalty_pulls_the_actor_toward_zero():
     mean_abs = {}
     for l2 in (0.0, 100.0):
         torch.manual_seed(0)
-        agent = Agent(C.AgentConfig(action_l2=l2, policy_delay=1, hidden_sizes=(32, 32)), 50, 12)
+        agent = TD3(C.AgentConfig(action_l2=l2, policy_delay=1, hidden_sizes=(32, 32)), 50, 12)
         for _ in range(30):
-            agent.update(b)
+            agent.update(b, UpdateSettings.of(agent.cfg))
         with torch.no_grad():
             mean_abs[l2] = float(agent.actor(b.select("observation").clone())["action"].abs().mean())
     assert mean_abs[100.0] < 0.01 < 0.1 < mean_abs[0.0]
@@ -239,8 +247,9 @@ def test_action_penalty_must_be_non_negative():
 
 
 def test_a_stage_can_set_its_own_action_penalty(tmp_path):
-    """StageConfig.action_l2 and actor_lr replace the agent's for that stage only (None keeps the agent's);
-    fresh_actor_optimizer starts the stage with new Adam moments."""
+    """StageConfig.action_l2 and actor_lr replace the agent's for that stage only (None keeps the agent's), the
+    learning rate in the actor's optimizer from the stage's first update on; fresh_actor_optimizer starts the stage
+    with new Adam moments."""
     cfg = C.override(tiny_config(), ["agent.action_l2=0.5", "train.stage2.action_l2=0.0", "train.init_random_frames=0",
                                "train.stage1.max_env_steps=100", "train.stage2.max_env_steps=100",
                                "agent.actor_lr=0.001", "train.stage2.actor_lr=0.0002",
@@ -249,11 +258,11 @@ def test_a_stage_can_set_its_own_action_penalty(tmp_path):
     seen = []
     update = trainer.agent.update
 
-    def recording_update(batch, settings, stage_update):
+    def recording_update(batch, settings, prior_weight):
         opt = trainer.agent.actor_optimizer
-        seen.append((trainer.c["stage"], settings.action_l2, settings.actor_lr,
+        seen.append((trainer.progress.stage, settings.action_l2, opt.param_groups[0]["lr"],
                      max((int(st["step"]) for st in opt.state.values()), default=0)))
-        return update(batch, settings, stage_update)
+        return update(batch, settings, prior_weight)
 
     trainer.agent.update = recording_update
     trainer.run()
@@ -270,9 +279,9 @@ def test_a_stage_can_set_its_own_action_penalty(tmp_path):
 
 def test_update_without_actor_trains_the_critics_only():
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1), OBS, ACT)
+    agent = TD3(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1), OBS, ACT)
     before = snapshot(agent)
-    agent.update(batch(), StageSettings.of(agent.cfg).replace(critic_warmup_updates=1), stage_update=0)
+    agent.update(batch(), UpdateSettings.of(agent.cfg, C.StageConfig(critic_warmup_updates=1)))
     after = snapshot(agent)
     assert changed(before, after, "qvalue_network_params")
     assert not changed(before, after, "actor_network_params")
@@ -280,7 +289,48 @@ def test_update_without_actor_trains_the_critics_only():
     assert agent.updates == 1 and agent.actor_updates == 0
 
 
-def without_critic_gradient(agent: Agent) -> None:
+def test_a_stage_resolves_its_update_settings_from_the_agent_and_its_own():
+    """A stage's own value replaces the agent's where it sets one; its warm-up counts from the agent's updates at
+    its start; DDPG's settings have no delay and no target smoothing; the settings cannot change afterwards."""
+    agent = C.AgentConfig(actor_lr=1e-3, action_l2=0.5, trot_imitation=0.2, policy_delay=3)
+    stage = C.StageConfig(actor_lr=2e-4, action_l2=0.0, critic_warmup_updates=7, actor_anchor=0.4)
+    s = UpdateSettings.of(agent, stage, updates_done=100)
+    assert (s.actor_lr, s.action_l2, s.trot_imitation, s.actor_anchor) == (2e-4, 0.0, 0.2, 0.4)
+    assert (s.critic_warmup_end, s.policy_delay, s.target_smoothing) == (107, 3, True)
+    ddpg = UpdateSettings.of(dataclasses.replace(agent, algorithm="ddpg"))
+    assert (ddpg.actor_lr, ddpg.action_l2, ddpg.policy_delay, ddpg.target_smoothing, ddpg.critic_warmup_end) == (
+        1e-3, 0.5, 1, False, 0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.actor_lr = 1.0
+
+
+def test_the_warm_up_counts_from_the_stage_start_and_the_learning_rate_is_set_as_it_begins():
+    torch.manual_seed(0)
+    agent = TD3(C.AgentConfig(hidden_sizes=(8,), policy_delay=1, actor_lr=1e-3), OBS, ACT)
+    for _ in range(3):
+        agent.update(batch(), UpdateSettings.of(agent.cfg))
+    s = UpdateSettings.of(agent.cfg, C.StageConfig(critic_warmup_updates=2, actor_lr=5e-5), updates_done=3)
+    agent.begin_stage(s)
+    assert [g["lr"] for g in agent.actor_optimizer.param_groups] == [5e-5]
+    actor_updates = []
+    for _ in range(3):
+        agent.update(batch(), s)
+        actor_updates.append(agent.actor_updates)
+    assert actor_updates == [3, 3, 4]  # the stage's first two updates train the critics only
+
+
+def test_the_trainers_counters_are_saved_as_a_plain_dict(tmp_path):
+    trainer = Trainer(tiny_config(), tmp_path / "run", progress=False)
+    trainer.progress.env_steps = 7
+    path = trainer.save()
+    trainer.close()
+    counters = load_checkpoint(path)["counters"]
+    assert counters == {**dataclasses.asdict(Progress(stage=1)), "env_steps": 7, "last_checkpoint": 7}
+    without_credit = {k: v for k, v in counters.items() if k != "update_credit"}  # as a checkpoint may lack it
+    assert Progress.from_dict(without_credit) == Progress(stage=1, env_steps=7, last_checkpoint=7)
+
+
+def without_critic_gradient(agent: TD3) -> None:
     """Critics whose output layer is zero (and that barely learn: critic_lr 1e-12) give the actor no gradient."""
     with torch.no_grad():
         for w in agent.critic.layers[-1]:
@@ -290,15 +340,15 @@ def without_critic_gradient(agent: Agent) -> None:
 def test_action_smoothness_pulls_consecutive_actions_together():
     """CAPS's temporal term: with only it in the actor loss (critic gradient removed), μ(s') − μ(s) shrinks."""
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_smoothness=10.0,
-                                actor_lr=1e-2, critic_lr=1e-12), OBS, ACT)
+    agent = TD3(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_smoothness=10.0,
+                              actor_lr=1e-2, critic_lr=1e-12), OBS, ACT)
     without_critic_gradient(agent)  # the penalty alone drives the actor
     b = batch(64)
     gap = lambda: (agent.actor(b["next"].select("observation").clone())["action"]  # noqa: E731
                    - agent.actor(b.select("observation").clone())["action"]).pow(2).mean().item()
     before = gap()
     for _ in range(50):
-        agent.update(b)
+        agent.update(b, UpdateSettings.of(agent.cfg))
     assert gap() < 0.2 * before
     with pytest.raises(ValueError, match="action_smoothness"):
         C.AgentConfig(action_smoothness=-1.0)
@@ -317,14 +367,43 @@ def test_spatial_smoothness_makes_the_policy_react_less_to_the_state():
 
     b = batch(64)
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_spatial_smoothness=10.0,
-                                spatial_smoothness_sigma=0.05, actor_lr=1e-2, critic_lr=1e-12), OBS, ACT)
+    agent = TD3(C.AgentConfig(hidden_sizes=(16, 16, 16), policy_delay=1, action_spatial_smoothness=10.0,
+                              spatial_smoothness_sigma=0.05, actor_lr=1e-2, critic_lr=1e-12), OBS, ACT)
     without_critic_gradient(agent)  # the penalty alone drives the actor
     before = sensitivity(agent, b)
     for _ in range(50):
-        agent.update(b)
+        agent.update(b, UpdateSettings.of(agent.cfg))
     assert sensitivity(agent, b) < 0.2 * before
     with pytest.raises(ValueError, match="action_spatial_smoothness"):
         C.AgentConfig(action_spatial_smoothness=-1.0)
     with pytest.raises(ValueError, match="spatial_smoothness_sigma"):
         C.AgentConfig(spatial_smoothness_sigma=-0.1)
+
+
+def rl_imports() -> dict[str, set[str]]:
+    """Each module of cyberdog/rl (its package `__init__` aside) → the modules of cyberdog/rl it imports (lazily
+    or for type checking too); importing the package itself counts as "__init__"."""
+    graph = {}
+    for path in Path(cyberdog.rl.__file__).parent.glob("*.py"):
+        if path.name == "__init__.py":
+            continue
+        names = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module == "cyberdog":
+                names |= {f"cyberdog.{a.name}" for a in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names.add(node.module)
+            elif isinstance(node, ast.Import):
+                names |= {a.name for a in node.names}
+        graph[path.stem] = {"__init__" if n == "cyberdog.rl" else n.split(".")[2] for n in names
+                            if n == "cyberdog.rl" or n.startswith("cyberdog.rl.")}
+    return graph
+
+
+def test_the_rl_modules_import_one_another_by_module_and_without_a_circle():
+    graph = rl_imports()
+    assert {"td3", "trainer", "collect"} <= set(graph)
+    through_package = sorted(m for m, deps in graph.items() if "__init__" in deps)
+    assert not through_package, f"{through_package} import cyberdog.rl itself: import its modules directly"
+    order = list(graphlib.TopologicalSorter(graph).static_order())  # raises CycleError on a circle
+    assert order.index("td3") < order.index("trainer") and order.index("exploration") < order.index("collect")

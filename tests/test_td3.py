@@ -1,6 +1,6 @@
-"""The hand-written TD3 and DDPG losses (cyberdog.rl.td3) against TorchRL's `TD3Loss` and `DDPGLoss`, the oracles:
-losses and gradients on fixed batches (to 1e-5), whole updates with Adam and soft target updates, and the soft
-update bit for bit. The oracles are built here, over copies of the agent's networks."""
+"""The hand-written TD3 and DDPG update (`cyberdog.rl.td3.TD3.update`) against TorchRL's `TD3Loss` and `DDPGLoss`,
+the oracles: losses and gradients on fixed batches (to 1e-5), whole updates with Adam and soft target updates, and
+the soft update bit for bit. The oracles are built here, over copies of the agent's networks."""
 import dataclasses
 
 import pytest
@@ -11,9 +11,8 @@ from torchrl.modules import ValueOperator
 from torchrl.objectives import DDPGLoss, SoftUpdate, TD3Loss
 
 from cyberdog import config as C
-from cyberdog.rl import td3
-from cyberdog.rl.agent import Agent
 from cyberdog.rl.networks import QCritic, make_actor
+from cyberdog.rl.td3 import TD3, UpdateSettings, soft_update
 
 OBS, ACT, B = 62, 12, 64
 
@@ -28,10 +27,10 @@ def fixed_batch(seed: int = 0) -> TensorDict:
                  "terminated": terminated, "done": terminated.clone()}}, batch_size=[B])
 
 
-def make_agent(algorithm: str = "td3", **changes) -> Agent:
+def make_agent(algorithm: str = "td3", **changes) -> TD3:
     torch.manual_seed(0)
     cfg = dataclasses.replace(C.AgentConfig(hidden_sizes=(32, 32, 32), algorithm=algorithm), **changes)
-    agent = Agent(cfg, OBS, ACT, observation_scale=torch.linspace(0.5, 3.0, OBS))
+    agent = TD3(cfg, OBS, ACT, observation_scale=torch.linspace(0.5, 3.0, OBS))
     with torch.no_grad():  # move the targets away from the online networks, as after some training
         for net in (agent.target_actor, agent.target_critic):
             for p in net.parameters():
@@ -40,7 +39,7 @@ def make_agent(algorithm: str = "td3", **changes) -> Agent:
     return agent
 
 
-def oracle(agent: Agent) -> tuple:
+def oracle(agent: TD3) -> tuple:
     """TorchRL's loss for the agent's algorithm, holding copies of the agent's networks and targets, and its
     `SoftUpdate` (made first: it starts by copying each network onto its target)."""
     cfg = agent.cfg
@@ -83,16 +82,20 @@ def ours(net_named: dict) -> list[torch.Tensor]:
 
 @pytest.mark.parametrize("algorithm", ["td3", "ddpg"])
 def test_critic_loss_and_gradients_equal_torchrl(algorithm):
+    """One update whose actor waits (a critic warm-up of one update): its critic loss, Q-values and the critics'
+    gradients (left on the tensors by its step) are the oracle's."""
     agent = make_agent(algorithm)
     (ref_loss, _), batch = oracle(agent), fixed_batch()
     torch.manual_seed(1)  # the target-policy noise is drawn first in both
     ref, meta = (ref_loss.value_loss if agent.twin else ref_loss.loss_value)(batch.clone())
     ref.backward()
     torch.manual_seed(1)
-    got, q = td3.critic_loss(agent, batch.clone())
-    got.backward()
-    assert got.item() == pytest.approx(ref.item(), rel=1e-5)
-    assert torch.allclose(q.reshape(meta["pred_value"].shape), meta["pred_value"], rtol=1e-5, atol=1e-6)
+    critics_only = UpdateSettings.of(agent.cfg, C.StageConfig(critic_warmup_updates=1))
+    metrics = agent.update(batch.clone(), critics_only)
+    assert agent.actor_updates == 0
+    assert metrics["critic_loss"].item() == pytest.approx(ref.item(), rel=1e-5)
+    for name in ("mean", "max"):
+        assert metrics[f"q_{name}"].item() == pytest.approx(getattr(meta["pred_value"], name)().item(), rel=1e-5)
     for g, g_ref in zip(grads(ours(agent.critic.named())), grads(critic_tensors(ref_loss))):
         assert torch.allclose(g, g_ref, rtol=1e-5, atol=1e-6)
 
@@ -103,7 +106,7 @@ def test_actor_loss_and_gradients_equal_torchrl(algorithm):
     (ref_loss, _), batch = oracle(agent), fixed_batch(3)
     ref, _ = (ref_loss.actor_loss if agent.twin else ref_loss.loss_actor)(batch.clone())
     ref.backward()
-    got = td3.actor_loss(agent, batch.clone(), td3.StageSettings.of(agent.cfg))
+    got = agent.actor_loss(batch.clone(), UpdateSettings.of(agent.cfg))
     got.backward()
     assert got.item() == pytest.approx(ref.item(), rel=1e-5)
     for g, g_ref in zip(grads(ours(agent.actor_net.named())), grads(actor_tensors(ref_loss))):
@@ -116,13 +119,14 @@ def test_whole_updates_track_torchrl():
     same start on the same batches and noise, ours against TorchRL's loss, Adam and SoftUpdate: the networks
     stay equal up to float rounding."""
     agent = make_agent(action_l2=0.3)
+    settings = UpdateSettings.of(agent.cfg)
     ref_loss, soft = oracle(agent)
     critic_opt = torch.optim.Adam(list(ref_loss.qvalue_network_params.flatten_keys().values()), agent.cfg.critic_lr)
     actor_opt = torch.optim.Adam(list(ref_loss.actor_network_params.flatten_keys().values()), agent.cfg.actor_lr)
     for k in range(10):
         batch = fixed_batch(10 + k)
         torch.manual_seed(100 + k)
-        agent.update(batch.clone())
+        agent.update(batch.clone(), settings)
         torch.manual_seed(100 + k)
         critic_opt.zero_grad()
         ref_loss.value_loss(batch.clone())[0].backward()
@@ -146,8 +150,8 @@ def test_soft_update_is_torchrl_soft_update_bit_for_bit():
     ref_loss, soft = oracle(agent)
     for _ in range(2):
         soft.step()
-        td3.soft_update(agent.target_actor, agent.actor_net, agent.cfg.tau)
-        td3.soft_update(agent.target_critic, agent.critic, agent.cfg.tau)
+        soft_update(agent.target_actor, agent.actor_net, agent.cfg.tau)
+        soft_update(agent.target_critic, agent.critic, agent.cfg.tau)
     ref = ref_loss.state_dict()
     targets = [k for k in agent.network_state() if k.startswith("target_")]
     assert targets and all(torch.equal(agent.network_state()[k], ref[k]) for k in targets)
@@ -157,7 +161,7 @@ def test_twin_critics_start_as_torchrl_draws_them():
     """The same seed gives the networks TorchRL's TD3Loss gave (the twin critics redrawn within each tensor's
     range), so that a seed trains the agent it trained before."""
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16,)), OBS, ACT)
+    agent = TD3(C.AgentConfig(hidden_sizes=(16,)), OBS, ACT)
     torch.manual_seed(0)
     actor = make_actor(OBS, ACT, (16,))
     critic = ValueOperator(QCritic(OBS, ACT, (16,)), in_keys=["observation", "action"])

@@ -16,11 +16,10 @@ from cyberdog.control.trot import TrotController
 from cyberdog.core import kinematics as kin
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.loop.walker import Walker
-from cyberdog.rl.agent import Agent
 from cyberdog.rl.checkpoint import load_checkpoint
 from cyberdog.rl.logger import COLUMNS, EpisodeLogger
 from cyberdog.rl.rollout import load_actor, rollout
-from cyberdog.rl.td3 import StageSettings, with_penalties
+from cyberdog.rl.td3 import TD3, UpdateSettings
 from cyberdog.rl.trainer import Trainer
 
 TORQUE = dict(action_mode="torque", control_dt=0.01)  # 4 controller periods per agent step: quick tests
@@ -169,10 +168,24 @@ def test_the_prior_weight_decays_linearly_to_exactly_zero():
     assert [held.prior_weight_at(k) for k in (0, 100, 300, 500, 501)] == [1.0, 1.0, 0.5, 0.0, 0.0]
 
 
+def test_a_saved_config_holding_the_trainers_progress_loads_where_it_changes_nothing():
+    """The trainer's progress is no env setting: a saved config that lists it at the values that leave the decay
+    as it is (0 steps done, 1 per step) loads as if it did not; other values are refused, naming the field."""
+    saved = C.to_dict(C.ExperimentConfig())
+    saved["env"].update(prior_steps_done=0, prior_step_stride=1)
+    assert C.from_dict(C.ExperimentConfig, saved) == C.ExperimentConfig()
+    for name, value in (("prior_steps_done", 100), ("prior_step_stride", 2)):
+        other = C.to_dict(C.ExperimentConfig())
+        other["env"][name] = value
+        with pytest.raises(ValueError, match=f"EnvConfig.{name} must be absent"):
+            C.from_dict(C.ExperimentConfig, other)
+
+
 @pytest.mark.parametrize("stride", [1, 2])
 def test_the_env_counts_the_decay_across_episodes_and_envs(stride):
     decay = 2 + 5 * stride  # the sixth step's weight is exactly 0
-    env = torque_env(prior_weight=1.0, prior_decay_steps=decay, prior_steps_done=2, prior_step_stride=stride)
+    env = torque_env(prior_weight=1.0, prior_decay_steps=decay)
+    env.set_training_progress(2, stride)  # the trainer's progress, given at run time
     weights = []
     for episode in range(3):
         env.reset(seed=episode)
@@ -228,7 +241,7 @@ def test_the_prior_decays_over_stage1_is_saved_and_resumes_and_the_stage_ends_wi
     state = load_checkpoint(tmp_path / "run" / "checkpoint.pt")
     assert state["counters"]["stage_env_steps"] == 100 and state["prior_weight"] == pytest.approx(0.5)
     resumed = Trainer(cfg, tmp_path / "run", resume=True, progress=False)
-    assert resumed.prior_weight == pytest.approx(0.5) and resumed._collection_env().prior_steps_done == 100
+    assert resumed.prior_weight == pytest.approx(0.5) and resumed.progress.stage_env_steps == 100
     resumed.run()
     rows = metrics_rows(tmp_path / "run")
     weights = [float(r["prior_weight"]) for r in rows if r["stage"] == "1"]
@@ -278,23 +291,25 @@ def _batch(n: int = 8, reference=None) -> TensorDict:
 
 
 def test_the_imitation_term_is_the_distance_to_the_share_the_prior_no_longer_gives():
-    agent = Agent(C.AgentConfig(hidden_sizes=(16,), trot_imitation=2.0), 50, 12)
-    settings = StageSettings.of(agent.cfg, imitation_scale=0.25)  # a prior at 0.75
+    agent = TD3(C.AgentConfig(hidden_sizes=(16,), trot_imitation=2.0), 50, 12)
     b = _batch()
     b["next", "trot_action"][3] = float("nan")  # no reference for this transition (e.g. a reset): left out
-    now = torch.rand(8, 12) * 2 - 1
-    got = with_penalties(agent, settings, torch.tensor(1.5), b, now)
+    with torch.no_grad():
+        agent.actor_net.layers[-1][0].normal_()  # an actor that acts, not the near-zero initial one
+        now = agent.actor(b.select("observation").clone())["action"]
+        pulled = (agent.actor_loss(b, UpdateSettings.of(agent.cfg), prior_weight=0.75)
+                  - agent.actor_loss(b, UpdateSettings.of(C.AgentConfig(hidden_sizes=(16,)))))
     keep = [i for i in range(8) if i != 3]
-    expected = 1.5 + 2.0 * ((now[keep] - 0.25 * b["next", "trot_action"][keep]) ** 2).mean()
-    assert float(got) == pytest.approx(float(expected), rel=1e-6)
+    expected = 2.0 * ((now[keep] - 0.25 * b["next", "trot_action"][keep]) ** 2).mean()
+    assert float(pulled) == pytest.approx(float(expected), rel=1e-5)
 
 
 def test_a_strong_pull_makes_the_actor_output_the_trot_torque():
     b = _batch(64)
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(64, 64), trot_imitation=1000.0, policy_delay=1, actor_lr=3e-3), 50, 12)
+    agent = TD3(C.AgentConfig(hidden_sizes=(64, 64), trot_imitation=1000.0, policy_delay=1, actor_lr=3e-3), 50, 12)
     for _ in range(300):
-        agent.update(b)
+        agent.update(b, UpdateSettings.of(agent.cfg))
     with torch.no_grad():
         out = agent.actor(b.select("observation").clone())["action"]
     error = (out - b["next", "trot_action"]).abs().mean()
@@ -304,10 +319,10 @@ def test_a_strong_pull_makes_the_actor_output_the_trot_torque():
 @pytest.mark.parametrize("targets", [True, False])
 def test_a_warm_up_with_targets_evaluates_the_actor_as_it_is(targets):
     torch.manual_seed(0)
-    agent = Agent(C.AgentConfig(hidden_sizes=(16,), policy_delay=1), 50, 12)
+    agent = TD3(C.AgentConfig(hidden_sizes=(16,), policy_delay=1), 50, 12)
     before = {k: v.clone() for k, v in agent.network_state().items()}
-    warmup = StageSettings.of(agent.cfg).replace(critic_warmup_updates=1, critic_warmup_targets=targets)
-    agent.update(_batch(), warmup, stage_update=0)
+    stage = C.StageConfig(critic_warmup_updates=1, critic_warmup_targets=targets)
+    agent.update(_batch(), UpdateSettings.of(agent.cfg, stage))
     after = agent.network_state()
     moved = {prefix: any(not torch.equal(before[k], after[k]) for k in before if k.startswith(prefix))
              for prefix in ("actor_network_params", "qvalue_network_params", "target_qvalue_network_params")}

@@ -102,6 +102,11 @@ STAGE2_REWARD = RewardConfig()  # stage 2: Eq. (11) with the energy term, E = �
 ACTION_MODES = ("torque", "residual", "foot")
 
 
+# what saved env configs may hold at these values, which leave the trot prior's decay as it is: the trainer's
+# progress (env steps done, per step of one env), which the env gets at run time, not from its config
+TRAINING_PROGRESS_FIELDS = {"prior_steps_done": 0, "prior_step_stride": 1}
+
+
 @dataclass(frozen=True)
 class EnvConfig:
     """`CyberDog-v0`: the paper's MDP (Tables 3-4) on the task the shipped agents learn. Degrees appear only
@@ -144,9 +149,6 @@ class EnvConfig:
     prior_weight: float = 0.0  # weight at the start of training (1 = the trot's whole torque)
     prior_decay_start: int = 0  # env steps (all envs together) at the full weight before the decay begins
     prior_decay_steps: int = 0  # env steps over which the weight then falls linearly to 0; 0 = it stays
-    prior_steps_done: int = 0  # env steps of the decay done before this env was made: the trainer sets it for
-    #                            each stage and resume (the weight is a function of the stage's env steps)
-    prior_step_stride: int = 1  # env steps of the decay per step of this env: the envs that collect in lock step
     # torque mode only: report the trot controller's torque at each step's start state, in action units, as
     # info["trot_action"] (computed anyway while the prior acts): what the actor may be pulled toward in training
     # (AgentConfig.trot_imitation). It does not act on the robot
@@ -167,6 +169,18 @@ class EnvConfig:
     randomization: RandomizationConfig = field(default_factory=RandomizationConfig)
     fall_height: float = 0.15  # m, body centre below this = fallen
     fall_tilt_deg: float = 45.0  # |roll| or |pitch| above this = fallen
+
+    @staticmethod
+    def upgrade_fields(data: dict) -> dict:
+        """Read by `from_dict` before the fields: a saved config's `TRAINING_PROGRESS_FIELDS` at the values that
+        leave the schedule as it is (0 steps done, 1 per step) are dropped; any other value is refused."""
+        if not isinstance(data, dict) or not any(k in data for k in TRAINING_PROGRESS_FIELDS):
+            return data
+        for name, inert in TRAINING_PROGRESS_FIELDS.items():
+            _check(data.get(name, inert) == inert, f"EnvConfig.{name}", f"absent (or {inert}): the trot prior's "
+                   "decay counts the trainer's env steps, which the trainer gives the env as it runs "
+                   "(CyberDogEnv.set_training_progress)", data.get(name))
+        return {k: v for k, v in data.items() if k not in TRAINING_PROGRESS_FIELDS}
 
     @property
     def decimation(self) -> int:
@@ -212,9 +226,7 @@ class EnvConfig:
                <= r.mass_scale[1], "EnvConfig.randomization.mass_scale", "(1, 1) (the hardware's own mass draw: "
                f"EnvConfig.hardware.mass_uncertainty = ±{hw.mass_uncertainty}) or a range that contains "
                f"1 ± {hw.mass_uncertainty}: a drawn mass replaces the hardware's", r.mass_scale)
-        _non_negative(self, "joint_damping", "prior_weight", "prior_decay_start", "prior_decay_steps",
-                      "prior_steps_done")
-        _check(self.prior_step_stride >= 1, "EnvConfig.prior_step_stride", ">= 1", self.prior_step_stride)
+        _non_negative(self, "joint_damping", "prior_weight", "prior_decay_start", "prior_decay_steps")
         for name in ("joint_damping", "prior_weight", "trot_reference"):
             _check(getattr(self, name) == 0 or self.action_mode == "torque", f"EnvConfig.{name}",
                    "0 unless action_mode is 'torque' (the other modes run the trot controller's PD at the "

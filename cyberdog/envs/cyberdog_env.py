@@ -148,7 +148,8 @@ class CyberDogEnv(gym.Env):
         # r_v over the last reward.speed_window s (None: each step's own speed, the paper's)
         self._speed_window = (rewards.SpeedWindow(max(1, round(cfg.reward.speed_window / cfg.control_dt)))
                               if cfg.reward.speed_window > 0 else None)
-        self._steps_taken = 0  # env steps since construction (all episodes): the trot prior's decay counts them
+        self._steps_taken = 0  # env steps since `set_training_progress` (all episodes): the prior's decay counts them
+        self._training_steps, self._steps_per_step = 0, 1  # the trainer's progress (`set_training_progress`)
 
     # ----------------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -250,11 +251,18 @@ class CyberDogEnv(gym.Env):
                 raise
             return None
 
+    def set_training_progress(self, training_steps: int, steps_per_step: int = 1) -> None:
+        """The trainer's progress, which the trot prior's weight decays over: `training_steps` env steps of training
+        are done, and each step of this env from now on adds `steps_per_step` (the envs that collect in lock step)."""
+        if training_steps < 0 or steps_per_step < 1:
+            raise ValueError(f"training_steps must be >= 0 and steps_per_step >= 1, got {training_steps}, "
+                             f"{steps_per_step}")
+        self._training_steps, self._steps_per_step, self._steps_taken = int(training_steps), int(steps_per_step), 0
+
     @property
     def prior_weight(self) -> float:
         """The trot prior's weight for the next step (torque mode; `EnvConfig.prior_weight_at`): 0 without one."""
-        cfg = self.cfg
-        return cfg.prior_weight_at(cfg.prior_steps_done + cfg.prior_step_stride * self._steps_taken)
+        return self.cfg.prior_weight_at(self._training_steps + self._steps_per_step * self._steps_taken)
 
     def _end_unreachable(self, k0: int, why: str, prior_weight: float):
         """The step in which the trot controller asked for a foot beyond the leg's reach: the episode ends as a

@@ -39,8 +39,10 @@ from tensordict import TensorDictBase
 from torchrl.collectors import Collector
 
 from cyberdog.config import AgentConfig, EnvConfig, RewardConfig
-from cyberdog.rl.torchrl_env import make_batched_env, make_env
+from cyberdog.rl.exploration import make_exploration
+from cyberdog.rl.networks import make_actor
 from cyberdog.rl.stop import ignore_stop_signals
+from cyberdog.rl.torchrl_env import make_batched_env, make_env
 
 WORKER_START_TIMEOUT_S = 300.0  # first batch: the worker imports torch, builds the env and collects
 WORKER_STOP_TIMEOUT_S = 60.0  # several envs: the batch in flight, then closing the env processes
@@ -57,25 +59,25 @@ def _policy_state(policy: torch.nn.Module) -> dict:
     return {k: v.detach().cpu() for k, v in policy.state_dict().items()}
 
 
-def make_env_for_collection(env_cfg: EnvConfig, reward: RewardConfig, seed: int, num_envs: int = 1):
-    """The env a collector steps: one `make_env` (batch size []), or N of them in `ParallelEnv` ([N])."""
+def make_env_for_collection(env_cfg: EnvConfig, reward: RewardConfig, seed: int, num_envs: int = 1,
+                            training_steps: int = 0):
+    """The env a collector steps: one `make_env` (batch size []), or N of them in `ParallelEnv` ([N]).
+    `training_steps`: env steps of training already made (the trot prior's decay counts them), each step of
+    an env then `num_envs` more (they step in lock step)."""
     if num_envs == 1:
-        return make_env(env_cfg, reward, seed=seed, track_init=True)
-    return make_batched_env(env_cfg, reward, seed, num_envs, track_init=True)
+        return make_env(env_cfg, reward, seed=seed, track_init=True, training_steps=training_steps)
+    return make_batched_env(env_cfg, reward, seed, num_envs, track_init=True, training_steps=training_steps)
 
 
 def _worker(conn, env_cfg: EnvConfig, reward: RewardConfig, seed: int, agent_cfg: AgentConfig,
             observation_size: int, action_size: int, frames_per_batch: int, init_random_frames: int,
-            num_envs: int = 1) -> None:
+            num_envs: int = 1, training_steps: int = 0) -> None:
     """Worker process: build env and policy, then per request load the weights and collect one batch."""
     ignore_stop_signals()  # the trainer answers SIGINT and SIGTERM, and then stops this worker
     try:
         torch.set_num_threads(1)
         torch.manual_seed(seed)
-        from cyberdog.rl.agent import make_exploration
-        from cyberdog.rl.networks import make_actor
-
-        env = make_env_for_collection(env_cfg, reward, seed, num_envs)
+        env = make_env_for_collection(env_cfg, reward, seed, num_envs, training_steps)
         policy = make_exploration(agent_cfg, make_actor(observation_size, action_size, agent_cfg.hidden_sizes),
                                   action_size)
         collector = make_collector(env, policy, frames_per_batch, init_random_frames, "cpu")
@@ -115,7 +117,7 @@ class ProcessCollector:
 
     def __init__(self, env_cfg: EnvConfig, reward: RewardConfig, seed: int, agent_cfg: AgentConfig,
                  policy: torch.nn.Module, observation_size: int, action_size: int, frames_per_batch: int,
-                 init_random_frames: int, num_envs: int = 1):
+                 init_random_frames: int, num_envs: int = 1, training_steps: int = 0):
         self.policy = policy
         self.num_envs = num_envs
         self.last_collect_time = self.last_collect_cpu = 0.0
@@ -128,7 +130,7 @@ class ProcessCollector:
         # trainer is killed the worker reads EOF on its pipe and closes its env processes
         self._proc = ctx.Process(target=_worker, name="cyberdog-collector", daemon=num_envs == 1,
                                  args=(child, env_cfg, reward, seed, agent_cfg, observation_size, action_size,
-                                       frames_per_batch, init_random_frames, num_envs))
+                                       frames_per_batch, init_random_frames, num_envs, training_steps))
         self._proc.start()
         child.close()
 

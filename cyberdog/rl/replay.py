@@ -58,7 +58,9 @@ def transitions(batch: TensorDictBase, extra_keys=()) -> TensorDictBase:
 def buffer_state(rb: TensorDictReplayBuffer) -> dict:
     """Contents (in storage order) and write cursor (the slot the next transition goes to), as a plain dict of
     tensors. The buffer is written only by `extend` since it was last emptied, one slot after the other (FIFO),
-    so the cursor is the count of transitions written, modulo the capacity."""
+    so the cursor is the count of transitions written, modulo the capacity.
+    Not TorchRL's `rb.state_dict()`: it round-trips too, but holds the whole preallocated storage, every one of the
+    `buffer_size` slots however few are filled (~0.56 GB at 10⁶ slots of 62 observations), in every checkpoint."""
     n, capacity = len(rb), int(rb.storage.max_size)
     data = rb[:n].to_dict() if n else {}
     return {"size": n, "cursor": rb.write_count % capacity if n else 0, "capacity": capacity, "data": data}

@@ -116,7 +116,7 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
     # and without the trot's torque computed as an imitation reference (EnvConfig.trot_reference): no trot
     # controller runs at all (the reference never drove the robot: the walk is the same to the last bit)
     cfg = dataclasses.replace(cfg, episode_time=max(cfg.episode_time, duration), target_speed_range=(),
-                              prior_weight=0.0, prior_decay_steps=0, prior_steps_done=0, trot_reference=False)
+                              prior_weight=0.0, prior_decay_steps=0, trot_reference=False)
     env = CyberDogEnv(config=cfg, reward=reward)
     try:
         # the env's simulation loop keeps every controller period: state, body, applied torque, contacts, and the

@@ -3,7 +3,9 @@ optimizers, counters, RNG states and the replay buffer), the stage-final files (
 the buffer and the Adam moments), the actor files, and the resume of a stage under a changed budget."""
 from __future__ import annotations
 
+import dataclasses
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 from cyberdog import config as C
@@ -12,19 +14,44 @@ from cyberdog.rl.checkpoint import (CheckpointError, budget_change, check_shapes
 from cyberdog.rl.replay import buffer_state, load_buffer_state
 
 
+@dataclass
+class Progress:
+    """Where a training run stands: the trainer's counters (a checkpoint's "counters", as a plain dict)."""
+
+    stage: int  # the stage being trained
+    env_steps: int = 0  # env steps collected, all stages together
+    stage_env_steps: int = 0  # env steps collected in this stage
+    episodes: int = 0  # episodes finished, all stages together
+    stage_episodes: int = 0  # episodes finished in this stage
+    stage_updates: int = 0  # gradient updates made in this stage
+    update_credit: float = 0.0  # updates owed: the fraction of the next one, or those a stop interrupted
+    csv_rows: int = 0  # rows of metrics.csv written
+    last_checkpoint: int = 0  # env_steps at the latest checkpoint
+    finished: bool = False  # every stage has ended
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, counters: dict) -> Progress:
+        """A checkpoint's counters (a field it lacks, e.g. `update_credit`, takes its default)."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in counters.items() if k in names})
+
+
 class RunState:
-    """The save and restore half of the trainer, on its attributes (cfg, run_dir, stages, c, agent, rb,
+    """The save and restore half of the trainer, on its attributes (cfg, run_dir, stages, progress, agent, rb,
     scores, best_score, logger, prior_weight). Every file records the trot prior's weight when it was written
     (torque mode; 0 without one): an actor saved while it was above 0 walked with its help."""
 
     def _state(self) -> dict:
-        return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": dict(self.c),
+        return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": self.progress.as_dict(),
                 "agent": self.agent.state_dict(), "replay": buffer_state(self.rb), "rng": rng_state(),
                 "scores": list(self.scores), "best_score": self.best_score, "prior_weight": self.prior_weight}
 
     def save(self, name: str = "checkpoint.pt") -> Path:
         self.logger.flush()
-        self.c["last_checkpoint"] = self.c["env_steps"]
+        self.progress.last_checkpoint = self.progress.env_steps
         return save_checkpoint(self._state(), self.run_dir / name)
 
     def _load_agent(self, state: dict, path) -> None:
@@ -65,38 +92,36 @@ class RunState:
         started `--init-from` a stage-final file begins with new optimizer moments."""
         agent = {k: v for k, v in self.agent.state_dict().items() if not k.endswith("_optimizer")}
         return {"kind": "stage_final", "config": C.to_dict(self.cfg), "stages": self.stages,
-                "counters": {**self.c, "finished": True}, "agent": agent,
+                "counters": {**self.progress.as_dict(), "finished": True}, "agent": agent,
                 "actor": self.agent.actor.state_dict(), "stage": stage, "score": score,
-                "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
-                "stage_updates": self.c["stage_updates"], "scores": list(self.scores), "best_score": self.best_score,
-                "prior_weight": self.prior_weight}
+                "episode": self.progress.episodes, "env_steps": self.progress.env_steps,
+                "stage_updates": self.progress.stage_updates, "scores": list(self.scores),
+                "best_score": self.best_score, "prior_weight": self.prior_weight}
 
     def _restore(self, state: dict, path) -> None:
         try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
             saved = C.to_dict(saved_config(state.get("config")))
         except (ValueError, TypeError) as e:
             raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
-        counters = state["counters"]
-        changes = budget_change(saved, C.to_dict(self.cfg), int(counters["stage"]), path,
-                                done={"max_env_steps": int(counters["stage_env_steps"]),
-                                      "max_episodes": int(counters["stage_episodes"]),
-                                      "finished": bool(counters["finished"])})
+        progress = Progress.from_dict(state["counters"])
+        changes = budget_change(saved, C.to_dict(self.cfg), progress.stage, path,
+                                done={"max_env_steps": progress.stage_env_steps,
+                                      "max_episodes": progress.stage_episodes, "finished": progress.finished})
         self._load_agent(state, path)
         try:
             load_buffer_state(self.rb, state["replay"], self.extra_transition_keys)
         except (ValueError, KeyError, RuntimeError) as e:
             raise CheckpointError(f"{path}: replay buffer cannot be restored: {e}") from e
         self.stages = list(state["stages"])
-        self.c.update(state["counters"])
+        self.progress = progress
         self.scores.extend(state["scores"])
         self.best_score = float(state["best_score"])
         set_rng_state(state["rng"])
         if changes:
             self._change_budget(changes)
-        c = self.c
         prior = f", trot prior's weight {self.prior_weight:.4f}" if self.cfg.env.prior_weight > 0 else ""
-        print(f"resuming {path}: stage {c['stage']} at env step {c['stage_env_steps']} of the stage "
-              f"({c['env_steps']} in all), episode {c['episodes']}, {self.agent.updates} updates{prior}",
+        print(f"resuming {path}: stage {progress.stage} at env step {progress.stage_env_steps} of the stage "
+              f"({progress.env_steps} in all), episode {progress.episodes}, {self.agent.updates} updates{prior}",
               file=sys.stderr, flush=True)
 
     def _change_budget(self, changes: dict) -> None:
@@ -104,16 +129,16 @@ class RunState:
         reached). If the run had finished (the budget can then only be raised), its stage-final files
         are kept under the stage's step count (`stage2_final_actor_40000steps.pt`): a longer run never
         overwrites the result of the shorter one. config.yaml records the new budget."""
-        stage, c = self.c["stage"], self.c
-        if c["finished"]:
+        stage, p = self.progress.stage, self.progress
+        if p.finished:
             for name in (f"stage{stage}_final.pt", f"stage{stage}_final_actor.pt"):
                 src = self.run_dir / name
                 if src.is_file():
-                    src.rename(src.with_name(f"{src.stem}_{c['stage_env_steps']}steps.pt"))
-            c["finished"] = False
+                    src.rename(src.with_name(f"{src.stem}_{p.stage_env_steps}steps.pt"))
+            p.finished = False
         C.save(self.cfg, self.run_dir / "config.yaml")
         how = "raised" if self._raised(changes) else "lowered"
-        print(f"stage {stage} continues past {c['stage_env_steps']} env steps / {c['stage_episodes']} episodes "
+        print(f"stage {stage} continues past {p.stage_env_steps} env steps / {p.stage_episodes} episodes "
               f"under a {how} budget: " + ", ".join(f"{k} {a} -> {b}" for k, (a, b) in changes.items()),
               file=sys.stderr, flush=True)
 
@@ -124,9 +149,10 @@ class RunState:
 
     def _save_actor(self, name: str, score: float) -> None:
         save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
-                     "stage": self.c["stage"], "episode": self.c["episodes"], "env_steps": self.c["env_steps"],
-                     "stage_updates": self.c["stage_updates"], "prior_weight": self.prior_weight},
+                     "stage": self.progress.stage, "episode": self.progress.episodes,
+                     "env_steps": self.progress.env_steps, "stage_updates": self.progress.stage_updates,
+                     "prior_weight": self.prior_weight},
                     self.run_dir / name)
 
 
-__all__ = ["RunState"]
+__all__ = ["Progress", "RunState"]

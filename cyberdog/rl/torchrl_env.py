@@ -53,17 +53,22 @@ class FlatInfo(gym.Wrapper):
         return obs, reward, terminated, truncated, self._flat(info)
 
 
-def make_gym_env(env_cfg: EnvConfig, reward: str | RewardConfig) -> gym.Env:
-    """The gymnasium env with the paper's time limit (`EnvConfig.max_episode_steps`) and flat info."""
+def make_gym_env(env_cfg: EnvConfig, reward: str | RewardConfig, training_steps: int = 0,
+                 steps_per_step: int = 1) -> gym.Env:
+    """The gymnasium env with the paper's time limit (`EnvConfig.max_episode_steps`) and flat info; the trot
+    prior's decay starts from `training_steps` env steps of training, `steps_per_step` more per step of this env
+    (`CyberDogEnv.set_training_progress`)."""
     env = CyberDogEnv(config=env_cfg, reward=reward)
+    env.set_training_progress(training_steps, steps_per_step)
     env = gym.wrappers.TimeLimit(env, max_episode_steps=env_cfg.max_episode_steps)
     return FlatInfo(env)
 
 
 def make_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, device: str = "cpu",
-             track_init: bool = False) -> TransformedEnv:
-    """TorchRL env; `track_init` adds the "is_init" flag Ornstein–Uhlenbeck noise needs."""
-    base = GymWrapper(make_gym_env(env_cfg, reward), device=device)
+             track_init: bool = False, training_steps: int = 0, steps_per_step: int = 1) -> TransformedEnv:
+    """TorchRL env; `track_init` adds the "is_init" flag Ornstein–Uhlenbeck noise needs; `training_steps`,
+    `steps_per_step`: as `make_gym_env`'s."""
+    base = GymWrapper(make_gym_env(env_cfg, reward, training_steps, steps_per_step), device=device)
     spec = {k: Unbounded(shape=INFO_SHAPES.get(k, ()), dtype=torch.float32, device=device) for k in INFO_KEYS}
     base.set_info_dict_reader(default_info_dict_reader(list(INFO_KEYS), spec=spec))
     env = TransformedEnv(base)
@@ -88,9 +93,10 @@ def worker_seed(seed: int, index: int) -> int:
 
 
 def make_batched_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, num_envs: int,
-                     track_init: bool = False) -> ParallelEnv:
+                     track_init: bool = False, training_steps: int = 0) -> ParallelEnv:
     """`num_envs` copies of `make_env`, each in its own process (TorchRL's `ParallelEnv`), worker i seeded
-    with `worker_seed(seed, i)`; batch size [num_envs].
+    with `worker_seed(seed, i)`; batch size [num_envs]. The trot prior's decay counts `training_steps` env steps
+    of training made, and `num_envs` per step of an env.
 
     The workers step in lock step (all of them, then the next step) and return their data through shared
     memory, so what a batch holds depends on the seeds only, never on the timing. The processes are spawned
@@ -99,7 +105,8 @@ def make_batched_env(env_cfg: EnvConfig, reward: str | RewardConfig, seed: int, 
     """
     if int(num_envs) != num_envs or num_envs < 2:
         raise ValueError(f"make_batched_env needs num_envs >= 2 (one env is make_env), got {num_envs!r}")
-    make_one = functools.partial(make_worker_env, env_cfg, reward, track_init=track_init)
+    make_one = functools.partial(make_worker_env, env_cfg, reward, track_init=track_init,
+                                 training_steps=training_steps, steps_per_step=int(num_envs))
     return ParallelEnv(int(num_envs), make_one, create_env_kwargs=[{"seed": worker_seed(seed, i)}
                                                                   for i in range(num_envs)],
                        mp_start_method="spawn", num_threads=torch.get_num_threads())

@@ -50,14 +50,13 @@ from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
 from cyberdog.envs.observation import actor_observation_scale, observation_typical_magnitude
-from cyberdog.rl.agent import Agent
 from cyberdog.rl.checkpoint import load_checkpoint, remove_stale_temporaries, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
 from cyberdog.rl.replay import TROT_ACTION_KEY, make_replay_buffer, relabel_rewards, sample_batches, transitions
-from cyberdog.rl.run_state import RunState
+from cyberdog.rl.run_state import Progress, RunState
 from cyberdog.rl.stop import StopSignals, TrainingInterrupted
-from cyberdog.rl.td3 import NonFiniteError, StageSettings, metrics_to_float
+from cyberdog.rl.td3 import TD3, NonFiniteError, UpdateSettings, metrics_to_float
 from cyberdog.runlock import RunFolderError, RunLock
 
 ACTION_SIZE = 12  # joint torques or foot offsets (Table 3); the observation's size is the env config's
@@ -73,11 +72,14 @@ def resolve_device(name: str) -> str:
 
 class Trainer(RunState):
     """Runs `stages` (e.g. (1, 2)) of one experiment in `run_dir`, which it locks until `run()` ends (or
-    `close()`): a second process (or a second Trainer) on the same folder raises `RunLockedError`."""
+    `close()`): a second process (or a second Trainer) on the same folder raises `RunLockedError`.
+
+    It owns the loop and its counters (`progress`, a `Progress`); the agent (`agent`, a `TD3`) owns the networks
+    and makes the updates, with the stage's `settings`, resolved once as the stage starts or resumes."""
 
     def __init__(self, cfg: C.ExperimentConfig, run_dir: str | Path, stages=(1, 2), resume: bool = False,
                  init_from: str | Path | None = None, progress: bool = True):
-        self.cfg, self.run_dir, self.progress = cfg, Path(run_dir), progress
+        self.cfg, self.run_dir, self.show_progress = cfg, Path(run_dir), progress
         self.lock = None
         self._stop = StopSignals()  # entered by run(): SIGINT and SIGTERM then stop at a safe point
         init_state = None
@@ -109,12 +111,12 @@ class Trainer(RunState):
         random.seed(tc.seed)
         obs_scale = observation_typical_magnitude(cfg.env)
         self.observation_size = len(obs_scale)
-        self.agent = Agent(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale,
-                           actor_observation_scale(cfg.env, cfg.agent.actor_observation))
+        self.agent = TD3(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale,
+                         actor_observation_scale(cfg.env, cfg.agent.actor_observation))
         self.rb = make_replay_buffer(tc.buffer_size)
         self.stages = list(stages)
-        self.c = dict(stage=self.stages[0], env_steps=0, stage_env_steps=0, episodes=0, stage_episodes=0,
-                      stage_updates=0, update_credit=0.0, csv_rows=0, last_checkpoint=0, finished=False)
+        self.progress = Progress(stage=self.stages[0])
+        self.settings: UpdateSettings | None = None  # the current stage's, resolved when it starts or resumes
         self.scores: deque = deque(maxlen=tc.score_window)
         self.recent: deque = deque(maxlen=100)  # (length, fell) of the latest episodes, for the progress line
         self.best_score = -math.inf
@@ -128,9 +130,9 @@ class Trainer(RunState):
             if init_state is not None:
                 self._load_agent(init_state, init_from)
             C.save(cfg, self.run_dir / "config.yaml")
-        self.logger = EpisodeLogger(self.run_dir, rows=self.c["csv_rows"],
-                                    purge_step=self.c["env_steps"] if resume else None)
-        self.c["csv_rows"] = self.logger.rows  # fewer if metrics.csv lost rows (the logger warned)
+        self.logger = EpisodeLogger(self.run_dir, rows=self.progress.csv_rows,
+                                    purge_step=self.progress.env_steps if resume else None)
+        self.progress.csv_rows = self.logger.rows  # fewer if metrics.csv lost rows (the logger warned)
         self.last = {"actor_loss": math.nan, "critic_loss": math.nan, "q_mean": math.nan, "q_max": math.nan}
 
     def _check_empty(self) -> None:
@@ -160,38 +162,39 @@ class Trainer(RunState):
                 self._run_stages()
         finally:
             self.close()
-        return {**self.c, "updates": self.agent.updates, "buffer_size": len(self.rb),
+        return {**self.progress.as_dict(), "updates": self.agent.updates, "buffer_size": len(self.rb),
                 "window_mean_score": float(np.mean(self.scores)) if self.scores else math.nan}
 
     def _stop_if_asked(self, saved: Path | None = None) -> None:
         """At a safe point: if a stop signal came, write the checkpoint (unless `saved` just was) and stop."""
         if self._stop.signum is not None:
-            raise TrainingInterrupted(self._stop.signum, self.c["env_steps"], saved or self.save())
+            raise TrainingInterrupted(self._stop.signum, self.progress.env_steps, saved or self.save())
 
     def _run_stages(self) -> None:
         """Each stage from where the counters stand, with its final files, then the next."""
-        while not self.c["finished"]:
-            stage = self.c["stage"]
+        while not self.progress.finished:
+            stage = self.progress.stage
             self._run_stage(stage)
             score = self.scores[-1] if self.scores else math.nan
-            if self.c["stage_updates"] > 0:
+            if self.progress.stage_updates > 0:
                 self._save_actor(f"stage{stage}_final_actor.pt", score)
                 save_checkpoint(self._final_state(stage, score), self.run_dir / f"stage{stage}_final.pt")
             else:  # e.g. its stop_score was reached before learning started: not a trained actor
                 self._save_actor(f"stage{stage}_untrained_actor.pt", score)
-                print(f"WARNING: stage {stage} ended after {self.c['stage_env_steps']} env steps without a single "
+                print(f"WARNING: stage {stage} ended after {self.progress.stage_env_steps} env steps without a single "
                       f"gradient update; its actor is saved as stage{stage}_untrained_actor.pt, and no "
                       f"stage{stage}_final files are written", file=sys.stderr, flush=True)
             rest = [s for s in self.stages if s > stage]
             if rest:  # next stage: same agent, fresh counters and score window
-                self.c.update(stage=rest[0], stage_env_steps=0, stage_episodes=0, stage_updates=0)
+                self.progress = dataclasses.replace(self.progress, stage=rest[0], stage_env_steps=0,
+                                                    stage_episodes=0, stage_updates=0)
                 self.scores.clear()
                 self.best_score = -math.inf
                 self._carry_buffer(stage, rest[0])
             else:
-                self.c["finished"] = True
+                self.progress.finished = True
             saved = self.save()
-            if not self.c["finished"]:
+            if not self.progress.finished:
                 self._stop_if_asked(saved)
 
     def _carry_buffer(self, old: int, new: int) -> None:
@@ -199,42 +202,31 @@ class Trainer(RunState):
         policy = self.cfg.train.buffer_between_stages
         if policy == "clear":
             self.rb.empty()
-        elif policy == "relabel":
-            r_old, r_new = (C.stage_reward(getattr(self.cfg.train, f"stage{s}")) for s in (old, new))
-            w_old, w_new = r_old.weights, r_new.weights
-            other = [n for n in ("speed", "y_offset", "fuselage") if w_old[n] != w_new[n]]
-            if other:  # only the energy (stored per step) and the constant keep-moving term can be recomputed
-                raise ValueError(f"buffer_between_stages='relabel' recomputes the energy and keep-moving terms "
-                                 f"only, but the weights of {other} differ between stage {old} and stage {new}")
-            if r_old.energy_model != r_new.energy_model:  # the stored step energy is the old stage's model's
-                raise ValueError(f"buffer_between_stages='relabel' needs one energy model in both stages, got "
-                                 f"{r_old.energy_model!r} (stage {old}) and {r_new.energy_model!r} (stage {new}): "
-                                 f"set train.stage{old}.energy_model too")
+        elif policy == "relabel":  # the stages differ in these two terms only (`TrainConfig` checks it)
+            w_old, w_new = (C.stage_reward(getattr(self.cfg.train, f"stage{s}")).weights for s in (old, new))
             keep_moving = rewards.keep_moving_term(self.cfg.env.control_dt, self.cfg.env.episode_time)
             relabel_rewards(self.rb, w_new["energy"] - w_old["energy"],
                             (w_new["keep_moving"] - w_old["keep_moving"]) * keep_moving)
 
     def _stage_done(self, sc: C.StageConfig) -> bool:
-        c = self.c
-        if c["stage_episodes"] >= sc.max_episodes or (sc.max_env_steps and c["stage_env_steps"] >= sc.max_env_steps):
+        p = self.progress
+        if p.stage_episodes >= sc.max_episodes or (sc.max_env_steps and p.stage_env_steps >= sc.max_env_steps):
             return True
         return len(self.scores) == self.scores.maxlen and float(np.mean(self.scores)) >= sc.stop_score
 
     def _run_stage(self, stage: int) -> None:
-        tc, sc = self.cfg.train, getattr(self.cfg.train, f"stage{stage}")
-        if self.c["update_credit"] >= 1:  # a run stopped within a round of updates: it owes them (at most a batch's)
+        tc, sc, p = self.cfg.train, getattr(self.cfg.train, f"stage{stage}"), self.progress
+        self._begin_stage(sc)
+        if p.update_credit >= 1:  # a run stopped within a round of updates: it owes them (at most a batch's)
             self._updates(0)
         if self._stage_done(sc):
             return
-        c = self.c
-        seed, reward = tc.seed + 100_003 * stage + c["env_steps"], C.stage_reward(sc)
-        if c["stage_env_steps"] == 0:  # the stage starts (a resume keeps the anchor and the Adam moments it set)
-            self.agent.begin_stage(anchor=sc.actor_anchor > 0, fresh_actor_optimizer=sc.fresh_actor_optimizer)
+        seed, reward = tc.seed + 100_003 * stage + p.env_steps, C.stage_reward(sc)
         threads = torch.get_num_threads()  # closing a ParallelEnv raises them by its worker count: restored below
         collector = self._collector(reward, seed, self._random_frames_left(stage))
         budget = sc.max_env_steps or sc.max_episodes * self.cfg.env.max_episode_steps
-        bar = tqdm(total=budget, initial=min(c["stage_env_steps"], budget), unit="step", desc=f"stage {stage}",
-                   disable=not self.progress, dynamic_ncols=True)
+        bar = tqdm(total=budget, initial=min(p.stage_env_steps, budget), unit="step", desc=f"stage {stage}",
+                   disable=not self.show_progress, dynamic_ncols=True)
         episodes = [self._new_episode() for _ in range(tc.num_envs)]  # the running episode of each env
         t_env = t_upd = 0.0
         n_upd, n_env = 0, 0  # in this process: a resumed stage's rates count only what it did itself
@@ -248,8 +240,8 @@ class Trainer(RunState):
                 self.rb.extend(transitions(batch, self.extra_transition_keys))
                 n = batch.numel()
                 self.agent.policy[-1].step(n)  # anneal the exploration noise
-                c["env_steps"] += n
-                c["stage_env_steps"] += n
+                p.env_steps += n
+                p.stage_env_steps += n
                 n_env += n
                 if is_async:
                     collector.prefetch()  # the next batch is collected while we update on this one
@@ -261,7 +253,7 @@ class Trainer(RunState):
                 self._bookkeep(batch, episodes, stage, sc, rates)
                 bar.update(min(n, max(0, budget - bar.n)))
                 bar.set_postfix(self._progress_fields(rates), refresh=False)
-                if c["env_steps"] - c["last_checkpoint"] >= tc.checkpoint_every:
+                if p.env_steps - p.last_checkpoint >= tc.checkpoint_every:
                     self.save()
                 self._stop_if_asked()  # the batch is stored, learned from and logged: a safe point
                 if self._stage_done(sc):
@@ -280,19 +272,19 @@ class Trainer(RunState):
         episodes), not only the score; the trot prior's weight while there is one."""
         length, fell = np.mean(self.recent, axis=0) if self.recent else (0.0, 0.0)
         prior = {"prior": f"{self.prior_weight:.3f}"} if self.cfg.env.prior_weight > 0 else {}
-        return {"ep": self.c["stage_episodes"], "score": f"{np.mean(self.scores) if self.scores else 0:.2f}",
+        return {"ep": self.progress.stage_episodes, "score": f"{np.mean(self.scores) if self.scores else 0:.2f}",
                 "len": f"{length:.0f}", "falls": f"{100 * fell:.0f}%", **prior,
                 "upd_s": f"{rates['updates_per_s']:.0f}"}
 
     def _collector(self, reward, seed: int, random_frames: int):
         """The stage's collector: the env(s) in a worker process one batch ahead of the updates ("async"), or
         here, with the policy on self.device acting on the observations of all envs at once."""
-        tc, env_cfg = self.cfg.train, self._collection_env()
+        tc, env_cfg, done = self.cfg.train, self._collection_env(), self.progress.stage_env_steps
         if tc.collection == "async":
             return ProcessCollector(env_cfg, reward, seed, self.cfg.agent, self.agent.policy,
                                     self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
-                                    tc.num_envs)
-        return make_collector(make_env_for_collection(env_cfg, reward, seed, tc.num_envs), self.agent.policy,
+                                    tc.num_envs, done)
+        return make_collector(make_env_for_collection(env_cfg, reward, seed, tc.num_envs, done), self.agent.policy,
                               tc.frames_per_batch, random_frames, self.device)
 
     @property
@@ -302,44 +294,51 @@ class Trainer(RunState):
 
     def _collection_env(self) -> C.EnvConfig:
         """The env config the stage collects in: the trot prior (torque mode, `EnvConfig.prior_weight`) decays
-        over stage 1's env steps, so its envs start where the stage's counter stands (a resume goes on with the
-        same weight) and each counts `num_envs` steps per step of its own; later stages have no prior."""
+        over stage 1's env steps, whose count the collector's envs are given (`CyberDogEnv.set_training_progress`:
+        a resume goes on with the same weight); later stages have no prior."""
         env = self.cfg.env
-        if env.prior_weight == 0:
+        if env.prior_weight == 0 or self.progress.stage == 1:
             return env
-        if self.c["stage"] != 1:
-            return dataclasses.replace(env, prior_weight=0.0, prior_decay_steps=0, prior_steps_done=0)
-        return dataclasses.replace(env, prior_steps_done=self.c["stage_env_steps"],
-                                   prior_step_stride=self.cfg.train.num_envs)
+        return dataclasses.replace(env, prior_weight=0.0, prior_decay_steps=0)
 
     @property
     def prior_weight(self) -> float:
         """The trot prior's weight now (0 without one, and in every stage after the first)."""
-        return (env := self._collection_env()).prior_weight_at(env.prior_steps_done)
+        return self._collection_env().prior_weight_at(self.progress.stage_env_steps)
 
     def _random_frames_left(self, stage: int) -> int:
         """Uniform random actions only at the very start (stage 1, or a stage run without a trained agent or
         an actor file's actor)."""
         if stage != self.stages[0] or self.agent.updates > 0 or self.agent.actor_from_file:
             return 0
-        return max(0, self.cfg.train.init_random_frames - self.c["stage_env_steps"])
+        return max(0, self.cfg.train.init_random_frames - self.progress.stage_env_steps)
+
+    def _begin_stage(self, sc: C.StageConfig) -> None:
+        """The stage's update settings, resolved once as it starts or resumes (its critic warm-up counted from the
+        agent's updates at its start); at its very start the agent begins it (anchor, fresh actor optimizer), on a
+        resume the optimizers take its learning rates (the anchor and the Adam moments come from the checkpoint)."""
+        p = self.progress
+        self.settings = UpdateSettings.of(self.cfg.agent, sc, updates_done=self.agent.updates - p.stage_updates)
+        if p.stage_env_steps == 0:
+            self.agent.begin_stage(self.settings, fresh_actor_optimizer=sc.fresh_actor_optimizer)
+        else:
+            self.agent.set_learning_rates(self.settings)
 
     def _updates(self, frames: int) -> int:
-        tc = self.cfg.train
-        if C.update_blockers(tc, len(self.rb), self._random_frames_left(self.c["stage"]), self.agent.updates,
-                             self.c["stage_env_steps"]):
+        tc, p = self.cfg.train, self.progress
+        if C.update_blockers(tc, len(self.rb), self._random_frames_left(p.stage), self.agent.updates,
+                             p.stage_env_steps):
             return 0
-        n, self.c["update_credit"] = C.update_credit(self.c["update_credit"], frames, tc.updates_per_frame)
-        settings = StageSettings.of(self.cfg.agent, getattr(tc, f"stage{self.c['stage']}"),
-                                    imitation_scale=1.0 - self.prior_weight)
+        n, p.update_credit = C.update_credit(p.update_credit, frames, tc.updates_per_frame)
+        prior_weight = self.prior_weight
         metrics = []
         for done, b in enumerate(sample_batches(self.rb, n, tc.batch_size)):
             if self._stop.signum is not None:  # a stop signal: the round's other updates are owed, not lost
-                self.c["update_credit"] += n - done
+                p.update_credit += n - done
                 n = done
                 break
-            metrics.append(self.agent.update(b, settings, self.c["stage_updates"]))
-            self.c["stage_updates"] += 1
+            metrics.append(self.agent.update(b, self.settings, prior_weight))
+            p.stage_updates += 1
         if n:  # tensors until here: one conversion per round of updates, not four per update
             self.last = metrics_to_float(metrics)
             self.last["actor_loss"] = self.agent.last_actor_loss
@@ -361,7 +360,7 @@ class Trainer(RunState):
                                                                    "prior_weight", "terminated"]
                 + [f"reward_{n}" for n in REWARD_TERM_NAMES]}
         done = nxt["done"].reshape(n_envs, -1).tolist()
-        first_step = self.c["env_steps"] - n_envs * len(done[0])
+        first_step = self.progress.env_steps - n_envs * len(done[0])
         for t in range(len(done[0])):
             for i, ep in enumerate(episodes):
                 ep["length"] += 1
@@ -377,23 +376,23 @@ class Trainer(RunState):
                     ep.update(self._new_episode())
 
     def _episode_end(self, ep: dict, stage: int, sc: C.StageConfig, rates: dict, env_steps: int) -> None:
-        c = self.c
-        c["episodes"] += 1
-        c["stage_episodes"] += 1
+        p = self.progress
+        p.episodes += 1
+        p.stage_episodes += 1
         self.scores.append(ep["score"])
         self.recent.append((ep["length"], ep["fell"]))
         row = {**{k: v for k, v in ep.items() if k not in ("speed_sum", "prior_sum")}, **self.last, **rates,
-               "stage": stage, "episode": c["episodes"], "stage_episode": c["stage_episodes"],
+               "stage": stage, "episode": p.episodes, "stage_episode": p.stage_episodes,
                "env_steps": env_steps, "mean_speed": ep["speed_sum"] / ep["length"],
                "prior_weight": ep["prior_sum"] / ep["length"],
                "window_mean_score": float(np.mean(self.scores)), "updates": self.agent.updates,
                "wall_time_s": time.time()}
         self.logger.log(row)
-        c["csv_rows"] = self.logger.rows
+        p.csv_rows = self.logger.rows
         if row["prior_weight"] > 0:  # the trot prior helped: not the policy's own score (no best or saved actor)
             return
         if ep["score"] > self.best_score:
             self.best_score = ep["score"]
             self._save_actor(f"stage{stage}_best_actor.pt", ep["score"])
         if ep["score"] >= sc.save_score:
-            self._save_actor(f"saved/stage{stage}_episode{c['episodes']:06d}_actor.pt", ep["score"])
+            self._save_actor(f"saved/stage{stage}_episode{p.episodes:06d}_actor.pt", ep["score"])
