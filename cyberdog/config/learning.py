@@ -21,7 +21,7 @@ EXPLORATION_NOISES = ("gaussian", "ou")
 DEVICES = ("cpu", "cuda", "auto")
 BUFFER_POLICIES = ("clear", "keep", "relabel")
 COLLECTION_MODES = ("sync", "async")
-RETIRED_AGENT_FIELDS = ("fast_update",)  # AgentConfig fields earlier files recorded (one loss since): dropped
+UNREAD_AGENT_FIELDS = ("fast_update",)  # what saved agent configs may hold that no setting reads: dropped
 RELABELLED_TERMS = ("energy", "keep_moving")  # the reward terms a relabel recomputes at the start of stage 2
 
 
@@ -65,9 +65,9 @@ class AgentConfig:
 
     @staticmethod
     def upgrade_fields(data: dict) -> dict:
-        """Read by `from_dict` before the fields: an earlier file's agent without the fields this version no
-        longer has (`RETIRED_AGENT_FIELDS`), so that old runs resume and old actor files load."""
-        return {k: v for k, v in data.items() if k not in RETIRED_AGENT_FIELDS} if isinstance(data, dict) else data
+        """Read by `from_dict` before the fields: a saved agent without `UNREAD_AGENT_FIELDS`, so that the runs
+        and actor files that hold them resume and load."""
+        return {k: v for k, v in data.items() if k not in UNREAD_AGENT_FIELDS} if isinstance(data, dict) else data
 
     def __post_init__(self) -> None:
         _check(all(isinstance(g, str) and g for g in self.actor_observation)
@@ -130,7 +130,7 @@ class StageConfig:
 
     @staticmethod
     def upgrade_fields(data: dict) -> dict:
-        """Read by `from_dict` before the fields: an earlier file's stage in today's form (`upgrade_stage`)."""
+        """Read by `from_dict` before the fields: a stage in its preset-name form, as a mapping (`upgrade_stage`)."""
         return upgrade_stage(data)
 
     def __post_init__(self) -> None:
@@ -159,28 +159,28 @@ def stage_reward(stage: StageConfig) -> RewardConfig:
     return stage.reward
 
 
-# The stage settings of earlier config files (before the stage's reward was a RewardConfig): a file or an actor
-# file that still has them is read as the same reward, so that old runs resume and old actors load.
-_LEGACY_STAGE_TERMS = {"energy_weight": "energy", "keep_moving_weight": "keep_moving", "speed_weight": "speed",
+# A stage's reward in its preset-name form (`reward: stage1|stage2` and `<term>_weight` fields), as saved configs and
+# actor files may hold it: read as the same reward, so that those runs resume and those actors load.
+_STAGE_TERM_FIELDS = {"energy_weight": "energy", "keep_moving_weight": "keep_moving", "speed_weight": "speed",
                        "y_offset_weight": "y_offset", "speed_window": "speed_window",
                        "speed_deadband": "speed_deadband", "speed_at_nominal_stride": "speed_at_nominal_stride",
                        "energy_model": "energy_model"}
 
 
 def upgrade_stage(data: dict) -> dict:
-    """A stage mapping in the earlier form (`reward: stage1|stage2` and `<term>_weight` fields) in today's
-    (`reward: {term: weight}`); today's form is returned unchanged."""
+    """A stage mapping in the preset-name form (`reward: stage1|stage2` and `<term>_weight` fields) in the mapping
+    form (`reward: {term: weight}`); the mapping form is returned unchanged."""
     if not isinstance(data, dict) or not (isinstance(data.get("reward"), str)
-                                          or any(k in data for k in _LEGACY_STAGE_TERMS)):
+                                          or any(k in data for k in _STAGE_TERM_FIELDS)):
         return data
-    out = {k: v for k, v in data.items() if k not in _LEGACY_STAGE_TERMS}
+    out = {k: v for k, v in data.items() if k not in _STAGE_TERM_FIELDS}
     preset = data.get("reward", "stage1")
     if preset not in ("stage1", "stage2"):
-        raise ValueError(f"StageConfig.reward must be a mapping of reward terms (or, in an earlier file, "
-                         f"'stage1' or 'stage2'), got {preset!r}")
+        raise ValueError(f"StageConfig.reward must be a mapping of reward terms (or the preset name 'stage1' or "
+                         f"'stage2'), got {preset!r}")
     base = STAGE1_REWARD if preset == "stage1" else STAGE2_REWARD
     reward = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)}
-    reward.update({term: data[k] for k, term in _LEGACY_STAGE_TERMS.items() if data.get(k) is not None})
+    reward.update({term: data[k] for k, term in _STAGE_TERM_FIELDS.items() if data.get(k) is not None})
     out["reward"] = reward
     return out
 
@@ -209,13 +209,13 @@ class TrainConfig:
     deterministic: bool = False  # torch.use_deterministic_algorithms (bit-identical reruns, slower)
     num_threads: int = 0  # torch CPU threads of the updates; 0 = torch's default ("async": one core fewer)
     collection: str = "sync"  # "sync": env steps and updates take turns in this process (bit-identical reruns
-    #                           and resumes, as before); "async": the env runs in a worker process while the
+    #                           and resumes); "async": the env runs in a worker process while the
     #                           updates run here, one batch ahead (~1.7x the env steps/s of "sync" on 2 idle
     #                           cores at 1 update per step, bench/train_throughput.py; the policy that collects
     #                           lags one batch of updates; reruns with a seed are identical too, but differ
     #                           from "sync"). See cyberdog/rl/collect.py
     num_envs: int = 1  # envs that collect, each in a process of its own (TorchRL ParallelEnv, stepped in lock
-    #                    step; 1: one env in the collecting process, as before): more env steps/s with more
+    #                    step; 1: one env in the collecting process): more env steps/s with more
     #                    cores. frames_per_batch must be a multiple of it; a seed repeats a run for a fixed
     #                    num_envs only. See cyberdog/rl/collect.py
 

@@ -97,8 +97,8 @@ def load_torch_file(path: str | Path, what: str):
 
 
 def saved_config(config: dict | None) -> C.ExperimentConfig:
-    """The experiment config that a checkpoint or actor file recorded (its plain dict; an earlier version's form
-    is read as the config layer reads earlier files)."""
+    """The experiment config that a checkpoint or actor file recorded (its plain dict, read as the config layer
+    reads a saved config)."""
     return C.from_dict(C.ExperimentConfig, dict(config or {}))
 
 

@@ -72,7 +72,7 @@ class RunState:
             raise CheckpointError(f"{path} holds no agent; --init-from needs checkpoint.pt, stage<N>_final.pt of a "
                                   f"run or an actor file")
         agent = state["agent"]
-        networks = {k: v for k, v in agent["loss"].items() if "_params." in k}  # not an earlier loss's constants
+        networks = {k: v for k, v in agent["loss"].items() if "_params." in k}  # the networks' tensors alone
         check_shapes(networks, self.agent.network_state(), "the agent", path)
         if "actor_optimizer" in agent:  # checkpoint.pt: the whole agent
             self.agent.load_state_dict(agent)
