@@ -30,6 +30,7 @@ import socket
 import sys
 import time
 import warnings
+import weakref
 from pathlib import Path
 
 from filelock import Timeout, UnixFileLock
@@ -83,7 +84,9 @@ class RunLock:
         self.run_dir, self.purpose = Path(run_dir), purpose
         self.path = self.run_dir / LOCK_FILE
         self.taken_over: dict | None = None  # the dead holder whose lock this one replaced
-        self._lock = UnixFileLock(self.path, timeout=0, thread_local=False, on_acquired=self._claim)
+        me = weakref.ref(self)  # not the bound method: an abandoned RunLock must be freed, and released, at once
+        self._lock = UnixFileLock(self.path, timeout=0, thread_local=False,
+                                  on_acquired=lambda fd: me()._claim(fd))
         self._inode: tuple[int, int] | None = None  # the lock file this process wrote its record into
 
     @property
