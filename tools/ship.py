@@ -37,7 +37,8 @@ Seeds given with --fresh (the recipe was never tuned on them) go through steps 1
 and figures_input/*_fresh.json, so that their rows stand beside the tuning seeds' (a re-make without --fresh
 removes them). Each evaluate.py step writes its own folder under --work (refused if it holds results, unless
 --force); results/ is written only from a step that succeeded. 3.3 min on 2 workers for five seeds, 1.9 more
-for three fresh ones (2-core AMD EPYC).
+for three fresh ones (2-core AMD EPYC). `--quick` runs every step at 1.0 m/s alone with short walks, into a
+--results folder of its own: a check that the chain runs, not a result.
 """
 from __future__ import annotations
 
