@@ -59,6 +59,9 @@ class ActuatorConfig:
                f"> full_torque_speed ({self.full_torque_speed})", self.zero_torque_speed)
 
 
+ENGINES = ("pybullet", "mujoco")  # the physics engines a robot can be built in (the first is the default)
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """PyBullet world and the two rates of the simulated robot.
@@ -80,6 +83,7 @@ class SimConfig:
     gravity: float = 9.81  # m/s²
     ground_friction: float = 0.8  # lateral friction coefficient of foot on ground [G]
     solver_iterations: int = 50  # PyBullet numSolverIterations
+    engine: str = "pybullet"  # one of ENGINES: the physics engine (cyberdog.sim.make_robot; docs/design.md)
 
     @property
     def physics_substeps(self) -> int:
@@ -96,6 +100,7 @@ class SimConfig:
                f"at every physics step has no controller_dt: give it controller_dt = physics_dt",
                self.controller_dt)
         _check(self.solver_iterations >= 1, "SimConfig.solver_iterations", ">= 1", self.solver_iterations)
+        _check(self.engine in ENGINES, "SimConfig.engine", f"one of {', '.join(ENGINES)}", self.engine)
 
 
 TRAJECTORY_NAMES = ("cycloid", "straight", "sampled")

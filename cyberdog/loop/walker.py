@@ -43,6 +43,7 @@ from cyberdog.loop.books import WalkBooks
 from cyberdog.loop.rows import PeriodEnds, PeriodMean, Rows
 from cyberdog.sim.hardware_model import (CommandDelay, HardwareSensing, RobotDraw, draw_mass_scale, hardware_walk_config,
                                    seeded_streams, whole_steps)
+from cyberdog.sim import make_robot
 from cyberdog.sim.robot import Robot, RobotState
 
 # "fallen" means the same everywhere (EnvConfig's defaults; the env passes its own)
@@ -109,7 +110,7 @@ class Walker(WalkBooks):
             raise ValueError("robot was built with another ActuatorConfig than the walk needs (friction="
                              f"{cfg.actuator.friction}); build it from hardware_walk_config(cfg, hardware)")
         self.own_robot = robot is None
-        self.robot = robot or Robot(cfg.robot, cfg.actuator, cfg.sim, gui=gui)
+        self.robot = robot or make_robot(cfg.robot, cfg.actuator, cfg.sim, gui=gui)
         self.controller = controller or TrotController(cfg)
         self.hardware = hardware
         self.joint_stop, self.drive = joint_stop, drive
