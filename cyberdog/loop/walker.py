@@ -78,7 +78,8 @@ class Walker(WalkBooks):
     module docstring).
 
     cfg: the walk (robot, actuator, sim, gait, PID, controller, energy).
-    controller: the trot controller (default: `TrotController(cfg)`); `drive=False` leaves it off (torque mode).
+    controller: the trot controller (default: `TrotController(cfg)`), or a command source with its `command` and
+        `reset` (`cyberdog.control.gait_table.TablePlayer`: a joint table's frames); `drive=False` leaves it off.
     hardware: the hardware model (None: the ideal robot). With friction on, a given `robot` must have been
         built with `hardware_walk_config(cfg, hardware).actuator`.
     joint_stop: the virtual end stop of the env's joint range (None: only the URDF limits).
