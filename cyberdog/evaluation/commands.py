@@ -9,6 +9,7 @@ from cyberdog import config as C
 from cyberdog.core.learned_set import LearnedSetError
 from cyberdog.evaluation import learned as L
 from cyberdog.evaluation.check import cmd_check
+from cyberdog.evaluation.export import cmd_export
 from cyberdog.evaluation.extraction import learned_trajectories, take_recipe_extraction
 from cyberdog.evaluation.options import UsageError
 from cyberdog.evaluation.output import Run, open_run
@@ -196,7 +197,7 @@ def cmd_video(args, cfg: C.WalkConfig) -> int:
 
 COMMAND_FUNCTIONS = {"all": cmd_all, "baselines": cmd_baselines, "extract": cmd_extract, "compare": cmd_compare,
                      "prototype": cmd_prototype, "stiffness": cmd_stiffness, "figures": cmd_figures, "video": cmd_video,
-                     "check": cmd_check, "pd-match": cmd_pd_match}
+                     "check": cmd_check, "pd-match": cmd_pd_match, "export": cmd_export}
 
 
 def run(args, argv: list[str], draw_figures=None) -> int:
