@@ -18,6 +18,8 @@ from typing import Any, get_type_hints
 
 import yaml
 
+CHECKOUT = Path(__file__).resolve().parents[2]  # the repository a checkout's package lives in
+
 # PyYAML reads 1e-5 and 1e5 (no dot) as strings (YAML 1.1); such numeric strings are accepted for numbers
 _NUMBER = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 _KINDS = {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "a list",
@@ -215,3 +217,16 @@ def _choices(node: Any, name: str, parent: list[str]) -> str:
 
 def replace(cfg: Any, **changes: Any) -> Any:
     return dataclasses.replace(cfg, **changes)
+
+
+def not_found(path: str | Path, what: str) -> str:
+    """One line for a `what` file (e.g. "config file") that is not at `path`: a relative path is read from the
+    current folder, so where the repository's own copy exists the line names the checkout to run from."""
+    path = Path(path)
+    line = f"{what} {path} does not exist"
+    if not path.is_absolute():
+        line += f" in the current folder ({Path.cwd()})"
+        in_checkout = CHECKOUT / path
+        if in_checkout.is_file():
+            line += f"; it is in the checkout: run from {CHECKOUT}, or give {in_checkout}"
+    return line

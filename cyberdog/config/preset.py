@@ -34,7 +34,7 @@ from typing import Any
 
 import yaml
 
-from cyberdog.config.io import from_dict, load_fields, merged, override, replace, to_dict
+from cyberdog.config.io import from_dict, load_fields, merged, not_found, override, replace, to_dict
 from cyberdog.config.learning import ExperimentConfig
 
 SECTIONS = ("env", "agent", "train")
@@ -154,8 +154,10 @@ def load(cls: type, path: str | Path) -> Any:
     also a preset file (its settings, `load_preset(path).config`). A missing file raises `OSError`, bad YAML or
     values `ValueError`."""
     path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(not_found(path, "config file"))
     try:
-        data = yaml.safe_load(path.read_text()) if path.is_file() else None
+        data = yaml.safe_load(path.read_text())
     except yaml.YAMLError:
         data = None  # load_fields says what is wrong with it
     if isinstance(data, dict) and {"base", "summary", "phases", "extract"} & set(data):

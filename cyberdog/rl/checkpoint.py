@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from cyberdog import config as C
+from cyberdog.config.io import not_found
 
 FORMAT = "cyberdog-rl-checkpoint"
 VERSION = 1
@@ -88,7 +89,7 @@ def load_torch_file(path: str | Path, what: str):
     it with weights_only=False, which would run code from the file) is not passed on."""
     path = Path(path)
     if not path.is_file():
-        raise CheckpointError(f"{what} {path} does not exist")
+        raise CheckpointError(not_found(path, what))
     try:
         return torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # not a torch file, truncated, or holding more than tensors and containers

@@ -138,8 +138,8 @@ class Trainer(RunState):
     def _check_empty(self) -> None:
         """A fresh start never appends to an earlier run's logs."""
         if (self.run_dir / "checkpoint.pt").exists():
-            raise RunFolderError(f"{self.run_dir} already holds a run (checkpoint.pt): continue it with --resume "
-                                 f"{self.run_dir}, or choose another --run-dir")
+            raise RunFolderError(f"{self.run_dir} already holds a run (checkpoint.pt): continue it (train.py --resume "
+                                 f"{self.run_dir}; Trainer(..., resume=True)), or train in another folder")
         metrics = self.run_dir / "metrics.csv"
         if metrics.exists() and metrics.stat().st_size > 0:
             raise RunFolderError(f"{self.run_dir} holds the logs of an earlier run stopped before its first "
