@@ -76,10 +76,7 @@ def experiment(args, collection: str, steps: int, num_envs: int = 1) -> C.Experi
             "train.stage1.stop_score=.inf", "train.stage1.save_score=.inf", "train.checkpoint_every=1000000000",
             f"train.num_threads={args.threads}", "agent.hidden_sizes=[128, 128, 128]",
             f"train.frames_per_batch={frames_per_batch(args, num_envs)}", "train.buffer_size=100000"]
-    if collection != "sync":  # (so that the script also runs against code without the option)
-        sets.append(f"train.collection={collection}")
-    if num_envs != 1:  # (the same)
-        sets.append(f"train.num_envs={num_envs}")
+    sets += [f"train.collection={collection}", f"train.num_envs={num_envs}"]
     return C.override(C.ExperimentConfig(env=env), sets)
 
 
@@ -93,7 +90,7 @@ def warmup_steps(args, num_envs: int = 1) -> int:
 WORKER_CPU: list[float] = []  # CPU seconds of the collector process per batch, in arrival order
 
 
-class RecordingCollector(getattr(trainer_module, "ProcessCollector", object)):
+class RecordingCollector(trainer_module.ProcessCollector):
     def __next__(self):
         batch = super().__next__()
         WORKER_CPU.append(self.last_collect_cpu)
@@ -104,8 +101,7 @@ def run_ours(args, collection: str, num_envs: int = 1) -> dict:
     """Stage 1 of the real trainer; timed from the end of the first round of updates to the end of the last."""
     w = warmup_steps(args, num_envs)
     total = w + args.steps  # the window opens when the first round of updates (after w env steps) ends
-    if hasattr(trainer_module, "ProcessCollector"):
-        trainer_module.ProcessCollector = RecordingCollector  # (the trainer looks it up at each stage)
+    trainer_module.ProcessCollector = RecordingCollector  # (the trainer looks it up at each stage)
     WORKER_CPU.clear()
     with tempfile.TemporaryDirectory() as tmp:
         trainer = Trainer(experiment(args, collection, total, num_envs), tmp, stages=(1,), progress=False)
@@ -115,7 +111,7 @@ def run_ours(args, collection: str, num_envs: int = 1) -> dict:
         def timed_updates(frames: int) -> int:
             n = updates(frames)
             if n:
-                marks.append((time.perf_counter(), time.process_time(), trainer.c["env_steps"],
+                marks.append((time.perf_counter(), time.process_time(), trainer.progress.env_steps,
                               trainer.agent.updates, len(WORKER_CPU)))
             return n
 
@@ -152,7 +148,6 @@ def random_transitions(n: int, obs_size: int, seed: int = 0) -> TensorDict:
 def bare_ours(args, trainer: Trainer) -> tuple[float, float]:
     """Updates/s of `Trainer._updates` (replay sampling, TD3 update, metrics) on a filled buffer: per second of
     wall-clock time and per second of CPU time."""
-    trainer.c["stage_env_steps"] = trainer.c["env_steps"] = 10 ** 9  # past learning_starts
     t0, c0 = time.perf_counter(), time.process_time()
     n = trainer._updates(args.bare_updates)
     return n / (time.perf_counter() - t0), n / (time.process_time() - c0)
@@ -248,8 +243,8 @@ def main() -> None:
                    help="the preset whose env both learn on (default configs/table5.yaml, the shipped Table 5 "
                         "policies')")
     p.add_argument("--threads", type=int, default=1, help="torch threads of the updates, ours and SB3 (default 1)")
-    p.add_argument("--collection", nargs="+", default=["sync", "async"], choices=C.COLLECTION_MODES
-                   if hasattr(C, "COLLECTION_MODES") else ["sync"], help="our collection modes to run")
+    p.add_argument("--collection", nargs="+", default=["sync", "async"], choices=C.COLLECTION_MODES,
+                   help="our collection modes to run")
     p.add_argument("--num-envs", nargs="+", type=int, default=[2], metavar="N",
                    help="numbers of env processes (train.num_envs) to run ours with, besides 1, in each collection "
                         "mode (default 2; e.g. --num-envs 2 4 8 for a scaling table); --frames-per-batch is rounded "
@@ -279,6 +274,8 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         bare_trainer = Trainer(cfg, tmp, stages=(1,), progress=False)
+        bare_trainer._begin_stage(cfg.train.stage1)  # the stage's update settings, resolved as a stage starts
+        bare_trainer.progress.stage_env_steps = bare_trainer.progress.env_steps = 10 ** 9  # past learning_starts
         bare_trainer.rb.extend(random_transitions(5000, observation_size(cfg.env)))
         bare_trainer._updates(10)  # warm-up
         for r in range(args.repeats):
