@@ -144,6 +144,7 @@ def test_the_exported_gait_keeps_the_limits_and_its_replay_walks(exported):
     replay = json.loads((out / "gait_replay.json").read_text())
     assert not replay["fell"] and replay["duration_s"] == pytest.approx(10.0)
     assert abs(replay["mean_speed_mps"] - 1.0) <= 0.05 and replay["in_band"]
+    assert replay["ground_speed_mps"] >= replay["mean_speed_mps"] - 1e-3  # |v_xy| >= v_x
 
 
 def test_the_replay_plays_the_table_it_is_given():

@@ -10,7 +10,8 @@ half). Without it the table is the command with no correction at all, which walk
 
 `replay_table` plays a table to the simulated drivers through the one simulation loop (`Walker` with a
 `TablePlayer` in the trot's place), repeating its period, and reports the walk (`WalkResult`) with the speed
-band, the fall and the heading it ended at. `load_limits` reads a limits file (configs/robots/cyberdog_limits.yaml).
+band, the fall, the heading it ended at and its speed over ground (an open-loop table turns: its forward speed
+then falls short of its speed over ground). `load_limits` reads a limits file (configs/robots/cyberdog_limits.yaml).
 """
 from __future__ import annotations
 
@@ -125,11 +126,13 @@ class TableReplay:
     result: WalkResult
     final_yaw: float  # rad, the body's heading when the walk ended
     rate: float  # Hz
+    ground_speed: float  # m/s, the mean horizontal speed |v_xy| over the walk's last half, whatever the heading
 
     def summary(self) -> dict:
         r = self.result
         return {"duration_s": r.duration, "rate_hz": self.rate, "speed_command_mps": r.speed_command,
                 "mean_speed_mps": r.mean_speed, "mean_speed_share_of_command": r.mean_speed / r.speed_command,
+                "ground_speed_mps": self.ground_speed,
                 "speed_band": SPEED_BAND, "in_band": bool(speed_within_band(r.mean_speed, r.speed_command)),
                 "fell": r.fell, "lateral_drift_m": r.lateral_drift, "final_yaw_rad": self.final_yaw,
                 "energy_J": r.energy, "electrical_energy_J": r.electrical_energy, "distance_m": r.distance,
@@ -141,7 +144,8 @@ class TableReplay:
         return (f"replay: {s['duration_s']:g} s at {s['speed_command_mps']:g} m/s: mean speed "
                 f"{s['mean_speed_mps']:.3f} m/s ({100 * (s['mean_speed_share_of_command'] - 1):+.1f} %, {band} "
                 f"±{100 * SPEED_BAND:g} %), {'fell' if s['fell'] else 'no fall'}, lateral drift "
-                f"{s['lateral_drift_m']:.2f} m, heading at the end {math.degrees(s['final_yaw_rad']):+.0f} deg")
+                f"{s['lateral_drift_m']:.2f} m, heading at the end {math.degrees(s['final_yaw_rad']):+.0f} deg, speed "
+                f"over ground {s['ground_speed_mps']:.3f} m/s")
 
 
 def replay_table(table: JointTable, cfg: WalkConfig, speed: float, duration: float = 10.0) -> TableReplay:
@@ -151,17 +155,18 @@ def replay_table(table: JointTable, cfg: WalkConfig, speed: float, duration: flo
     if not (duration > 0 and np.isfinite(duration)):
         raise ValueError(f"duration must be > 0 s and finite, got {duration!r}")
     walk_cfg = table_walk_config(cfg, table.rate, table)
-    fell = False
+    fell, ground = False, []
     with Walker(walk_cfg, TablePlayer(table), gait_metrics=True) as walker:
         for _ in range(int(round(duration / walker.dt))):
             walker.step()
+            ground.append(math.hypot(*walker.reading.base_linear_velocity_world[:2]))
             if walker.fallen():
                 fell = True
                 break
         result = walk_result(walker, float(speed), fell)
         final_yaw = float(walker.state.base_rpy[2])
     result.traces = {}
-    return TableReplay(result, final_yaw, table.rate)
+    return TableReplay(result, final_yaw, table.rate, float(np.mean(ground[len(ground) // 2:])))
 
 
 def load_limits(path: str | Path | None = None) -> JointLimits:
