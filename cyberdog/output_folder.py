@@ -2,7 +2,7 @@
 run again.
 
 A folder that already holds files is refused unless the user asks to write into it (`force=True`); then the
-files that earlier runs recorded in the folder's `outputs.json` are removed first, so that `config.yaml` and
+files that previous runs recorded in the folder's `outputs.json` are removed first, so that `config.yaml` and
 every result recorded there come from this run. Files no run recorded (a folder written before
 `outputs.json` existed, or someone else's) are kept and named in a note. `append=True` is for a run that
 adds to the results it reads from the same folder (`evaluate.py figures --from DIR`): nothing is refused or
@@ -10,7 +10,7 @@ removed.
 
 Every run is entered in `outputs.json` as it starts (status "running", its start time) and, however it ends,
 with exactly the files it wrote (new or rewritten) and its status: "finished", or "failed" / "interrupted"
-(`abandon`). A file rewritten by a later run leaves the earlier run's list. A run killed outright stays
+(`abandon`). A file rewritten by a later run leaves the previous run's list. A run killed outright stays
 "running"; the files in the folder written after its start are taken as its own. So the folder says what is
 whose, `finish()` returns exactly this run's files for the summary, and a folder that holds only what runs
 that did not finish left behind is emptied of it and reused without `--force`. Standard library only.
@@ -73,12 +73,12 @@ class OutputFolder:
         if existing and not append:
             unfinished = _unfinished_files(self.out, existing)
             if set(existing) <= unfinished:  # only what runs that did not finish left: theirs to replace
-                self._remove(unfinished, "an earlier run that did not finish")
+                self._remove(unfinished, "a previous run that did not finish")
             elif not force:
                 raise OutputFolderError(
                     f"--out {self.out} already holds {len(existing)} file(s) ({_examples(existing)}): this run's "
                     f"results would mix with them; choose a new --out, or pass --force to replace the results "
-                    f"that earlier evaluate.py runs wrote there")
+                    f"that previous evaluate.py runs wrote there")
             else:
                 self._remove_earlier(existing, unfinished)
         self.started = time.time()
@@ -87,7 +87,7 @@ class OutputFolder:
 
     def _remove_earlier(self, existing: dict, unfinished: set[str]) -> None:
         recorded = {f for run in read_manifest(self.out)["runs"] for f in run.get("files", [])} | unfinished
-        self._remove(recorded & set(existing), "earlier evaluate.py runs", "--force: ")
+        self._remove(recorded & set(existing), "previous evaluate.py runs", "--force: ")
         kept = set(existing) - recorded
         if kept:
             self.notes.append(f"--force: kept {len(kept)} file(s) in {self.out} that no evaluate.py run recorded "
@@ -123,7 +123,7 @@ class OutputFolder:
         self._record(status, self.written())
 
     def _record(self, status: str, files: list[Path]) -> list[Path]:
-        """This run's entry in outputs.json with `status` and `files` (a file now this run's leaves earlier
+        """This run's entry in outputs.json with `status` and `files` (a file now this run's leaves previous
         runs' lists); written atomically."""
         rel = [p.relative_to(self.out).as_posix() for p in files]
         manifest = read_manifest(self.out)
@@ -131,7 +131,7 @@ class OutputFolder:
         runs = []
         for run in manifest["runs"]:
             if run.get("started_ns") == self._started_ns():
-                continue  # this run's own earlier entry
+                continue  # this run's own entry, written at its start
             run["files"] = [f for f in run.get("files", []) if f not in mine and (self.out / f).is_file()]
             if run["files"] or run.get("status", "finished") == "running":
                 runs.append(run)

@@ -104,7 +104,7 @@ def test_skipped_cycles_give_the_next_cheapest_in_band_and_none_left_raises():
         assert ex.trajectory.provenance["cycles_skipped"] == sorted(order)
         order.append(ex.chosen.index)
     assert order == [4, 5, 3, 1, 0]
-    with pytest.raises(ExtractionError, match="all 5 gait cycles .* tried and rejected"):
+    with pytest.raises(ExtractionError, match="all 5 gait cycles .* replayed and rejected"):
         extract_trajectory(tr, DT, 1.0, gait=gait, settle_time=0.0, skip_cycles=order)
 
 

@@ -192,7 +192,7 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
     speed_command: m/s, the speed the policy was commanded. robot, gait: the rollout's robot geometry and
     trot (period, swing time and lift height of the policy's env; defaults: RobotConfig(), GaitConfig()).
     leg: the reference foot (the paper shows LF). provenance: merged into the trajectory's provenance.
-    skip_cycles: indices of cycles not to take (ones whose path was tried and rejected): the cheapest of the
+    skip_cycles: indices of cycles not to take (ones whose path was replayed and rejected): the cheapest of the
     others is taken. Raises ExtractionError when no cycle qualifies, listing the cycles' speeds.
     """
     robot = robot or RobotConfig()
@@ -214,7 +214,7 @@ def extract_trajectory(traces: dict, dt: float, speed_command: float, robot: Rob
     left = [c for c in usable if c.index not in set(skip_cycles)]
     if not left:
         raise ExtractionError(f"all {len(usable)} gait cycles of {leg} within ±{speed_tolerance:.0%} of "
-                              f"{speed_command:g} m/s were tried and rejected")
+                              f"{speed_command:g} m/s were replayed and rejected")
     chosen = min(left, key=lambda c: c.energy)
     contacts = debounce(np.asarray(traces["contacts"], dtype=bool)[:, li], max(1, int(round(min_run_s / dt))))
     cp = _cycle_path(foot_paths(traces["q"], robot)[:, li, :], contacts, chosen, n_points)

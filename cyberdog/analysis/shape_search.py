@@ -5,7 +5,7 @@ Objective (`ShapeObjective`): the mean over the speeds of the energy (Eq. 7, or 
 `objective="electrical"`), J, of a `duration`-s walk
 (`cyberdog.analysis.walk.walk` with WalkConfig(gait=GaitConfig(speed=v, lift_height=H)), the default trot
 controller and simulator), integrated from `measure_from` s on so that the 1 s start-up ramp is left out.
-A walk that falls costs FALL_PENALTY_J (plus more the earlier it fell); a walk whose mean speed over its
+A walk that falls costs FALL_PENALTY_J (plus more the sooner it fell); a walk whose mean speed over its
 last half misses the command by more than 5 % costs its energy plus SPEED_MISS_PENALTY_J per % of excess:
 an invalid gait is never cheaper than a valid one. The walks of one evaluation run in parallel processes.
 The optimiser is scipy's bounded Nelder–Mead in coordinates scaled to [0, 1], started from the cycloid.

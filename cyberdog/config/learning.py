@@ -55,7 +55,7 @@ class AgentConfig:
     spatial_smoothness_sigma: float = 0.05  # s̃'s spread, in typical magnitudes of each observation entry
     trot_imitation: float = 0.0  # actor loss += trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²): a torque
     #                             policy pulled toward the share of the trot controller's torque (in action
-    #                             units, EnvConfig.trot_reference) that the prior of weight w no longer gives
+    #                             units, EnvConfig.trot_reference) that the prior of weight w leaves out
     #                             (TD3+BC's regulariser, the trot as the behaviour); 0 = off
     actor_observation: Tuple[str, ...] = ()  # the observation groups the actor sees (names of CyberDog-v0's
     #                                          layout, e.g. ("target_speed", "gait_phase")); () = all. The

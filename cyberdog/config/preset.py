@@ -209,7 +209,7 @@ def _phase_label(item: Any, i: int, where: Path, phases: list[Phase]) -> str:
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise ValueError(f"{label}: name must be lower-case letters, digits and _ (a folder name), got {name!r}")
     if name in (p.name for p in phases):
-        raise ValueError(f"{label}: the name is used by an earlier phase")
+        raise ValueError(f"{label}: the name is used by a phase before it")
     if str(item.get("stage", "both")) not in STAGES:
         raise ValueError(f"{label}: stage must be 1, 2 or both, got {item.get('stage')!r}")
     return label
@@ -222,7 +222,7 @@ def _phase_start(item: dict, label: str, phases: list[Phase]) -> str | None:
     if start is not None:
         first = str(start).split("/")[0]
         if first not in (p.name for p in phases):
-            raise ValueError(f"{label}: from {start!r} must be a file of an earlier phase "
+            raise ValueError(f"{label}: from {start!r} must be a file of a phase before it "
                              f"({', '.join(p.name for p in phases) or 'none before this one'})")
     if str(item.get("stage", "both")) == "2" and start is None:
         raise ValueError(f"{label}: stage 2 alone starts from the agent of a phase before it; the first phase "

@@ -13,7 +13,7 @@ cycle, φ = 0 at lift-off; swing for φ < β = swing_time / period with τ = φ 
 With c(s) = s − sin(2πs)/(2π) the cycloid's timing law (c(0) = 0, c(1) = 1, zero slope at both ends):
 
 - swing x̂(τ) = u(w(τ)) − ½, where w(τ) = τ + x_skew·τ(1 − τ) is a monotone phase warp (x_skew > 0 moves
-  the foot forward earlier in the swing, < 0 lifts first and moves forward later) and u is the timing law
+  the foot forward sooner in the swing, < 0 lifts first and moves forward later) and u is the timing law
   `x_law` blends: 0 → the cycloid's c, +1 → constant speed (w itself, softer peak speed but velocity jumps
   at lift-off and touch-down), −1 → c(c(w)) (slower at the ends, faster mid-swing); beyond +1 the
   blend (1 − a)·c + a·w extrapolates past constant speed (faster at the ends than mid-swing), still monotone

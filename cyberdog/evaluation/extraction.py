@@ -23,7 +23,7 @@ from cyberdog.evaluation.options import EXTRACT_DEFAULTS, UsageError
 from cyberdog.evaluation.recorded_trot import trot_for
 from cyberdog.provenance import portable_path
 
-# in-band cycles of one rollout whose measured path is replayed before the next rollout is tried
+# in-band cycles of one rollout whose measured path is replayed before the next rollout runs
 MEASURED_CYCLES_TRIED = 6
 
 
@@ -227,11 +227,11 @@ def _extract_measured(actor, path: Path, speed: float, walks_at: tuple[float, ..
                 log(f"  rejected: cycle {ex.chosen.index} of {leg} in env seed {seed} does not replay ({status})")
                 rejected.append({"leg": leg, "rollout_seed": seed, "cycle_index": ex.chosen.index, "status": status})
                 skipped.append(ex.chosen.index)
-    tried = "; ".join(f"{c['leg']} cycle {c.get('cycle_index', '-')} of env seed {c['rollout_seed']}: {c['status']}"
+    replayed = "; ".join(f"{c['leg']} cycle {c.get('cycle_index', '-')} of env seed {c['rollout_seed']}: {c['status']}"
                       for c in rejected[:8])
     more = f"; {len(rejected) - 8} more" if len(rejected) > 8 else ""
     raise UsageError(f"extraction from {path} at {speed:g} m/s: no measured path of any foot replays in the band "
-                     f"({len(rejected)} tried: {tried}{more}); more with --replay-attempts, --speed-tolerance, or "
+                     f"({len(rejected)} replayed: {replayed}{more}); more with --replay-attempts, --speed-tolerance, or "
                      "--no-replay-check to keep the cheapest")
 
 
@@ -284,9 +284,9 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         if len(passed) == (args.candidates if args.replay_check else 1):
             break
     if not passed:
-        tried = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
+        replayed = "; ".join(f"{c['cycle']} of env seed {c['rollout_seed']}: {c['status']}" for c in rejected)
         raise UsageError(f"extraction from {path} at {speed:g} m/s: no candidate path passes the replay check "
-                         f"({tried}); more with --replay-attempts, or --no-replay-check to keep the first")
+                         f"({replayed}); more with --replay-attempts, or --no-replay-check to keep the first")
     # the cheapest on the validation robots; with one candidate (or unchecked) the first
     ex, check, _ = min(passed, key=lambda c: c[1].electrical_J_per_m if c[1].electrical_J_per_m is not None else 0.0)
     ex.path.provenance["replay_check"] = {

@@ -76,7 +76,7 @@ def recorded_trot(learned: LearnedSet) -> dict | None:
 
 def with_trot(cfg: C.WalkConfig, recorded: dict) -> C.WalkConfig:
     """`cfg` with its trot controller's fields set to `recorded`'s (fields the record lacks keep `cfg`'s; fields
-    `ControllerConfig` no longer has are ignored)."""
+    `ControllerConfig` lacks are ignored)."""
     names = {f.name for f in dataclasses.fields(C.ControllerConfig)}
     changes = {k: v for k, v in recorded.items() if k in names}
     return dataclasses.replace(cfg, controller=dataclasses.replace(cfg.controller, **changes))
@@ -125,7 +125,7 @@ def searched_trot(reference) -> dict | None:
     mine = [o for o in overrides if str(o).split("=", 1)[0].strip().startswith("controller.")]
     try:
         return dataclasses.asdict(C.override(C.WalkConfig(), mine).controller)
-    except ValueError:  # a field this version no longer has
+    except ValueError:  # a field this version lacks
         return None
 
 

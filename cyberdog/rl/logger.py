@@ -95,7 +95,7 @@ class EpisodeLogger:
         header = ",".join(COLUMNS).encode()
         older = lines[0].rstrip(b"\r").split(b",") if lines else []
         if lines and older != header.split(b",") and older == header.split(b",")[:len(older)]:
-            # a run logged by a version with fewer columns: they are appended, empty in its earlier rows
+            # a run logged by a version with fewer columns: they are appended, empty in its first rows
             missing = b"," * (len(COLUMNS) - len(older))
             lines = [header] + [line.rstrip(b"\r") + missing for line in lines[1:]]
         if lines and lines[0].rstrip(b"\r") != header:

@@ -102,7 +102,7 @@ class RunState:
         try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
             saved = C.to_dict(saved_config(state.get("config")))
         except (ValueError, TypeError) as e:
-            raise CheckpointError(f"{path}: its configuration no longer loads ({e})") from e
+            raise CheckpointError(f"{path}: its configuration does not load with this version ({e})") from e
         progress = Progress.from_dict(state["counters"])
         changes = budget_change(saved, C.to_dict(self.cfg), progress.stage, path,
                                 done={"max_env_steps": progress.stage_env_steps,

@@ -59,7 +59,7 @@ class UpdateSettings:
     action_smoothness: float  # weight of mean((μ(s') − μ(s))²), CAPS's temporal term
     action_spatial_smoothness: float  # weight of mean((μ(s̃) − μ(s))²), CAPS's spatial term
     spatial_smoothness_sigma: float  # s̃'s spread, in typical magnitudes of each observation entry
-    trot_imitation: float  # weight of the pull toward the share of the trot's torque the prior no longer gives
+    trot_imitation: float  # weight of the pull toward the share of the trot's torque the prior leaves out
     actor_anchor: float  # weight of the pull toward the actor the stage started from (`TD3.anchor`)
     critic_warmup_end: int  # the agent's update count up to which the critics train alone (the stage's warm-up)
     critic_warmup_targets: bool  # during that warm-up the targets follow the critics (every d-th update)
@@ -167,7 +167,7 @@ class TD3:
           from (TD3+BC's regulariser, Fujimoto & Gu 2021, with it as the behaviour);
         - `trot_imitation · mean((μ(s) − (1 − w)·a_trot(s))²)` over the transitions with a reference: the pull
           toward the share of the trot controller's torque a_trot (stored per transition, `EnvConfig.trot_reference`)
-          that the prior of weight w (`prior_weight`) no longer gives.
+          that the prior of weight w (`prior_weight`) leaves out.
         μ(s), and μ(s') and μ(s̃) for the smoothness terms, come from one forward pass of the actor."""
         obs = batch["observation"]
         parts = [obs]

@@ -21,7 +21,7 @@ resume), the batch in hand is stored and logged, a checkpoint is written and `ru
 starts a fresh episode: the interrupted episode's transitions stay in the buffer but it is not logged as an
 episode. A resume may raise the current stage's budget (`max_env_steps`, `max_episodes`; nothing else may
 differ), or lower it to a point the stage has not reached: the stage goes on to the new end, and a finished
-one (raised only) keeps its earlier stage-final files as `stage<N>_final*_<steps>steps.pt`. Only
+one (raised only) keeps its previous stage-final files as `stage<N>_final*_<steps>steps.pt`. Only
 `checkpoint.pt` carries the replay buffer and the Adam moments: the stage-final files (`stage<N>_final.pt`:
 networks, targets, counters; `stage<N>_final_actor.pt`: the actor) hold what `--init-from` and the evaluation
 need: about 1 MB with 128-unit layers.
@@ -136,13 +136,13 @@ class Trainer(RunState):
         self.last = {"actor_loss": math.nan, "critic_loss": math.nan, "q_mean": math.nan, "q_max": math.nan}
 
     def _check_empty(self) -> None:
-        """A fresh start never appends to an earlier run's logs."""
+        """A fresh start never appends to a previous run's logs."""
         if (self.run_dir / "checkpoint.pt").exists():
             raise RunFolderError(f"{self.run_dir} already holds a run (checkpoint.pt): continue it (train.py --resume "
                                  f"{self.run_dir}; Trainer(..., resume=True)), or train in another folder")
         metrics = self.run_dir / "metrics.csv"
         if metrics.exists() and metrics.stat().st_size > 0:
-            raise RunFolderError(f"{self.run_dir} holds the logs of an earlier run stopped before its first "
+            raise RunFolderError(f"{self.run_dir} holds the logs of a previous run stopped before its first "
                                  f"checkpoint (metrics.csv but no checkpoint.pt): delete the folder (or its "
                                  f"metrics.csv and tb/) to start it again, or choose another --run-dir")
 

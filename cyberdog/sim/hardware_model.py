@@ -108,7 +108,7 @@ def whole_steps(duration_s: float, dt: float, name: str) -> int:
 
 
 class CommandDelay:
-    """Actuation latency: `push(x)` returns what was pushed `steps` calls earlier (None at first: no command
+    """Actuation latency: `push(x)` returns what was pushed `steps` calls before (None at first: no command
     has arrived yet). With steps = 0 it returns its input.
 
     The walker pushes the controller's command to the motor drivers (joint targets, target speeds, gains,

@@ -123,7 +123,7 @@ def sweep_budget(sweep_dir, spec: SweepSpec, cfg: C.ExperimentConfig) -> int:
 
 
 def stage_budget(cfg: C.ExperimentConfig, stage: str) -> int:
-    """Env steps one seed runs at most (stages can stop earlier at their stop_score)."""
+    """Env steps one seed runs at most (a stage stops sooner at its stop_score)."""
     total = 0
     for s in ((1, 2) if stage == "both" else (int(stage),)):
         sc = getattr(cfg.train, f"stage{s}")
@@ -138,7 +138,7 @@ def write_json(path: Path, data) -> None:
     os.replace(tmp, path)
 
 
-# ---- what earlier attempts left -------------------------------------------------------------------------------
+# ---- what previous attempts left ------------------------------------------------------------------------------
 def load_previous_status(sweep_dir: Path) -> dict:
     try:
         data = json.loads((sweep_dir / STATUS_FILE).read_text())

@@ -177,7 +177,7 @@ class SweepDriver:
             st.attempts += 1
             st._tries += 1
             args = attempt_args(self.sweep_dir, self.spec, s)
-            if "--resume" not in args:  # a fresh start: earlier metrics were moved aside
+            if "--resume" not in args:  # a fresh start: the previous attempt's metrics were moved aside
                 st.reset_metrics()
             # a recipe's lineage is always started with --resume (it finds its phase); it resumes only with a checkpoint
             resuming = "--resume" in args and any(seed_dir(self.sweep_dir, s).rglob("checkpoint.pt"))
