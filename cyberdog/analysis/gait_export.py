@@ -39,7 +39,7 @@ SETTLE_DURATION = 10.0  # s, the closed-loop walk whose last half's mean command
 
 def table_walk_config(cfg: WalkConfig, rate: float, table: JointTable | None = None) -> WalkConfig:
     """`cfg` with the controller at `rate` (Hz: one table frame per period) and the physics step the largest whole
-    fraction of that period no longer than `cfg`'s; with `table`, the PD gains set to its largest per joint type
+    fraction of that period at most `cfg`'s; with `table`, the PD gains set to its largest per joint type
     (the walker chooses the drivers' physics step for the gains: `driver_rate_config`)."""
     controller_dt = 1.0 / rate
     physics_dt = controller_dt / math.ceil(controller_dt / cfg.sim.physics_dt - 1e-9)

@@ -24,7 +24,7 @@ Evaluate foot trajectories on the simulated CyberDog (paper Sections 3 and 4).
 Without a sub-command, `all` runs. `evaluate.py SUB --help` lists the options of one sub-command.
 
 Outputs go to --out (default runs/evaluate-<time>/), never over inputs; a folder that already holds results is
-refused unless --force (which first removes the files earlier runs recorded in its outputs.json); every file a
+refused unless --force (which first removes the files previous runs recorded in its outputs.json); every file a
 run writes is listed at the end and recorded in outputs.json; the last line names the folder.
 """
 

@@ -81,7 +81,7 @@ def add_output_options(p) -> None:
                         "--config controller section chooses one")
     g.add_argument("--out", type=Path, default=None, help="output folder (default runs/evaluate-<time>)")
     g.add_argument("--force", action="store_true",
-                   help="write into an --out folder that already holds results: the files earlier evaluate.py runs "
+                   help="write into an --out folder that already holds results: the files previous evaluate.py runs "
                         "recorded there (outputs.json) are removed first; without --force such a folder is refused")
 
 
@@ -142,7 +142,7 @@ def add_extraction_options(p) -> None:
                         "next candidate (the other --cycle choice, then the rollout of the next env seed); a measured "
                         "path must walk Table 5's 10 s at every speed (else the next cheapest cycle, then rollout)")
     g.add_argument("--replay-attempts", type=positive_int, default=EXTRACT_DEFAULTS["replay_attempts"], metavar="N",
-                   help="extraction rollouts (env seeds --rollout-seed, +1, ...) tried per speed before giving up "
+                   help="extraction rollouts (env seeds --rollout-seed, +1, ...) run per speed before giving up "
                         "(default 3)")
     g.add_argument("--candidates", type=positive_int, default=EXTRACT_DEFAULTS["candidates"], metavar="N",
                    help="commanded path: keep the first N candidates that replay (one per rollout) and extract "
@@ -151,7 +151,7 @@ def add_extraction_options(p) -> None:
                         "replays; the battery preset's shipped paths: 2, of up to 16 rollouts)")
     g.add_argument("--speed-tolerance", type=share, default=SPEED_BAND,
                    help=f"cycles within this share of the command qualify (default {SPEED_BAND:g})")
-    g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the foot tried first, then others")
+    g.add_argument("--leg", default="LF", choices=LEG_NAMES, help="measured path: the foot taken first, then the others")
 
 
 def add_prototype_options(p) -> None:
