@@ -19,7 +19,7 @@ from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig,
 from cyberdog.core.actuator import ActuatorModel
 from cyberdog.core.drivers import JointCommand, driver_torque
 from cyberdog.core.kinematics import standing_joint_angles
-from cyberdog.sim.state import RobotState
+from cyberdog.sim.state import RobotState, StateReading
 
 # The robot's files ship inside the package (cyberdog/urdf/, package data in setup.cfg) so that an installed
 # wheel can walk; the repository's top-level urdf/ links to them. The package folder rather than
@@ -64,9 +64,9 @@ def rest_pose(robot: RobotConfig, joint_angles=None, base_position=None, base_ya
 class EngineRobot:
     """The CyberDog on a flat plane in one physics engine, driven by joint torques set at every physics step.
 
-    A subclass builds its world and calls `super().__init__` first; it implements `_advance` (one physics step
-    under 12 joint torques), `joint_lists`, `read`, `reset`, the contact reads, `total_mass`, `_set_step`,
-    `_set_friction`, `_scale_masses`, `render` and `close`."""
+    A subclass calls `super().__init__` first, builds its world and implements the methods below that raise
+    NotImplementedError: reset, one physics step (`_advance`), the reads, the contacts, the settings' engine
+    calls, `render` and `_release`."""
 
     def __init__(self, robot: RobotConfig, actuator: ActuatorConfig, sim: SimConfig):
         for name, value, cls in (("robot", robot, RobotConfig), ("actuator", actuator, ActuatorConfig),
@@ -91,13 +91,79 @@ class EngineRobot:
         self._closed = False
 
     # ---- the engine's part ----------------------------------------------------------------------------------
+    def reset(self, joint_angles: np.ndarray | None = None, base_position=None, base_yaw: float = 0.0) -> None:
+        """Put the robot at rest: joint angles (12,) (default: standing pose at robot.body_height), body origin
+        at base_position (default (0, 0, body_height + 2 mm)) with yaw base_yaw (rad); all velocities zero
+        (`rest_pose`); `time` restarts at 0."""
+        raise NotImplementedError
+
     def _advance(self, joint_torque: list) -> None:
         """One physics step with these 12 joint torques (N·m) acting over it."""
         raise NotImplementedError
 
-    def joint_lists(self) -> tuple[list, list]:
-        """(q, dq) as 12 floats each, read now (do not modify)."""
+    def _set_step(self, physics_dt: float) -> None:
         raise NotImplementedError
+
+    def _set_friction(self, coefficient: float) -> None:
+        raise NotImplementedError
+
+    def _scale_masses(self, scale: float) -> None:
+        """Every link's mass and inertia × `scale` of the URDF's."""
+        raise NotImplementedError
+
+    def joint_lists(self) -> tuple[list, list]:
+        """(q, dq) as 12 floats each, read now and cached until the next step or reset (do not modify)."""
+        raise NotImplementedError
+
+    def read(self) -> StateReading:
+        """Joint and body state in plain floats (the controller's per-period read). Body values are of the trunk's
+        URDF link frame (the body frame of `cyberdog.core.kinematics`): its origin's position and velocity in
+        the world, its quaternion (x y z w), roll/pitch/yaw (R = Rz Ry Rx), its angular velocity in the world."""
+        raise NotImplementedError
+
+    def base_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Position (3,) and quaternion (x y z w) of the trunk's link frame (the body frame) in the world."""
+        raise NotImplementedError
+
+    def foot_contacts(self) -> np.ndarray:
+        """(4,) bool: each foot (LF, RF, LH, RH) touched the ground over the last physics step."""
+        raise NotImplementedError
+
+    def foot_contact_forces(self) -> np.ndarray:
+        """(4,) normal force of the ground on each foot over the last physics step, N (0 in the air)."""
+        raise NotImplementedError
+
+    def ground_contact_links(self) -> set[str]:
+        """Names of the robot's links touching the ground (in a healthy gait: feet only)."""
+        raise NotImplementedError
+
+    def foot_positions_world(self) -> np.ndarray:
+        """(4, 3) foot-sphere centres in the world, m."""
+        raise NotImplementedError
+
+    def total_mass(self) -> float:
+        """Sum of the link masses as the engine holds them, kg."""
+        raise NotImplementedError
+
+    def render(self, width: int = 320, height: int = 240, distance: float = 1.2, yaw_deg: float = 45.0,
+               pitch_deg: float = -20.0) -> np.ndarray:
+        """(height, width, 3) uint8 RGB image from a camera `distance` m from the body, looking at it from
+        `yaw_deg` about the vertical and `pitch_deg` (< 0: from above)."""
+        raise NotImplementedError
+
+    def _release(self) -> None:
+        """The engine's world let go (`close`, once)."""
+        raise NotImplementedError
+
+    @property
+    def foot_link_names(self) -> list[str]:
+        """Names of the four foot links, LF, RF, LH, RH."""
+        return list(FOOT_LINKS)
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._release()
 
     # ---- stepping -------------------------------------------------------------------------------------------
     def physics_step(self, torque_command: list) -> list:

@@ -25,25 +25,16 @@ frame); the free joint's angular velocity (body frame) is turned into the world 
 """
 from __future__ import annotations
 
-import ctypes.util
 import math
-import os
-import sys
 import warnings
 
+import mujoco
 import numpy as np
 
 from cyberdog.config import ActuatorConfig, RobotConfig, SimConfig
 from cyberdog.sim.engine import FOOT_LINKS, JOINT_ORDER, EngineRobot, rest_pose
+from cyberdog.sim.mujoco_view import MujocoView
 from cyberdog.sim.state import StateReading
-
-# MuJoCo picks its OpenGL backend when imported: on a Linux machine without a display, EGL where its library is
-# found (the offscreen renderer works headless), unless MUJOCO_GL says otherwise; a backend that cannot load
-# would fail the import itself, so none is forced without its library.
-if (sys.platform.startswith("linux") and not os.environ.get("DISPLAY") and "MUJOCO_GL" not in os.environ
-        and ctypes.util.find_library("EGL")):
-    os.environ["MUJOCO_GL"] = "egl"
-import mujoco  # noqa: E402
 
 # The ground contact (every robot geom against the plane), from physical values and a calibration with no learned
 # gait (docs/design.md, "The second engine"; python -m cyberdog.analysis.engine_check):
@@ -132,18 +123,12 @@ class MujocoRobot(EngineRobot):
         self._geom_body = m.geom_bodyid.tolist()
         self._nominal_dynamics = (m.body_mass.copy(), m.body_inertia.copy())
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
-        self._renderer = None
+        self._view: MujocoView | None = None
         self.reset()
-
-    @property
-    def foot_link_names(self) -> list[str]:
-        """Names of the four foot links, LF, RF, LH, RH."""
-        return list(FOOT_LINKS)
 
     # ---- reset and step -------------------------------------------------------------------------------------
     def reset(self, joint_angles: np.ndarray | None = None, base_position=None, base_yaw: float = 0.0) -> None:
-        """Put the robot at rest: joint angles (12,) (default: standing pose at robot.body_height), body origin
-        at base_position (default (0, 0, body_height + 2 mm)) with yaw base_yaw (rad); all velocities zero."""
+        """`EngineRobot.reset`: MuJoCo's data cleared (warm start included), the pose set, the model forwarded."""
         q, pos, (x, y, z, w) = rest_pose(self.robot_config, joint_angles, base_position, base_yaw)
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
@@ -164,19 +149,17 @@ class MujocoRobot(EngineRobot):
 
     # ---- state reads ----------------------------------------------------------------------------------------
     def joint_lists(self) -> tuple[list, list]:
-        """(q, dq) as 12 floats each, cached until the next step or reset (do not modify)."""
         if self._joint_cache is None:
             self._joint_cache = (self.data.qpos[7:19].tolist(), self.data.qvel[6:18].tolist())
         return self._joint_cache
 
     def base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Position (3,) and quaternion (x y z w) of the trunk's link frame (the body frame) in the world."""
         x, y, z, w, qx, qy, qz = self.data.qpos[:7].tolist()
         return np.array([x, y, z]), np.array([qx, qy, qz, w])
 
     def read(self) -> StateReading:
-        """Joint and body state in plain floats (the controller's per-period read); body values are of the
-        trunk's link frame: its origin's world velocity, and the angular velocity in the world frame."""
+        """`EngineRobot.read`: the free joint's pose and linear velocity are the link frame's; its angular velocity,
+        in the body frame, turned into the world frame."""
         q, dq = self.joint_lists()
         px, py, pz, w, x, y, z = self.data.qpos[:7].tolist()
         vx, vy, vz, *omega_body = self.data.qvel[:6].tolist()
@@ -194,12 +177,11 @@ class MujocoRobot(EngineRobot):
         return out
 
     def foot_contacts(self) -> np.ndarray:
-        """(4,) bool: each foot (LF, RF, LH, RH) touches the ground."""
         touching = {b for _, b in self._ground_contacts()}
         return np.array([b in touching for b in self.foot_body_ids])
 
     def foot_contact_forces(self) -> np.ndarray:
-        """(4,) normal force of the ground on each foot over the last physics step, N (0 in the air)."""
+        """`EngineRobot.foot_contact_forces`: the normal part of mj_contactForce, summed per foot."""
         force = dict.fromkeys(self.foot_body_ids, 0.0)
         wrench = np.zeros(6)
         for i, b in self._ground_contacts():
@@ -209,16 +191,14 @@ class MujocoRobot(EngineRobot):
         return np.array([force[b] for b in self.foot_body_ids])
 
     def ground_contact_links(self) -> set[str]:
-        """Names of the robot's links touching the ground (in a healthy gait: feet only)."""
         return {self.link_names[b] for _, b in self._ground_contacts()}
 
     def foot_positions_world(self) -> np.ndarray:
-        """(4, 3) foot-sphere centres in the world, m (the kinematics of the state now)."""
+        """`EngineRobot.foot_positions_world`, from the kinematics of the state now."""
         mujoco.mj_kinematics(self.model, self.data)
         return self.data.xpos[self.foot_body_ids].copy()
 
     def total_mass(self) -> float:
-        """Sum of the link masses as MuJoCo holds them, kg."""
         return float(self.model.body_mass[1:].sum())
 
     # ---- settings -------------------------------------------------------------------------------------------
@@ -241,27 +221,17 @@ class MujocoRobot(EngineRobot):
     # ---- rendering and teardown -----------------------------------------------------------------------------
     def render(self, width: int = 320, height: int = 240, distance: float = 1.2, yaw_deg: float = 45.0,
                pitch_deg: float = -20.0) -> np.ndarray:
-        """(height, width, 3) uint8 RGB image from a camera that follows the body (MuJoCo's offscreen renderer;
-        yaw and pitch as PyBullet's camera)."""
-        if self._renderer is None or (self._renderer.width, self._renderer.height) != (width, height):
-            if self._renderer is not None:
-                self._renderer.close()
-            try:
-                self._renderer = mujoco.Renderer(self.model, height, width)
-            except Exception as err:  # no OpenGL context: name the setting that chooses one
-                raise RuntimeError(f"MuJoCo's offscreen renderer cannot start here (MUJOCO_GL="
-                                   f"{os.environ.get('MUJOCO_GL', '')!r}): {err}. Set MUJOCO_GL=egl or osmesa "
-                                   f"before importing mujoco") from err
+        """`EngineRobot.render` with MuJoCo's offscreen renderer (yaw and pitch as PyBullet's camera's)."""
+        if self._view is None or self._view.size != (width, height):
+            self._release()
+            self._view = MujocoView(self.model, width, height)
         camera = mujoco.MjvCamera()
         camera.lookat[:] = self.data.qpos[:3]
         camera.distance, camera.azimuth, camera.elevation = distance, yaw_deg + 90.0, pitch_deg
         mujoco.mj_kinematics(self.model, self.data)
-        self._renderer.update_scene(self.data, camera)
-        return self._renderer.render().copy()
+        return self._view.draw(self.data, camera)
 
-    def close(self) -> None:
-        if not self._closed:
-            self._closed = True
-            if self._renderer is not None:
-                self._renderer.close()
-                self._renderer = None
+    def _release(self) -> None:
+        if self._view is not None:
+            self._view.close()
+            self._view = None

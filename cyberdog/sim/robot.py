@@ -131,8 +131,7 @@ class Robot(EngineRobot):
     # ------------------------------------------------------------------------------------------------------
 
     def reset(self, joint_angles: np.ndarray | None = None, base_position=None, base_yaw: float = 0.0) -> None:
-        """Put the robot at rest: joint angles (12,) (default: standing pose at robot.body_height), body origin
-        at base_position (default (0, 0, body_height + 2 mm)) with yaw base_yaw (rad); all velocities zero."""
+        """`EngineRobot.reset`: the link-frame pose moved to the inertial frame PyBullet's base pose is."""
         q, pos, quat = rest_pose(self.robot_config, joint_angles, base_position, base_yaw)
         c = self.client
         com_pos, com_quat = c.multiplyTransforms(pos, quat, *self._link_to_inertial)
@@ -165,13 +164,11 @@ class Robot(EngineRobot):
         return self._joint_cache
 
     def base_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Position (3,) and quaternion (x y z w) of the trunk's link frame (the body frame) in the world."""
         pos, quat = self._multiply_transforms(*self._get_base_pose(self.body_id), *self._inertial_to_link)
         return np.array(pos), np.array(quat)
 
     def read(self) -> StateReading:
-        """Joint and body state in plain floats (the controller's per-period read); body values are of the
-        trunk's link frame (see the module docstring)."""
+        """`EngineRobot.read`: PyBullet's base pose and velocity moved from the inertial to the link frame."""
         q, dq = self.joint_lists()
         com_pos, com_quat = self._get_base_pose(self.body_id)
         pos, quat = self._multiply_transforms(com_pos, com_quat, *self._inertial_to_link)
@@ -185,19 +182,13 @@ class Robot(EngineRobot):
     def _ground_contacts(self) -> list:
         return self.client.getContactPoints(bodyA=self.body_id, bodyB=self.plane_id)
 
-    @property
-    def foot_link_names(self) -> list[str]:
-        """Names of the four foot links, LF, RF, LH, RH."""
-        return [self.link_names[i] for i in self.foot_link_ids]
-
     def foot_contacts(self) -> np.ndarray:
-        """(4,) bool: each foot (LF, RF, LH, RH) touches the ground."""
         touching = {pt[3] for pt in self._ground_contacts()}
         return np.array([link in touching for link in self.foot_link_ids])
 
     def foot_contact_forces(self) -> np.ndarray:
-        """(4,) normal force of the ground on each foot over the last physics step, N (0 in the air): PyBullet's
-        contact impulse divided by fixedTimeStep, the physics step (measured: a standing robot's feet carry m·g)."""
+        """`EngineRobot.foot_contact_forces`: PyBullet's contact impulse divided by fixedTimeStep, the physics
+        step (measured: a standing robot's feet carry m·g)."""
         force = dict.fromkeys(self.foot_link_ids, 0.0)
         for pt in self._ground_contacts():
             if pt[3] in force:
@@ -205,11 +196,9 @@ class Robot(EngineRobot):
         return np.array([force[link] for link in self.foot_link_ids])
 
     def ground_contact_links(self) -> set[str]:
-        """Names of the robot's links touching the ground (in a healthy gait: feet only)."""
         return {self.link_names[pt[3]] for pt in self._ground_contacts()}
 
     def foot_positions_world(self) -> np.ndarray:
-        """(4, 3) foot-sphere centres in the world, m."""
         states = self.client.getLinkStates(self.body_id, self.foot_link_ids, computeForwardKinematics=1)
         return np.array([s[4] for s in states])
 
@@ -232,7 +221,7 @@ class Robot(EngineRobot):
 
     def render(self, width: int = 320, height: int = 240, distance: float = 1.2, yaw_deg: float = 45.0,
                pitch_deg: float = -20.0) -> np.ndarray:
-        """(height, width, 3) uint8 RGB image from a camera that follows the body (TinyRenderer, no GPU)."""
+        """`EngineRobot.render` with PyBullet's TinyRenderer (no GPU)."""
         c = self.client
         target = self.base_pose()[0].tolist()
         view = c.computeViewMatrixFromYawPitchRoll(target, distance, yaw_deg, pitch_deg, 0.0, 2)
@@ -240,7 +229,5 @@ class Robot(EngineRobot):
         _, _, rgba, _, _ = c.getCameraImage(width, height, view, proj, renderer=pybullet.ER_TINY_RENDERER)
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
 
-    def close(self) -> None:
-        if not self._closed:
-            self._closed = True
-            self.client.disconnect()
+    def _release(self) -> None:
+        self.client.disconnect()
