@@ -104,7 +104,7 @@ def test_one_place_steps_the_robot_under_the_controller():
                         patches.append(f"{rel}: {ast.unparse(target)}")
     assert steppers == {"loop/walker.py"}
     assert torquers == {"loop/walker.py"}
-    assert laws == {"sim/robot.py", "control/trot.py"}
+    assert laws == {"sim/engine.py", "control/trot.py"}
     assert patches == []
 
 

@@ -1,8 +1,8 @@
 """The two physics engines side by side, with no learned gait: a standing robot and the composite-cycloid trot.
 
-- `stand`: the robot reset to its standing pose and held there by the trot controller's stance (its PD on the
-  standing joint angles, at rest, with the stance gravity feedforward of four feet down), for `duration` s;
-  reports the mean joint torque, foot load, foot penetration (the foot sphere's centre below its radius) and body
+- `stand`: the robot reset to its standing pose and held there by the trot controller's stance (`TrotStance`: its
+  PD on the standing joint angles, at rest, with the stance gravity feedforward of four feet down), stepped by the
+  walker for `duration` s; reports the mean joint torque, foot load, foot penetration (the foot sphere's centre below its radius) and body
   height over the second half.
 - `cycloid_walks`: the trot controller's composite-cycloid walks (`cyberdog.analysis.walk.walk`) at each speed:
   mean speed, Eq. 7 and electrical J/m.
@@ -24,7 +24,7 @@ from cyberdog.control.trot import TrotController
 from cyberdog.core.drivers import JointCommand
 from cyberdog.core.kinematics import standing_joint_angles
 from cyberdog.analysis.walk import walk
-from cyberdog.sim import make_robot
+from cyberdog.loop.walker import Walker
 
 ENGINE_NAMES = ("pybullet", "mujoco")
 
@@ -44,31 +44,41 @@ class Stand:
     body_height: float  # m, the body origin's height
 
 
-def stand_command(controller: TrotController, q: list) -> JointCommand:
-    """The trot controller's stance held still: its PD on the standing joint angles at zero speed, plus the
-    stance feedforward with all four feet down, at the joint angles q (12 floats)."""
-    target = standing_joint_angles(controller.robot).reshape(12).tolist()
-    feedforward = [0.0] * 12
-    controller._add_stance_feedforward(feedforward, q, [False] * 4)
-    pid = controller.pid
-    return JointCommand(target, [0.0] * 12, feedforward, pid.kp_list, pid.kd_list)
+class TrotStance:
+    """The trot controller's stance held still, as a command source for `Walker`: its PD on the standing joint
+    angles at zero speed, plus its stance feedforward with all four feet down at the joint angles read."""
+
+    speed_correction = speed_correction_limit = 0.0  # m/s: no speed loop
+    dropped_shifts = 0
+    last_foot_targets = last_foot_offsets = None
+
+    def __init__(self, cfg: WalkConfig):
+        self.trot = TrotController(cfg)
+        self.target = standing_joint_angles(cfg.robot).reshape(12).tolist()
+
+    def reset(self, kp_factor: float = 1.0, kd_factor: float = 1.0) -> None:
+        self.trot.reset(kp_factor, kd_factor)
+
+    def command(self, t: float, q, body=None, periods: int = 1, dq=None) -> JointCommand:
+        feedforward = [0.0] * 12
+        self.trot._add_stance_feedforward(feedforward, list(q), [False] * 4)
+        pid = self.trot.pid
+        return JointCommand(self.target, [0.0] * 12, feedforward, pid.kp_list, pid.kd_list)
 
 
 def stand(cfg: WalkConfig, duration: float = 2.0) -> Stand:
-    """The robot of `cfg` (its engine) standing for `duration` s from a reset (module docstring)."""
-    controller = TrotController(cfg)
-    controller.reset()
+    """The robot of `cfg` (its engine) standing for `duration` s from a reset under `TrotStance` (module
+    docstring)."""
     taus, forces, depths, heights = [], [], [], []
-    with make_robot(cfg.robot, cfg.actuator, cfg.sim) as robot:
-        robot.reset()
-        periods = int(round(duration / robot.dt))
+    with Walker(cfg, TrotStance(cfg), body_trace=False) as walker:
+        periods = int(round(duration / walker.dt))
         for k in range(periods):
-            tau, _ = robot.drive(stand_command(controller, robot.joint_lists()[0]))
+            tau = walker.step()
             if k >= periods // 2:
-                taus += tau
-                forces.append(robot.foot_contact_forces())
-                depths.append(cfg.robot.foot_radius - robot.foot_positions_world()[:, 2])
-                heights.append(robot.read().base_position[2])
+                taus.append(tau)
+                forces.append(walker.robot.foot_contact_forces())
+                depths.append(cfg.robot.foot_radius - walker.robot.foot_positions_world()[:, 2])
+                heights.append(walker.reading.base_position[2])
     return Stand(np.mean(taus, axis=0), np.mean(forces, axis=0), np.mean(depths, axis=0), float(np.mean(heights)))
 
 
