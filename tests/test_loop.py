@@ -103,7 +103,9 @@ def test_one_place_steps_the_robot_under_the_controller():
                             and "robot" in ast.unparse(target.value).lower()):
                         patches.append(f"{rel}: {ast.unparse(target)}")
     assert steppers == {"loop/walker.py"}
-    assert torquers == {"loop/walker.py"}
+    # and the joint table's export, which asks the controller for one gait period's commands at its targets
+    # without stepping any robot
+    assert torquers == {"loop/walker.py", "control/gait_table.py"}
     assert laws == {"sim/engine.py", "control/trot.py"}
     assert patches == []
 
