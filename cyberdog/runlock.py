@@ -136,8 +136,8 @@ class RunLock:
                     f"and try again")
             if info.get("pid") != os.getpid():  # our flock: its holder died without releasing (killed, crashed)
                 self.taken_over = info
-                warnings.warn(f"{self.run_dir}: taking over the lock left by {describe(info)}, which is no longer "
-                              f"running", RuntimeWarning, stacklevel=2)
+                warnings.warn(f"{self.run_dir}: taking over the lock left by {describe(info)}, whose process has "
+                              f"ended", RuntimeWarning, stacklevel=2)
         me = {"pid": os.getpid(), "host": socket.gethostname(), "started": time.time(),
               "started_local": time.strftime("%Y-%m-%d %H:%M:%S"), "purpose": self.purpose,
               "command": [sys.executable] + sys.argv}

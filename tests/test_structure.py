@@ -172,3 +172,25 @@ def test_a_function_over_the_limit_is_named_with_its_docstring_counted(tmp_path)
     path = tmp_path / "m.py"
     path.write_text(f'def fits():\n    """Doc."""\n{body}\n\n\ndef over():\n    """Doc.\n\n    More."""\n{body}\n')
     assert long_functions(path) == [f"{path}::over (line 62): 61 lines"]
+
+
+# what the code and the presets say is what is; how it came to be is the research log's
+HISTORY_WORDS = ("tried", "earlier", "legacy", "retired", "no longer")
+
+
+def history_words(text: str) -> list[str]:
+    """The history words of `text`, as whole words, case-insensitively."""
+    import re
+    return [m.group(0) for w in HISTORY_WORDS for m in re.finditer(rf"\b{w}\b", text, flags=re.I)]
+
+
+def test_the_package_and_the_presets_say_what_is_not_how_it_came_to_be():
+    found = [f"{p.relative_to(ROOT)}:{i}: {line.strip()[:100]}"
+             for p in sorted([*PACKAGE.rglob("*.py"), *(ROOT / "configs").rglob("*.yaml")])
+             for i, line in enumerate(p.read_text().splitlines(), 1) if history_words(line)]
+    assert not found, "\n".join(found)
+
+
+def test_history_words_are_found_as_whole_words_only():
+    assert history_words("an Earlier run, no longer used; it was tried") == ["tried", "Earlier", "no longer"]
+    assert history_words("untried, legacyless") == []
