@@ -7,7 +7,8 @@ wall clock counts the time other processes held the CPU) and in wall-clock time:
   env    CyberDog-v0 as configs/table5.yaml builds it (foot mode, 62 observations, stage-2 reward), at
          the config's controller rate; zero action, episodes restarted where they end. Its joint controller
          runs every `walk.sim.controller_dt`; the motor drivers close their PD at every physics step
-         (`walk.sim.physics_dt`), one stepSimulation each.
+         (`walk.sim.physics_dt`), one engine step each, in the engine `--engine` names (default the
+         preset's: PyBullet).
   floor  raw PyBullet at 1 kHz, as a controller at the physics rate would drive it: the project's URDF in the
          same world, and at every 1 ms physics step the state reads a controller needs (getJointStates,
          getBasePositionAndOrientation, getBaseVelocity), one torque write (setJointMotorControlArray) and
@@ -17,10 +18,10 @@ wall clock counts the time other processes held the CPU) and in wall-clock time:
          agent-step equivalent (Ts = 25 ms).
 
 The ratio env / floor above 1 means that the env, with its controller, hardware model, reward and
-observation, runs faster than bare PyBullet can be stepped from Python at 1 kHz. Several repetitions; the
-medians are printed.
+observation, runs faster than bare PyBullet can be stepped from Python at 1 kHz (the floor is PyBullet's
+whatever the env's engine). Several repetitions; the medians are printed.
 
-    python bench/env_throughput.py [--steps 400] [--repeats 5] [--config configs/table5.yaml]
+    python bench/env_throughput.py [--steps 400] [--repeats 5] [--config configs/table5.yaml] [--engine mujoco]
                                    [--set env.walk.sim.controller_dt=0.001 env.walk.sim.physics_dt=0.001]
 """
 from __future__ import annotations
@@ -35,6 +36,7 @@ import pybullet
 
 from cyberdog import config as C
 from cyberdog.config.preset import load_preset
+from cyberdog.config.walk_settings import ENGINES
 from cyberdog.core.kinematics import standing_joint_angles
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.sim.robot import Robot
@@ -90,10 +92,13 @@ def main() -> None:
                    "(default configs/table5.yaml, the shipped policies')")
     p.add_argument("--set", nargs="+", default=[], metavar="SECTION.FIELD=VALUE",
                    help="overrides of the preset, e.g. env.walk.sim.controller_dt=0.001 (default: none)")
+    p.add_argument("--engine", choices=ENGINES, default=None,
+                   help="the env's physics engine (env.walk.sim.engine; default the preset's)")
     args = p.parse_args()
-    cfg = env_config(args.config, args.set)
+    cfg = env_config(args.config, args.set + ([f"env.walk.sim.engine={args.engine}"] if args.engine else []))
     sim = cfg.walk.sim
-    print(f"env: {args.config}, action_mode={cfg.action_mode}, controller {1 / sim.controller_dt:.0f} Hz, "
+    print(f"env: {args.config} in {sim.engine}, action_mode={cfg.action_mode}, "
+          f"controller {1 / sim.controller_dt:.0f} Hz, "
           f"physics {1 / sim.physics_dt:.0f} Hz ({sim.physics_substeps} substeps); floor: PyBullet at 1 kHz")
     env = CyberDogEnv(cfg, reward="stage2")
     walk = C.EnvConfig().walk

@@ -54,6 +54,17 @@ def test_a_robot_is_the_ideal_one_or_a_hardware_like_draw():
             parse_robot(bad)
 
 
+def test_a_check_walks_in_the_engine_asked_for_or_the_actors_own():
+    """`check --runs --set sim.engine=mujoco`: every job carries the engine, and the env it builds names it; without
+    it the actor's env keeps its own."""
+    env = C.EnvConfig()
+    assert robot_env(env, "hardware:0", "mujoco")[0].walk.sim.engine == "mujoco"
+    assert robot_env(env, "ideal")[0].walk.sim == env.walk.sim
+    jobs = check_jobs({"s0": {1: __file__}}, [1.0, 1.2], 10.0, engine="mujoco")
+    assert [job[-1] for job in jobs] == ["mujoco", "mujoco"]
+    assert check_jobs({"s0": {1: __file__}}, [1.0], 10.0)[0][-1] is None
+
+
 def test_the_trot_reference_row_walks_the_controller_at_the_speed():
     """The reference row is the trot controller's own walk: it keeps the speed and does not fall."""
     from cyberdog.analysis.policy_check import COLUMNS, check_trot

@@ -12,8 +12,9 @@ came from) is the reference row, label "trot" and stage 0 (`check_trot`).
 
 Each walk is on a named robot (`ROBOTS`, `robot_env`): "ideal" (no hardware effect, no randomisation draw, whatever
 the actor trained on) or "hardware:N", the hardware-like robot of draw N (`HARDWARE_LIKE` with seed N: its mass,
-sensor noise and Kalman speed, latency and joint friction; the robot a scripted walk with that config walks). The
-per-metre reductions are on Eq. 7 and on the electrical energy (what the battery pays).
+sensor noise and Kalman speed, latency and joint friction; the robot a scripted walk with that config walks), in
+the physics engine the actor's env names or the one asked for (`SimConfig.engine`). The per-metre reductions are
+on Eq. 7 and on the electrical energy (what the battery pays).
 """
 from __future__ import annotations
 
@@ -39,21 +40,26 @@ def parse_robot(robot: str) -> int | None:
     return int(draw)
 
 
-def robot_env(env, robot: str):
+def robot_env(env, robot: str, engine: str | None = None):
     """(the env config, hardware_robot) a walk on `robot` runs with: `env` (an EnvConfig, the actor's) with no
-    randomisation draw and the ideal robot's hardware, or the hardware-like robot of draw N."""
+    randomisation draw and the ideal robot's hardware, or the hardware-like robot of draw N; in the physics
+    engine `engine` (None: the one `env` names)."""
     import dataclasses
 
     from cyberdog.config import HARDWARE_LIKE, HardwareConfig, RandomizationConfig
 
     draw = parse_robot(robot)
     hardware = HardwareConfig() if draw is None else dataclasses.replace(HARDWARE_LIKE, seed=draw)
+    if engine is not None:
+        env = dataclasses.replace(env, walk=dataclasses.replace(
+            env.walk, sim=dataclasses.replace(env.walk.sim, engine=engine)))
     return dataclasses.replace(env, hardware=hardware, randomization=RandomizationConfig()), draw is not None
 
 
-def _row(label, stage, robot, path, speed, r) -> dict:
+def _row(label, stage, robot, path, speed, r, engine: str) -> dict:
     in_band = speed_within_band(r.mean_speed, speed) if math.isfinite(r.mean_speed) else False
-    return {"label": label, "stage": stage, "robot": robot, "actor": str(path), "speed_command_mps": speed,
+    return {"label": label, "stage": stage, "robot": robot, "engine": engine, "actor": str(path),
+            "speed_command_mps": speed,
             "walks": bool(not r.fell and in_band), "fell": bool(r.fell), "duration_s": r.duration,
             "mean_speed_mps": r.mean_speed, "in_band": in_band, "energy_J": r.energy,
             "electrical_energy_J": r.electrical_energy, "energy_per_metre_J": r.energy_per_metre,
@@ -62,15 +68,16 @@ def _row(label, stage, robot, path, speed, r) -> dict:
 
 
 def check_actor(job: tuple) -> dict:
-    """One walk → one row. job: (label, stage, actor file, speed m/s, duration s, env seed, robot)."""
+    """One walk → one row. job: (label, stage, actor file, speed m/s, duration s, env seed, robot, engine or None:
+    the actor's own)."""
     from cyberdog.rl.rollout import load_actor, rollout
 
-    label, stage, path, speed, duration, seed, robot = job
+    label, stage, path, speed, duration, seed, robot, engine = job
     t0 = time.perf_counter()
     actor = load_actor(path)
-    env, hardware_robot = robot_env(actor.config.env, robot)
+    env, hardware_robot = robot_env(actor.config.env, robot, engine)
     r = rollout(actor, speed=speed, duration=duration, seed=seed, env_config=env, hardware_robot=hardware_robot)
-    return {**_row(label, stage, robot, path, speed, r), "wall_s": time.perf_counter() - t0}
+    return {**_row(label, stage, robot, path, speed, r, env.walk.sim.engine), "wall_s": time.perf_counter() - t0}
 
 
 def check_trot(job: tuple) -> dict:
@@ -86,12 +93,14 @@ def check_trot(job: tuple) -> dict:
     t0 = time.perf_counter()
     r = walk(dataclasses.replace(cfg, gait=dataclasses.replace(cfg.gait, speed=float(speed))), duration=duration,
              hardware=None if draw is None else dataclasses.replace(HARDWARE_LIKE, seed=draw))
-    return {**_row("trot", 0, robot, "", speed, r), "score": math.nan, "wall_s": time.perf_counter() - t0}
+    return {**_row("trot", 0, robot, "", speed, r, cfg.sim.engine), "score": math.nan,
+            "wall_s": time.perf_counter() - t0}
 
 
 def check_jobs(actors: dict[str, dict[int, str | Path]], speeds, duration: float, seed: int = 0,
-               robots=("ideal",)) -> list[tuple]:
-    """The walks to make: `actors` maps a label (a seed) to {stage: actor file}; each walks on each robot."""
+               robots=("ideal",), engine: str | None = None) -> list[tuple]:
+    """The walks to make: `actors` maps a label (a seed) to {stage: actor file}; each walks on each robot, in
+    `engine` (None: the engine each actor's env names)."""
     if not actors:
         raise ValueError("no actor to check")
     if not (math.isfinite(duration) and duration > 0):
@@ -107,7 +116,7 @@ def check_jobs(actors: dict[str, dict[int, str | Path]], speeds, duration: float
         for stage, path in stages.items():
             if not Path(path).is_file():
                 raise FileNotFoundError(f"{label} stage {stage}: no actor file {path}")
-    return [(label, stage, str(path), float(v), float(duration), seed, robot)
+    return [(label, stage, str(path), float(v), float(duration), seed, robot, engine)
             for label, stages in actors.items() for stage, path in sorted(stages.items()) for robot in robots
             for v in speeds]
 

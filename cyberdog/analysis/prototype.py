@@ -87,13 +87,15 @@ def _job_config(base: WalkConfig, name: str, trajectory: FootTrajectory | None, 
 
 def _policy_walk(job: _Job, hardware: HardwareConfig | None, cap: float):
     """The actor of `job.policy` walks the protocol in its own env (its observation, its trot under the action),
-    on the same robot and with the same joint PD as the paths: `job.cfg.pid`, the hardware draw's mass and
-    sensor streams (`hardware_robot`), the domain randomisation off."""
+    on the same robot, in the same physics engine and with the same joint PD as the paths: `job.cfg.pid`,
+    `job.cfg.sim.engine`, the hardware draw's mass and sensor streams (`hardware_robot`), the domain
+    randomisation off."""
     from cyberdog.rl.rollout import load_actor, rollout  # torch: only in the processes that walk a policy
 
     actor = load_actor(job.policy)
     env = actor.config.env
-    env = dataclasses.replace(env, walk=dataclasses.replace(env.walk, pid=job.cfg.pid),
+    sim = dataclasses.replace(env.walk.sim, engine=job.cfg.sim.engine)
+    env = dataclasses.replace(env, walk=dataclasses.replace(env.walk, pid=job.cfg.pid, sim=sim),
                               hardware=hardware or HardwareConfig(), randomization=RandomizationConfig())
     return rollout(actor, job.speed, cap, seed=job.draw, env_config=env, distance=job.distance_m,
                    run_up=job.run_up_s, hardware_robot=True)

@@ -11,7 +11,8 @@ walk alone at the paper's speeds?
 - `--runs RUN ...` (train.py run folders, a recipe's seed folders, shipped policy folders): each run's stage-1
   and stage-2 actors walk `--duration` s from the stand at each speed, deterministically, alone
   (`cyberdog.analysis.policy_check`), on each of `--robots` (default the ideal robot; `hardware:N` the
-  hardware-like robot of draw N), and stage 2's reduction against stage 1 is tabulated (Eq. 7, and the
+  hardware-like robot of draw N), in the engine of `--set sim.engine=...` (the one setting `--set` may change
+  for them; default the actor's env's), and stage 2's reduction against stage 1 is tabulated (Eq. 7, and the
   electrical energy per metre). A seed folder of a recipe (train.py --seeds) gives its last stage-1 and last
   stage-2 phase's actors. Writes policy_check.{md,json}.
 
@@ -20,6 +21,7 @@ The command line (`cyberdog.evaluation.parsers`) imports this module for its hel
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -66,7 +68,7 @@ def add_options(p) -> None:
 def cmd_check(args, cfg) -> int:
     if bool(args.paths) == bool(args.runs):
         raise UsageError("check needs path files (PATH ...) or --runs RUN ..., one of the two")
-    return _check_paths(args, cfg) if args.paths else _check_policies(args)
+    return _check_paths(args, cfg) if args.paths else _check_policies(args, cfg)
 
 
 # ---- path files ---------------------------------------------------------------------------------------------
@@ -173,22 +175,37 @@ def run_actors(runs: list[Path], actor: str) -> dict[str, dict[int, Path]]:
     return actors
 
 
-def _check_policies(args) -> int:
+ENGINE_SETTING = "sim.engine"  # the one --set a policy check takes: the physics engine its walks run in
+
+
+def _policy_engine(args, cfg) -> str | None:
+    """The engine --set names for the policies' walks (None: each actor's own); UsageError for any option a
+    policy check does not take (a policy walks in the env it was trained in)."""
+    sets = [str(s).split("=", 1)[0].strip() for s in args.overrides or []]
+    given = [o for o, v in (("--parts", args.parts), ("--config", args.config),
+                            ("--set " + ", ".join(k for k in sets if k != ENGINE_SETTING),
+                             any(k != ENGINE_SETTING for k in sets)),
+                            ("--no-recorded-trot", args.no_recorded_trot)) if v]
+    if given:
+        raise UsageError(f"{', '.join(given)}: not for --runs (a policy walks in the env it was trained in, its "
+                         f"run's config.yaml; --robots chooses the robot it walks, --set {ENGINE_SETTING}=... "
+                         "the physics engine)")
+    return cfg.sim.engine if ENGINE_SETTING in sets else None
+
+
+def _check_policies(args, cfg) -> int:
     from cyberdog.analysis.parallel import map_in_processes, progress_log
     from cyberdog.analysis.policy_check import COLUMNS, check_actor, check_jobs, check_trot, stage_reductions
     from cyberdog.analysis.report import json_safe, markdown_table
     from cyberdog.evaluation.output import Run, new_out
     from cyberdog.rl.rollout import load_actor
 
-    given = [o for o, v in (("--parts", args.parts), ("--config", args.config), ("--set", args.overrides),
-                            ("--no-recorded-trot", args.no_recorded_trot)) if v]
-    if given:
-        raise UsageError(f"{', '.join(given)}: not for --runs (a policy walks in the env it was trained in, its "
-                         f"run's config.yaml; --robots chooses the robot it walks)")
+    engine = _policy_engine(args, cfg)
     speeds, duration = args.speeds or list(PAPER_SPEEDS), args.duration or PAPER_WALK_DURATION
     robots = args.robots or ["ideal"]
     try:
-        jobs = check_jobs(run_actors(args.runs, args.actor or "final"), speeds, duration, robots=robots)
+        jobs = check_jobs(run_actors(args.runs, args.actor or "final"), speeds, duration, robots=robots,
+                          engine=engine)
     except (ValueError, FileNotFoundError) as err:
         raise UsageError(str(err)) from None
     out = args.out or new_out()
@@ -196,7 +213,8 @@ def _check_policies(args) -> int:
         run = Run(args, out)  # no config.yaml: each policy walks in its own run's config
     except OSError as err:
         raise UsageError(f"cannot write the output folder --out {out}: {err.strerror or err}") from None
-    print(f"{len(jobs)} walks of {duration:g} s on {', '.join(robots)}, the policies alone", flush=True)
+    print(f"{len(jobs)} walks of {duration:g} s on {', '.join(robots)}, the policies alone"
+          f"{f', in {engine}' if engine else ''}", flush=True)
 
     def line(r: dict) -> str:
         return (f"{r['label']} stage {r['stage']} {r['robot']} {r['speed_command_mps']:g} m/s: "
@@ -206,6 +224,8 @@ def _check_policies(args) -> int:
     rows = map_in_processes(check_actor, jobs, args.workers, on_result=progress_log(len(jobs), line))
     if args.trot:  # the reference: the trot controller's own walks, as the first actor's env has it
         walk_cfg = load_actor(jobs[0][2]).config.env.walk
+        if engine is not None:
+            walk_cfg = dataclasses.replace(walk_cfg, sim=dataclasses.replace(walk_cfg.sim, engine=engine))
         trot_jobs = [(float(v), duration, walk_cfg, robot) for robot in robots for v in speeds]
         rows += map_in_processes(check_trot, trot_jobs, args.workers, on_result=progress_log(len(trot_jobs), line))
     reductions = stage_reductions(rows)
