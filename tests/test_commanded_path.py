@@ -112,11 +112,28 @@ def test_commanded_path_lift_height_and_file_round_trip(tmp_path):
     assert isinstance(read_path(sampled.save(tmp_path / "s.json")), SampledTrajectory)
 
 
-def test_commanded_path_rejects_a_period_mismatch_and_a_sampled_base():
+def test_commanded_path_rejects_a_period_mismatch_and_a_sampled_base_without_its_file():
     with pytest.raises(ValueError, match="period"):
         CommandedPath(1.0, GAIT, FootOffsetPath.zero(0.5))
-    with pytest.raises(ValueError, match="base trajectory"):
+    with pytest.raises(ValueError, match="sampled_file"):
         CommandedPath(1.0, dataclasses.replace(GAIT, trajectory="sampled"), FootOffsetPath.zero(0.4))
+
+
+def test_a_commanded_path_on_a_sampled_base_keeps_its_file_and_draws_that_base(tmp_path):
+    """A policy trained around a sampled path (a searched shape) records the file its base path was read from;
+    with zero offsets its foot path is that shape at the path's step length and lift."""
+    phase = np.linspace(0.0, 1.0, 80, endpoint=False)
+    swing = phase < 0.5
+    x = np.where(swing, -0.5 + phase * 2, 0.5 - (phase - 0.5) * 2)  # normalised: one step length, back and forth
+    z = np.where(swing, np.sin(np.pi * phase * 2) ** 2, 0.0)
+    shape = SampledTrajectory(phase, x * 0.24, z * 0.08, 0.24, 0.08).save(tmp_path / "shape.json")
+    gait = dataclasses.replace(GAIT, trajectory="sampled", sampled_file=str(shape), lift_height=0.08)
+    path = CommandedPath(1.2, gait, FootOffsetPath.zero(0.4, n=200))
+    back = read_path(path.save(tmp_path / "p.json"))
+    assert back.gait.sampled_file == str(shape) and back.gait == path.gait
+    _, xs, zs = back.leg_path("LF")
+    assert zs.max() == pytest.approx(0.08, abs=2e-3) and xs.max() - xs.min() == pytest.approx(1.2 * GAIT.stance_time,
+                                                                                              abs=2e-3)
 
 
 # ---- extraction -----------------------------------------------------------------------------------------

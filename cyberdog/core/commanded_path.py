@@ -43,8 +43,8 @@ class CommandedPath:
     def __post_init__(self) -> None:
         if not (np.isfinite(self.speed) and self.speed > 0):
             raise ValueError(f"speed must be > 0 m/s, got {self.speed!r}")
-        if self.gait.trajectory not in ("cycloid", "straight"):
-            raise ValueError(f"the base trajectory must be 'cycloid' or 'straight', got {self.gait.trajectory!r}")
+        if self.gait.trajectory == "sampled" and not self.gait.sampled_file:
+            raise ValueError("a sampled base trajectory needs its file (GaitConfig.sampled_file)")
         if abs(self.offsets.period - self.gait.period) > 1e-9:
             raise ValueError(f"offset path period {self.offsets.period} s differs from the gait period "
                              f"{self.gait.period} s")
@@ -103,7 +103,8 @@ class CommandedPath:
                 "gait": {"trajectory": g.trajectory, "straight_shape": g.straight_shape,
                          "trapezoid_fraction": g.trapezoid_fraction, "period": g.period,
                          "swing_time": g.swing_time, "lift_height": g.lift_height,
-                         "phase_offsets": list(g.phase_offsets)},
+                         "phase_offsets": list(g.phase_offsets),
+                         **({"sampled_file": g.sampled_file} if g.trajectory == "sampled" else {})},
                 "own_lift_height_m": self.own_lift_height(),
                 "leg_lift_heights_m": self.leg_lift_heights().tolist(),
                 "offsets": self.offsets.to_dict(), "provenance": self.provenance}
@@ -126,7 +127,7 @@ class CommandedPath:
             gait = GaitConfig(speed=float(d["speed_mps"]), period=g["period"], swing_time=g["swing_time"],
                               lift_height=g["lift_height"], trajectory=g["trajectory"],
                               straight_shape=g["straight_shape"], trapezoid_fraction=g["trapezoid_fraction"],
-                              phase_offsets=tuple(g["phase_offsets"]))
+                              phase_offsets=tuple(g["phase_offsets"]), sampled_file=g.get("sampled_file", ""))
             return cls(float(d["speed_mps"]), gait, FootOffsetPath.from_dict(d["offsets"]), d.get("provenance", {}))
         except KeyError as e:
             raise ValueError(f"commanded foot path lacks the field {e.args[0]!r}") from None
