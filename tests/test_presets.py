@@ -187,6 +187,25 @@ def test_table5s_recipe_keeps_each_policys_first_path_unless_the_check_is_asked_
     assert args.replay_check is True
 
 
+def test_a_sweep_of_plain_run_folders_takes_the_extraction_of_the_preset_it_was_trained_from(tmp_path):
+    """`train.py --config configs/table5.yaml --seeds ...` (one phase) writes plain run folders, not lineages:
+    the sweep's record names the preset, whose extraction is taken; a sweep of no preset takes none."""
+    import json
+
+    from cyberdog.evaluation import extraction as L
+    from cyberdog.evaluation.cli import EXTRACT_DEFAULTS
+
+    sweep = tmp_path / "table5"
+    (sweep / "seed0").mkdir(parents=True)
+    (sweep / "sweep.json").write_text(json.dumps({"format": "cyberdog-sweep", "seeds": [0],
+                                                   "source_config": str(ROOT / "configs/table5.yaml")}))
+    args = argparse.Namespace(sweep=sweep, **EXTRACT_DEFAULTS)
+    assert L.take_recipe_extraction(args) == {"replay_check": False} and args.replay_check is False
+    (sweep / "sweep.json").write_text(json.dumps({"format": "cyberdog-sweep", "seeds": [0], "source_config": None}))
+    args = argparse.Namespace(sweep=sweep, **EXTRACT_DEFAULTS)
+    assert L.take_recipe_extraction(args) == {} and args.replay_check is True
+
+
 def test_an_earlier_files_stage_and_agent_read_as_today():
     """Run folders and actor files written before a stage's reward was a RewardConfig (and while the agent had
     fast_update) read as the same settings, so that they resume and load."""

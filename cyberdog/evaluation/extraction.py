@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import json
 import time
 from pathlib import Path
 
@@ -34,10 +35,8 @@ def take_recipe_extraction(args) -> dict:
 
     sweep = getattr(args, "sweep", None)
     lineages = sorted(d for d in sweep.iterdir() if C.is_lineage(d)) if sweep is not None and sweep.is_dir() else []
-    if not lineages:
-        return {}
     try:
-        settings = C.read_phases(lineages[0])[1]
+        settings = C.read_phases(lineages[0])[1] if lineages else _sweep_preset_extraction(sweep)
     except ValueError as e:
         raise UsageError(f"--sweep {sweep}: {e}") from None
     taken = {k: v for k, v in settings.items() if getattr(args, k) == EXTRACT_DEFAULTS[k]}
@@ -46,6 +45,18 @@ def take_recipe_extraction(args) -> dict:
     if taken:
         print(f"extract: the recipe's settings: {', '.join(f'{k}={v}' for k, v in taken.items())}")
     return taken
+
+
+def _sweep_preset_extraction(sweep: Path | None) -> dict:
+    """The `extract:` settings of the preset a sweep of plain run folders was trained from (its sweep.json's
+    `source_config`, a preset of one phase), as the file reads now; {} for a sweep without one."""
+    record = sweep / "sweep.json" if sweep is not None else None
+    if record is None or not record.is_file():
+        return {}
+    source = json.loads(record.read_text()).get("source_config")
+    if not source or not Path(source).is_file():
+        return {}
+    return dict(C.load_preset(source).extract)
 
 
 def learned_trajectories(args, out: Path, speeds: list[float], log=print, cfg: C.WalkConfig | None = None,
