@@ -1,6 +1,7 @@
 """Figure 13: energy against speed, by foot trajectory. (a) E by Eq. (7) over the comparison walk: the learned
 paths (mean ± 95 % CI over seeds), the baselines at each learned path's own lift height (matched, Table 5's
-headline; plain bars) and at the paper's H (hatched: the paper's protocol); (b) battery used per 100 m,
+headline; plain bars) and at the paper's H (hatched: the paper's protocol), and the direct search's shape (the
+strongest alternative the project builds; grey) where the comparison walked it; (b) battery used per 100 m,
 Eq. (13), in the prototype experiment, one panel per robot (ideal, hardware-like) that the run walked.
 
 Drawn from `comparison.json` and `prototype.json`. Each mark means one thing, said once in the figure's legend:
@@ -101,6 +102,10 @@ def simulation_groups(rows: list[dict]) -> tuple[list[float], dict[str, list[Bar
         if paper:
             label = f"{paper[0]['label']} at H = {paper[0]['lift_height_m']:.2f} m (the paper's protocol)"
             groups[label], styles[label] = per_speed(speeds, paper), (COLORS[key], PAPER_HATCH)
+    searched = [r for r in rows if r["trajectory"] == "searched"]  # the direct search's shape, one walk a speed
+    if searched:
+        label = f"{NAMES['searched']} at H = {searched[0]['lift_height_m']:.3f} m"
+        groups[label], styles[label] = per_speed(speeds, searched), (COLORS["searched"], None)
     return speeds, groups, styles
 
 
