@@ -4,6 +4,7 @@
     python tools/make_readme_tables.py                 # print them from results/figures_input/
     python tools/make_readme_tables.py --write         # and put them into README.md and docs/results.md
     python tools/make_readme_tables.py --from runs/eval # from another `evaluate.py` output folder
+    python tools/make_readme_tables.py --table engines  # one table (its name between the pages' markers)
 
 The tables are made by `cyberdog.analysis.readme_tables` from comparison.json and prototype.json (and the
 stiffness walks where shipped), the walks that `python evaluate.py` writes; results/figures_input/ holds the
@@ -19,7 +20,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from cyberdog.analysis.readme_tables import make_tables, write_documents  # noqa: E402
+from cyberdog.analysis.readme_tables import NAMES, make_tables, write_documents  # noqa: E402
 
 DEFAULT_SOURCE = REPO / "results" / "figures_input"
 
@@ -30,6 +31,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="folder holding comparison.json and prototype.json (default results/figures_input/)")
     p.add_argument("--write", action="store_true",
                    help="replace the tables in README.md and docs/results.md (between their markers)")
+    p.add_argument("--table", choices=NAMES, default=None, help="print this table only (default: every table)")
     p.add_argument("--root", type=Path, default=REPO, help=argparse.SUPPRESS)  # where the pages are (tests)
     args = p.parse_args(argv)
     try:
@@ -41,7 +43,12 @@ def main(argv: list[str] | None = None) -> int:
     except (FileNotFoundError, ValueError) as e:
         print(f"readme_tables: {e}", file=sys.stderr)
         return 2
+    if args.table is not None and args.table not in tables:
+        print(f"readme_tables: no {args.table} table: its inputs are not in {args.source}", file=sys.stderr)
+        return 2
     for name, table in tables.items():
+        if args.table not in (None, name):
+            continue
         print(f"<!-- table:{name} -->\n{table}\n<!-- /table:{name} -->\n")
     return 0
 

@@ -25,6 +25,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
 - `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
   (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where
   `torque_check_fresh.json` is shipped.
+- `engines` (where the `*_mujoco.json` twins are shipped): PyBullet and MuJoCo side by side on the same seeds
+  (`cyberdog.analysis.engine_table`).
 """
 from __future__ import annotations
 
@@ -35,6 +37,8 @@ from pathlib import Path
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
 from cyberdog.analysis.compare import REFERENCE
+from cyberdog.analysis.engine_table import HEADLINE_ROWS as ENGINE_HEADLINE_ROWS
+from cyberdog.analysis.engine_table import engine_markdown
 from cyberdog.analysis.markdown_cells import header as _header
 from cyberdog.analysis.markdown_cells import line as _line
 from cyberdog.analysis.markdown_cells import mean_ci, seeds_named
@@ -65,10 +69,11 @@ HEADLINES = {
                                    TORQUE_SAVING_ROW.format(robot="ideal robot"),
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
+    "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
 OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS)}
-NAMES = ("table5", "prototype", "stiffness", "gains", "torque", *HEADLINES)
+NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 TORQUE_FRESH_SOURCE = "comparison_torque_fresh.json"  # optional: the same of the seeds it was never tuned on
@@ -336,6 +341,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
                      if (results / STIFFNESS_SOURCE).is_file() else [])
         tables["gains"] = gains_markdown(json.loads((results / GAINS_SOURCE).read_text()), walks["prototype"],
                                          default_policy_walks=[w for w in stiffness if w["pd_scale"] == 1.0])
+    if (engines := engine_markdown(results)) is not None:  # where the MuJoCo twins are shipped
+        tables["engines"] = engines
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in headlines.items() if full in tables})
     return tables
 
