@@ -255,10 +255,12 @@ def test_fresh_seeds_rows_are_those_seeds_walks_as_table5_summarises_them(tmp_pa
     import json
     import shutil
 
+    from cyberdog.analysis.engine_table import TWIN_SUFFIX
     from cyberdog.analysis.readme_tables import make_tables
     source = ROOT / "results" / "figures_input"
     for f in source.glob("*.json"):
-        shutil.copy(f, tmp_path / f.name)
+        if not f.name.endswith(TWIN_SUFFIX):  # the other engine's twins walked the shipped paths, not these
+            shutil.copy(f, tmp_path / f.name)
     walks = json.loads((source / "comparison.json").read_text())
     relabel = {f"seed{k}": f"seed{k + 5}" for k in range(5)}
     (tmp_path / "comparison_fresh.json").write_text(json.dumps(
@@ -277,10 +279,12 @@ def test_fresh_seeds_prototype_rows_are_those_seeds_walks_as_the_prototype_summa
     import json
     import shutil
 
+    from cyberdog.analysis.engine_table import TWIN_SUFFIX
     from cyberdog.analysis.readme_tables import FRESH_PROTOTYPE_ROW, make_tables
     source = ROOT / "results" / "figures_input"
     for f in source.glob("*.json"):
-        shutil.copy(f, tmp_path / f.name)
+        if not f.name.endswith(TWIN_SUFFIX):  # the other engine's twins walked the shipped paths, not these
+            shutil.copy(f, tmp_path / f.name)
     walks = json.loads((source / "prototype.json").read_text())
     relabel = {f"seed{k}": f"seed{k + 5}" for k in range(5)}
     fresh = [dict(w, seed=relabel.get(str(w.get("seed")), w.get("seed"))) for w in walks]
