@@ -72,7 +72,8 @@ HEADLINES = {
     "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
-OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS)}
+OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
+                 *ENGINE_HEADLINE_ROWS[1:]}  # and the engines' rows of the parts whose twins are not all there
 NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
