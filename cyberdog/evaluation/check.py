@@ -34,8 +34,9 @@ LINE = "do learned paths pass the replay check, walk by walk (PATH...); do train
 PARAGRAPH = ("path files (commanded paths, as `extract` writes them; folders of them): every walk of the replay "
              "check at the speed each serves, under the trot it was recorded with, and a verdict per path "
              "(replay_check.json; exit status 1 where one fails). --runs RUN...: each run's stage-1 and stage-2 "
-             "actors walk alone at each speed on the ideal robot (or --robots), and stage 2's reduction against "
-             "stage 1 on Eq. 7 and the electrical energy per metre (policy_check.{md,json}).")
+             "actors walk alone at each speed on the ideal robot (or --robots; in MuJoCo with --set sim.engine=mujoco), "
+             "and stage 2's reduction against stage 1 on Eq. 7 and the electrical energy per metre "
+             "(policy_check.{md,json}).")
 
 
 def add_options(p) -> None:
