@@ -208,11 +208,12 @@ def test_replaying_the_commanded_path_reproduces_the_closed_loop_energy():
     ex = commanded_from_rollout(r, env, cycle="mean", settle_time=2.0)
     assert len(ex.used) >= 5
     cfg = dataclasses.replace(env.walk, gait=dataclasses.replace(ex.path.gait, speed=speed))
-    per = 400
+    dt = cfg.sim.controller_dt  # s, one traced period
+    per = int(round(cfg.gait.period / dt))  # traced periods per gait cycle
 
     def settled_cycle_energy(result) -> float:
         p = result.traces["power"].sum(axis=1)
-        return float(np.mean([p[k * per:(k + 1) * per].sum() * DT for k in range(5, len(p) // per)]))
+        return float(np.mean([p[k * per:(k + 1) * per].sum() * dt for k in range(5, len(p) // per)]))
 
     replay = walk(cfg, 5.0, record=True, foot_offsets=ex.path.offsets)
     plain = walk(cfg, 5.0, record=True)
