@@ -1,16 +1,12 @@
 """Unit tests of the rl layer: the agent's updates, exploration, replay buffer, checkpoints and guards."""
 from __future__ import annotations
 
-import ast
 import dataclasses
-import graphlib
-from pathlib import Path
 
 import pytest
 import torch
 from tensordict import TensorDict
 
-import cyberdog.rl
 from cyberdog import config as C
 from cyberdog.rl.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector
@@ -378,32 +374,3 @@ def test_spatial_smoothness_makes_the_policy_react_less_to_the_state():
         C.AgentConfig(action_spatial_smoothness=-1.0)
     with pytest.raises(ValueError, match="spatial_smoothness_sigma"):
         C.AgentConfig(spatial_smoothness_sigma=-0.1)
-
-
-def rl_imports() -> dict[str, set[str]]:
-    """Each module of cyberdog/rl (its package `__init__` aside) → the modules of cyberdog/rl it imports (lazily
-    or for type checking too); importing the package itself counts as "__init__"."""
-    graph = {}
-    for path in Path(cyberdog.rl.__file__).parent.glob("*.py"):
-        if path.name == "__init__.py":
-            continue
-        names = set()
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module == "cyberdog":
-                names |= {f"cyberdog.{a.name}" for a in node.names}
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                names.add(node.module)
-            elif isinstance(node, ast.Import):
-                names |= {a.name for a in node.names}
-        graph[path.stem] = {"__init__" if n == "cyberdog.rl" else n.split(".")[2] for n in names
-                            if n == "cyberdog.rl" or n.startswith("cyberdog.rl.")}
-    return graph
-
-
-def test_the_rl_modules_import_one_another_by_module_and_without_a_circle():
-    graph = rl_imports()
-    assert {"td3", "trainer", "collect"} <= set(graph)
-    through_package = sorted(m for m, deps in graph.items() if "__init__" in deps)
-    assert not through_package, f"{through_package} import cyberdog.rl itself: import its modules directly"
-    order = list(graphlib.TopologicalSorter(graph).static_order())  # raises CycleError on a circle
-    assert order.index("td3") < order.index("trainer") and order.index("exploration") < order.index("collect")

@@ -3,6 +3,7 @@ no function over 60 (from `def` to its last line, docstring included)."""
 from __future__ import annotations
 
 import ast
+import graphlib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -194,3 +195,33 @@ def test_the_package_and_the_presets_say_what_is_not_how_it_came_to_be():
 def test_history_words_are_found_as_whole_words_only():
     assert history_words("an Earlier run, no longer used; it was tried") == ["tried", "Earlier", "no longer"]
     assert history_words("untried, legacyless") == []
+
+
+# ---- the learning layer ----
+def rl_imports() -> dict[str, set[str]]:
+    """Each module of cyberdog/rl (its package `__init__` aside) → the modules of cyberdog/rl it imports (lazily
+    or for type checking too); importing the package itself counts as "__init__"."""
+    graph = {}
+    for path in (PACKAGE / "rl").glob("*.py"):
+        if path.name == "__init__.py":
+            continue
+        names = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module == "cyberdog":
+                names |= {f"cyberdog.{a.name}" for a in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names.add(node.module)
+            elif isinstance(node, ast.Import):
+                names |= {a.name for a in node.names}
+        graph[path.stem] = {"__init__" if n == "cyberdog.rl" else n.split(".")[2] for n in names
+                            if n == "cyberdog.rl" or n.startswith("cyberdog.rl.")}
+    return graph
+
+
+def test_the_rl_modules_import_one_another_by_module_and_without_a_circle():
+    graph = rl_imports()
+    assert {"td3", "trainer", "collect"} <= set(graph)
+    through_package = sorted(m for m, deps in graph.items() if "__init__" in deps)
+    assert not through_package, f"{through_package} import cyberdog.rl itself: import its modules directly"
+    order = list(graphlib.TopologicalSorter(graph).static_order())  # raises CycleError on a circle
+    assert order.index("td3") < order.index("trainer") and order.index("exploration") < order.index("collect")
