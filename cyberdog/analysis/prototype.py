@@ -49,7 +49,7 @@ TIME_CAP_MARGIN_S = 10.0  # s added to 1.5 × distance / speed (+ the start-up r
 
 # the Markdown table's columns (rows carry more: J, wall time, peak torque, lateral drift, battery E_f, E_n)
 TABLE_COLUMNS = ["trajectory", "seed", "draw", "speed_mps", "robot", "lift_height_m", "fell", "reached", "mass_scale",
-                 "mean_speed_mps",
+                 "mass_kg", "mean_speed_mps",
                  "distance_m", "time_s", "energy_kJ", "electrical_energy_kJ", "battery_used_pct",
                  "range_full_charge_m", "electrical_gap_pct"]
 
@@ -123,6 +123,7 @@ def _run_job(job: _Job) -> dict:
         "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
         "robot": job.mode, "pd_scale": job.pd_scale, "pd_matched": job.pd_matched_from is not None, "fell": r.fell,
         "reached": r.reached, "mass_scale": r.mass_scale,
+        "mass_kg": job.cfg.robot.carried_mass * r.mass_scale,  # the payload's and the mass draw's body
         # one meaning in every row: the lift height of the foot path walked (a learned path's own); the trot a
         # commanded path shifts has its own, under its own name
         "lift_height_m": (math.nan if job.policy is not None  # a policy's own foot lift is not an input
@@ -133,7 +134,7 @@ def _run_job(job: _Job) -> dict:
         "run_up_s": job.run_up_s, "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
         "energy_J": r.energy,  # Eq. (7)
         "electrical_energy_J": r.electrical_energy,
-        "electrical_cost_of_transport": (en.cost_of_transport(r.electrical_energy, job.cfg.robot.total_mass,
+        "electrical_cost_of_transport": (en.cost_of_transport(r.electrical_energy, job.cfg.robot.carried_mass,
                                                               job.cfg.sim.gravity, r.distance) if ok else float("nan")),
         "battery_start_pct": start_pct,  # E_f
         "battery_end_pct": en.remaining_percent(r.electrical_energy, e_cfg),  # E_n

@@ -22,16 +22,26 @@ class RobotConfig:
     l2: float = 0.200  # m, thigh: hip → knee (the paper's l2)
     l3: float = 0.200  # m, calf: knee → foot-sphere centre (the paper's l3)
     foot_radius: float = 0.018  # m
-    total_mass: float = 13.573  # kg, model total (body + 4 legs incl. rotors)
+    total_mass: float = 13.573  # kg, the URDF's links (body + 4 legs incl. rotors); checked against it at load
+    # kg carried on the body at its centre of mass, spread as the body's own mass is (its inertia scales with it):
+    # the simulated body weighs this much more, and the trot's weight feed-forward counts it (a known load)
+    payload: float = 0.0
     body_height: float = 0.30  # m, nominal standing height of the body centre (Xiaomi's des height)
     abad_limit: float = 0.76096355387  # rad, symmetric ±
     hip_limit: Tuple[float, float] = (-1.88495559215, 3.76991118431)  # rad
     knee_limit: Tuple[float, float] = (-2.49582083035, -0.717155789644)  # rad
     reflected_rotor_inertia: float = 0.00721  # kg·m², rotor 8.9031e-5 × gear 9², added about each joint axis
 
+    @property
+    def carried_mass(self) -> float:
+        """kg, the robot as it walks: the URDF's links and the payload."""
+        return self.total_mass + self.payload
+
     def __post_init__(self) -> None:
         _positive(self, "l1", "l2", "l3", "foot_radius", "total_mass", "body_height", "abad_limit")
         _non_negative(self, "reflected_rotor_inertia")
+        _check(math.isfinite(self.payload) and 0.0 <= self.payload <= self.total_mass, "RobotConfig.payload",
+               f"kg in [0, total_mass = {self.total_mass}]", self.payload)
         for n in ("hip_limit", "knee_limit"):
             lo, hi = getattr(self, n)
             _check(lo < hi, f"RobotConfig.{n}", "(lower, upper) with lower < upper", (lo, hi))

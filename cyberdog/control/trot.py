@@ -95,7 +95,7 @@ class TrotController:
         self.scheduler = GaitScheduler(diagonal_trot(cfg.gait), cfg.gait.period)
         self.pid = JointPID.from_config(cfg.pid, cfg.sim.controller_dt, cfg.actuator.torque_limit)
         self.stand_height = self.robot.body_height - self.robot.foot_radius  # m, hip joint → foot centre
-        self.body_weight = self.robot.total_mass * cfg.sim.gravity  # N
+        self.body_weight = self.robot.carried_mass * cfg.sim.gravity  # N, with the payload it knows it carries
         self.speed = cfg.gait.speed
         self.speed_correction = 0.0  # m/s, integral of the speed error × speed_gain
         self.speed_correction_limit = 0.0  # m/s, ± the integral's bound at the last command (0: none yet)

@@ -105,7 +105,7 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
     start, end = walker.start, walker.state.base_position
     e_joint = walker.energy_per_joint(since)
     travelled = float(end[0] - (start[0] if since_x is None else since_x))  # m, forward
-    mass = cfg.robot.total_mass * walker.robot.mass_scale  # kg, what the robot weighed in this walk
+    mass = cfg.robot.carried_mass * walker.robot.mass_scale  # kg, what the robot weighed in this walk
     cycles = n * dt / cfg.gait.period
     slip = float("nan")
     first_sample = -(-since // walker.slip_sample_every)  # the slip samples taken from period `since` on

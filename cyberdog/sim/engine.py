@@ -61,6 +61,9 @@ def rest_pose(robot: RobotConfig, joint_angles=None, base_position=None, base_ya
     return q.tolist(), pos.tolist(), quat
 
 
+MODEL_MASS_TOLERANCE = 1e-3  # RobotConfig.total_mass within 0.1 % of the URDF's links (13.573 of 13.577 kg)
+
+
 class EngineRobot:
     """The CyberDog on a flat plane in one physics engine, driven by joint torques set at every physics step.
 
@@ -110,6 +113,19 @@ class EngineRobot:
     def _scale_masses(self, scale: float) -> None:
         """Every link's mass and inertia × `scale` of the URDF's."""
         raise NotImplementedError
+
+    def _body_with_payload(self, links_mass: float, body_mass: float, body_inertia):
+        """(mass kg, principal inertia) of the body carrying `RobotConfig.payload` at its centre of mass, spread as
+        its own mass is (the inertia × the same ratio), after refusing a `RobotConfig.total_mass` that is not the
+        URDF's links' `links_mass`: total_mass states the model (the trot's weight feed-forward reads it), the
+        payload changes the body."""
+        stated = self.robot_config.total_mass
+        if abs(links_mass - stated) > MODEL_MASS_TOLERANCE * stated:
+            raise ValueError(f"RobotConfig.total_mass = {stated} kg, but {self.urdf.name}'s links weigh "
+                             f"{links_mass:.3f} kg: total_mass states the URDF's mass; to walk a heavier robot set "
+                             "robot.payload (kg carried on the body)")
+        ratio = (body_mass + self.robot_config.payload) / body_mass
+        return body_mass * ratio, np.asarray(body_inertia) * ratio
 
     def joint_lists(self) -> tuple[list, list]:
         """(q, dq) as 12 floats each, read now and cached until the next step or reset (do not modify)."""

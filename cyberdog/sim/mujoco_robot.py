@@ -122,6 +122,11 @@ class MujocoRobot(EngineRobot):
         self.link_names = {b: m.body(b).name for b in range(1, m.nbody)}  # body id → URDF link name
         self._geom_body = m.geom_bodyid.tolist()
         self._nominal_dynamics = (m.body_mass.copy(), m.body_inertia.copy())
+        trunk = m.body("trunk").id
+        body = self._body_with_payload(float(m.body_mass[1:].sum()), m.body_mass[trunk], m.body_inertia[trunk])
+        if self.robot_config.payload > 0:
+            self._nominal_dynamics[0][trunk], self._nominal_dynamics[1][trunk] = body
+            self._scale_masses(1.0)
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
         self._view: MujocoView | None = None
         self.reset()

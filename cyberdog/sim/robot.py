@@ -122,6 +122,11 @@ class Robot(EngineRobot):
         for link in self.link_names:
             info = c.getDynamicsInfo(self.body_id, link)
             self._nominal_dynamics[link] = (info[0], info[2])
+        links_mass = sum(mass for mass, _ in self._nominal_dynamics.values())
+        body = self._body_with_payload(links_mass, *self._nominal_dynamics[-1])
+        if self.robot_config.payload > 0:
+            self._nominal_dynamics[-1] = (body[0], tuple(body[1]))
+            self._scale_masses(1.0)
         inertial_pos, inertial_orn = c.getDynamicsInfo(self.body_id, -1)[3:5]  # inertial frame in the link frame
         self._link_to_inertial = (inertial_pos, inertial_orn)
         self._inertial_to_link = c.invertTransform(inertial_pos, inertial_orn)
