@@ -56,9 +56,11 @@ def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resol
 
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():
     assert set(p.name for p in (ROOT / "configs").glob("*.yaml")) == {"table5.yaml", "battery.yaml", "torque.yaml",
-                                                                       "paper.yaml", "tiny.yaml"}
-    assert [(p.name, p.start) for p in _phases("battery.yaml").values()] == [
-        ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
+                                                                       "battery_searched.yaml", "paper.yaml",
+                                                                       "tiny.yaml"}
+    for battery in ("battery.yaml", "battery_searched.yaml"):
+        assert [(p.name, p.start) for p in _phases(battery).values()] == [
+            ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
         ("main", None), ("speed", "main/stage1_final.pt"), ("band", "speed/stage1_final.pt"),
         ("energy", "band/stage1_final.pt"), ("energy2", "energy/stage2_final.pt"),
