@@ -32,6 +32,20 @@ def header(first: str, speeds: list[float]) -> list[str]:
 
 
 def seeds_named(labels: Iterable[str]) -> str:
-    """"seeds 5–9": the first and last seed that labels "seedN" (or "N") name; "fresh seeds" where none does."""
+    """"seeds 5–9": the first and last seed that labels "seedN" (or "N") name ("seed 0" where one does, "fresh
+    seeds" where none does)."""
     numbers = sorted({int(n) for n in (str(x).removeprefix("seed") for x in labels) if n.isdigit()})
-    return f"seeds {numbers[0]}–{numbers[-1]}" if numbers else "fresh seeds"
+    if not numbers:
+        return "fresh seeds"
+    return f"seed {numbers[0]}" if len(numbers) == 1 else f"seeds {numbers[0]}–{numbers[-1]}"
+
+
+def missed_walks(row: dict) -> str:
+    """" (k fell, m off the ±5 % band, of n)" for a summary row whose walks did not all count, "" if they did;
+    with walks off the band, also the saving counting them ("; with them: s % ± h"): a slow walk left out of the
+    mean must not hide what it cost."""
+    off = row["walks"] - row["counted"] - row["fell"]
+    parts = [f"{row['fell']} fell"] * bool(row["fell"]) + [f"{off} off the ±5 % band"] * bool(off)
+    stood = mean_ci(row, "battery_saving_stood_pct", ".1f", " %")  # "–" where no walk stood without counting
+    with_them = f"; with {'it' if off == 1 else 'them'}: {stood}" if off and stood != "–" else ""
+    return f" ({', '.join(parts)}, of {row['walks']}{with_them})" if parts else ""

@@ -25,6 +25,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
 - `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
   (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where
   `torque_check_fresh.json` is shipped.
+- `searched_start` (where `prototype_searched_start.json` is shipped): the recipe that starts from the searched
+  shape against it, on seeds never tuned on (`cyberdog.analysis.searched_start_table`).
 - `engines` (where the `*_mujoco.json` twins are shipped): PyBullet and MuJoCo side by side on the same seeds
   (`cyberdog.analysis.engine_table`).
 """
@@ -35,13 +37,14 @@ import re
 from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
-from cyberdog.analysis import table5
+from cyberdog.analysis import searched_start_table, table5
 from cyberdog.analysis.compare import REFERENCE
 from cyberdog.analysis.engine_table import HEADLINE_ROWS as ENGINE_HEADLINE_ROWS
 from cyberdog.analysis.engine_table import engine_markdown
 from cyberdog.analysis.markdown_cells import header as _header
 from cyberdog.analysis.markdown_cells import line as _line
-from cyberdog.analysis.markdown_cells import mean_ci, seeds_named
+from cyberdog.analysis.markdown_cells import mean_ci, missed_walks, seeds_named
+from cyberdog.analysis.gains_table import GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW, gains_markdown
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
 from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_SAVING_ROW, TORQUE_WALKS_ROW,
                                            torque_markdown)
@@ -50,9 +53,6 @@ from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 FRESH_SEEDS = "seeds 5–9"  # the seeds the recipes were never tuned on, as their rows name them
 FRESH_ROW = f"**D_t on E, {FRESH_SEEDS} (never tuned on)**"  # a headline row only where its walks are shipped
 FRESH_PROTOTYPE_ROW = f"**battery saving, {FRESH_SEEDS} (never tuned on)**"  # the same, the prototype run's
-GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
-POLICY_ROW = "the policy, closed loop"  # the gains table's rows of the policies walking the protocol themselves
-GAINS_DEFAULT_POLICY_ROW = f"default gains, {POLICY_ROW}"
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
     "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
@@ -74,7 +74,7 @@ HEADLINES = {
 # the fresh seeds' rows: in a headline only where their walks are shipped
 OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                  *ENGINE_HEADLINE_ROWS[1:]}  # and the engines' rows of the parts whose twins are not all there
-NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", *HEADLINES)
+NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", "searched_start", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 TORQUE_FRESH_SOURCE = "comparison_torque_fresh.json"  # optional: the same of the seeds it was never tuned on
@@ -174,7 +174,7 @@ def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -
     return [_line(f"battery % per 100 m: learned, {named}",
                   ["–" if r is None else mean_ci(r, "battery_pct_per_100m", ".2f") for r in rows]),
             _line(f"**battery saving, {named} (never tuned on)**",
-                  ["–" if r is None else f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**{_missed(r)}"
+                  ["–" if r is None else f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**{missed_walks(r)}"
                    f"{_fewer_seeds(walks, robot, r['speed_mps'], seeds)}" for r in rows])]
 
 
@@ -222,17 +222,6 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware", fresh_walks: 
     return "\n".join(lines)
 
 
-def _missed(row: dict) -> str:
-    """" (k fell, m off the ±5 % band, of n)" for a summary row whose walks did not all count, "" if they did;
-    with walks off the band, also the saving counting them ("; with them: s % ± h"): a slow walk left out of the
-    mean must not hide what it cost."""
-    off = row["walks"] - row["counted"] - row["fell"]
-    parts = [f"{row['fell']} fell"] * bool(row["fell"]) + [f"{off} off the ±5 % band"] * bool(off)
-    stood = mean_ci(row, "battery_saving_stood_pct", ".1f", " %")  # "–" where no walk stood without counting
-    with_them = f"; with {'it' if off == 1 else 'them'}: {stood}" if off and stood != "–" else ""
-    return f" ({', '.join(parts)}, of {row['walks']}{with_them})" if parts else ""
-
-
 def stiffness_markdown(walks: list[dict], robot: str = "hardware", matched: list[dict] | None = None) -> str:
     """The README's robustness table from the walks of `evaluate.py stiffness`: per walk kind (the replayed
     learned path, the policy closed loop, the searched shape) and PD stiffness, the battery saving against the
@@ -254,47 +243,10 @@ def stiffness_markdown(walks: list[dict], robot: str = "hardware", matched: list
             rows = [by.get((name, scale, v)) for v in speeds]
             if not any(rows):
                 continue
-            cells = [("" if r is None else mean_ci(r, "battery_saving_pct", ".1f", " %") + _missed(r)) for r in rows]
+            cells = [("" if r is None else mean_ci(r, "battery_saving_pct", ".1f", " %") + missed_walks(r)) for r in rows]
             bold = name in ("learned", "matched")
             label = f"{title}, PD {scale:g}×"
             lines.append(_line(f"**{label}**" if bold else label, [f"**{c}**" if bold and c else c for c in cells]))
-    return "\n".join(lines)
-
-
-def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware",
-                   default_policy_walks: list[dict] | None = None) -> str:
-    """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
-    scaled (`tools/merge_walks.py gains`'s walks, each labelled `gain`, `gain_scale`, `pd_matched`), as commanded and
-    re-commanded, beside the default gains' (the prototype run's `default_walks`). Where a run walked the
-    policies too (`prototype --closed-loop`), their row follows that factor's: the policy itself under those
-    gains, nothing re-solved; `default_policy_walks` (walks at the default gains with the policies among them,
-    e.g. the stiffness run's PD 1× walks) give the default gains' policy row."""
-    def cells(rows: list[dict], trajectory: str) -> list[str] | None:
-        by = {r["speed_mps"]: r for r in ps.summary_rows(rows) if r["robot"] == robot and r["trajectory"] == trajectory}
-        if not by:
-            return None
-        return ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + _missed(by[v])
-                for v in speeds]
-
-    default = {r["speed_mps"]: r for r in ps.summary_rows(default_walks)
-               if r["robot"] == robot and r["trajectory"] == "learned"}
-    speeds = sorted(default)
-    lines = _header("battery saving against the cheaper common trajectory", speeds)
-    lines.append(_line(GAINS_DEFAULT_ROW, [mean_ci(default[v], "battery_saving_pct", ".1f", " %") for v in speeds]))
-    policy = cells(default_policy_walks or [], "policy")
-    if policy:
-        lines.append(_line(GAINS_DEFAULT_POLICY_ROW, policy))
-    factors = sorted({(w["gain"], w["gain_scale"]) for w in walks}, key=lambda f: (f[0] != "kp", f[1]))  # kp first
-    for gain, scale in factors:
-        at = [w for w in walks if (w["gain"], w["gain_scale"]) == (gain, scale)]
-        for matched in (False, True):  # as commanded, then re-commanded
-            row = cells([w for w in at if bool(w["pd_matched"]) == matched], "learned")
-            if row is not None:
-                label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
-                lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in row]))
-        policy = cells([w for w in at if not w["pd_matched"]], "policy")  # against the commons as commanded
-        if policy:
-            lines.append(_line(f"{gain} {scale:g}×, {POLICY_ROW}", policy))
     return "\n".join(lines)
 
 
@@ -344,6 +296,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
                                          default_policy_walks=[w for w in stiffness if w["pd_scale"] == 1.0])
     if (engines := engine_markdown(results)) is not None:  # where the MuJoCo twins are shipped
         tables["engines"] = engines
+    if (searched_start := searched_start_table.make_table(results)) is not None:
+        tables["searched_start"] = searched_start
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in headlines.items() if full in tables})
     return tables
 

@@ -1,0 +1,49 @@
+"""The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
+scaled, as commanded and re-commanded, beside the default gains' (`tools/merge_walks.py gains`'s walks)."""
+from __future__ import annotations
+
+from cyberdog.analysis import prototype_summary as ps
+from cyberdog.analysis.markdown_cells import header as _header
+from cyberdog.analysis.markdown_cells import line as _line
+from cyberdog.analysis.markdown_cells import mean_ci, missed_walks
+
+GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
+POLICY_ROW = "the policy, closed loop"  # the gains table's rows of the policies walking the protocol themselves
+GAINS_DEFAULT_POLICY_ROW = f"default gains, {POLICY_ROW}"
+
+
+def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware",
+                   default_policy_walks: list[dict] | None = None) -> str:
+    """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
+    scaled (`tools/merge_walks.py gains`'s walks, each labelled `gain`, `gain_scale`, `pd_matched`), as commanded and
+    re-commanded, beside the default gains' (the prototype run's `default_walks`). Where a run walked the
+    policies too (`prototype --closed-loop`), their row follows that factor's: the policy itself under those
+    gains, nothing re-solved; `default_policy_walks` (walks at the default gains with the policies among them,
+    e.g. the stiffness run's PD 1× walks) give the default gains' policy row."""
+    def cells(rows: list[dict], trajectory: str) -> list[str] | None:
+        by = {r["speed_mps"]: r for r in ps.summary_rows(rows) if r["robot"] == robot and r["trajectory"] == trajectory}
+        if not by:
+            return None
+        return ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + missed_walks(by[v])
+                for v in speeds]
+
+    default = {r["speed_mps"]: r for r in ps.summary_rows(default_walks)
+               if r["robot"] == robot and r["trajectory"] == "learned"}
+    speeds = sorted(default)
+    lines = _header("battery saving against the cheaper common trajectory", speeds)
+    lines.append(_line(GAINS_DEFAULT_ROW, [mean_ci(default[v], "battery_saving_pct", ".1f", " %") for v in speeds]))
+    policy = cells(default_policy_walks or [], "policy")
+    if policy:
+        lines.append(_line(GAINS_DEFAULT_POLICY_ROW, policy))
+    factors = sorted({(w["gain"], w["gain_scale"]) for w in walks}, key=lambda f: (f[0] != "kp", f[1]))  # kp first
+    for gain, scale in factors:
+        at = [w for w in walks if (w["gain"], w["gain_scale"]) == (gain, scale)]
+        for matched in (False, True):  # as commanded, then re-commanded
+            row = cells([w for w in at if bool(w["pd_matched"]) == matched], "learned")
+            if row is not None:
+                label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
+                lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in row]))
+        policy = cells([w for w in at if not w["pd_matched"]], "policy")  # against the commons as commanded
+        if policy:
+            lines.append(_line(f"{gain} {scale:g}×, {POLICY_ROW}", policy))
+    return "\n".join(lines)

@@ -1,0 +1,99 @@
+"""The table of the battery recipe that starts from the searched shape (`configs/battery_searched.yaml`): the
+learned paths against the best gait the direct search finds, on the seeds the recipe was never tuned on and on
+its tuning seeds, each group's rows apart.
+
+From `results/figures_input/` (each optional: the table is made where its prototype walks are shipped):
+- `prototype_searched_start.json`: `evaluate.py prototype --learned <the recipe's paths>` (the prototype run: two
+  hardware-like robots per seed, 20 m; its reference row is the shape searched for the battery): battery per 100
+  m, the saving against the cheaper common trajectory and against the searched shape;
+- `comparison_searched_start.json`: `evaluate.py compare --learned <the same paths> --reference <a shape searched
+  on Eq. 7 at the paths' lift>` (Table 5's 10 s walk on the ideal robot): the paths against that shape on Eq. 7;
+- `gains_searched_start.json`: `tools/merge_walks.py gains` over four prototype runs with kp or kd alone at 0.5×
+  or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from cyberdog.analysis import prototype_summary as ps
+from cyberdog.analysis import table5
+from cyberdog.analysis.gains_table import gains_markdown
+from cyberdog.analysis.markdown_cells import header, line, mean_ci, missed_walks, seeds_named
+
+PROTOTYPE_SOURCE = "prototype_searched_start.json"
+COMPARE_SOURCE = "comparison_searched_start.json"
+GAINS_SOURCE = "gains_searched_start.json"
+TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every other seed was never seen
+RECIPE = "configs/battery_searched.yaml"
+SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
+VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
+EQ7_ROW = "learned against the shape searched on Eq. 7 at {lift:.3f} m, on E (ideal robot), {seeds}"
+
+
+def _groups(walks: list[dict]) -> list[tuple[str, list[dict]]]:
+    """(name, walks) of the fresh seeds, then of the tuning seeds, each where it has walks; a walk of no seed (a
+    comparison's common trajectories, shared by the paths of a lift) belongs to both."""
+    shared = [w for w in walks if not w.get("seed")]
+    fresh = [w for w in walks if w.get("seed") and str(w["seed"]) not in TUNED_SEEDS]
+    tuned = [w for w in walks if str(w.get("seed", "")) in TUNED_SEEDS]
+    return [(f"{seeds_named(w['seed'] for w in group)}{note}", group + shared)
+            for group, note in ((fresh, " (never tuned on)"), (tuned, " (tuned on)")) if group]
+
+
+def _prototype_lines(walks: list[dict], name: str, speeds: list[float], robot: str) -> list[str]:
+    by = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
+    learned = [by.get(("learned", v)) for v in speeds]
+    searched = [by.get((ps.REFERENCE, v)) for v in speeds]
+
+    def cell(r: dict | None, key: str, fmt: str, sign: bool = False) -> str:
+        return "–" if r is None else mean_ci(r, key, fmt, " %" if key.endswith("pct") else "", sign)
+
+    return [line(f"battery % per 100 m: learned / searched shape, {name}",
+                 [f"{cell(r, 'battery_pct_per_100m', '.2f')} / {cell(s, 'battery_pct_per_100m', '.2f')}"
+                  for r, s in zip(learned, searched)]),
+            line(SAVING_ROW.format(seeds=name),
+                 [f"**{cell(r, 'battery_saving_pct', '.1f')}**" + (missed_walks(r) if r else "") for r in learned]),
+            line(VS_SEARCHED_ROW.format(seeds=name),
+                 [f"**{cell(r, 'battery_vs_searched_pct', '.1f', sign=True)}**" for r in learned])]
+
+
+def _eq7_lines(walks: list[dict], name: str, speeds: list[float]) -> list[str]:
+    same = {r["speed_command_mps"]: r for r in table5.summary_rows(walks) if r["set"] == "same_lift"}
+    lifts = {r.get(f"{table5.REFERENCE}_lift_height_m") for r in same.values()}
+    if not same or None in lifts or len(lifts) != 1:
+        return []
+    return [line(EQ7_ROW.format(lift=lifts.pop(), seeds=name),
+                 ["–" if v not in same else mean_ci(same[v], "D_ref_pct", ".1f", " %", sign=True) for v in speeds])]
+
+
+def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dict] | None = None,
+                            gains_walks: list[dict] | None = None, robot: str = "hardware") -> str:
+    """The table: per group of seeds (never tuned on, then tuned on) the prototype rows and the Eq. 7 row, then
+    the gains rows of the fresh seeds (`gains_markdown`'s, as commanded)."""
+    speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
+    if not speeds:
+        raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
+    lines = header(f"`{RECIPE}`, hardware-like robot", speeds)
+    compared = dict(_groups(compare_walks or []))
+    for name, walks in _groups(prototype_walks):
+        lines += _prototype_lines(walks, name, speeds, robot)
+        if name in compared:
+            lines += _eq7_lines(compared[name], name, speeds)
+    fresh = [w for w in prototype_walks if w.get("seed") and str(w["seed"]) not in TUNED_SEEDS]
+    if gains_walks and fresh:
+        named = seeds_named(w["seed"] for w in fresh)
+        for row in gains_markdown(gains_walks, fresh, robot).splitlines()[3:]:  # after the header and default row
+            label, cells = row.split(" | ", 1)
+            lines.append(f"| the saving at {label.removeprefix('| ')}, {named} | {cells}")
+    return "\n".join(lines)
+
+
+def make_table(results: Path) -> str | None:
+    """The table from a folder of shipped inputs, None where its prototype walks are not there."""
+    results = Path(results)
+    if not (results / PROTOTYPE_SOURCE).is_file():
+        return None
+    read = {name: json.loads((results / name).read_text()) if (results / name).is_file() else None
+            for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE)}
+    return searched_start_markdown(read[PROTOTYPE_SOURCE], read[COMPARE_SOURCE], read[GAINS_SOURCE])

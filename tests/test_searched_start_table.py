@@ -1,0 +1,65 @@
+"""The searched-start recipe's table keeps the seeds it was never tuned on apart from its tuning seeds, and each
+group's cells are the prototype summary of that group's walks alone."""
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+
+from cyberdog.analysis import prototype_summary as ps
+from cyberdog.analysis import searched_start_table as sst
+from cyberdog.analysis.markdown_cells import mean_ci
+
+SHIPPED = Path(__file__).resolve().parents[1] / "results" / "figures_input" / "prototype.json"
+
+
+def _walks(tuned_seed: str = "seed0") -> list[dict]:
+    """The shipped battery prototype walks (seeds 0-4), `tuned_seed` as the recipe's tuning seed."""
+    walks = json.loads(SHIPPED.read_text())
+    assert tuned_seed in {w["seed"] for w in walks}
+    return walks
+
+
+def _rows(table: str) -> dict[str, list[str]]:
+    return {cells[0]: cells[1:] for cells in ([c.strip() for c in ln.strip("|").split("|")]
+                                                for ln in table.splitlines()[2:])}
+
+
+def test_each_group_is_summarised_from_its_own_walks():
+    walks = _walks()
+    rows = _rows(sst.searched_start_markdown(walks))
+    fresh = [w for w in walks if w["seed"] != "seed0"]
+    expected = {r["speed_mps"]: r for r in ps.summary_rows(fresh)
+                if r["robot"] == "hardware" and r["trajectory"] == "learned"}
+    named = "seeds 1–4 (never tuned on)"
+    assert rows[sst.VS_SEARCHED_ROW.format(seeds=named)] == [
+        f"**{mean_ci(expected[v], 'battery_vs_searched_pct', '.1f', ' %', sign=True)}**" for v in sorted(expected)]
+    assert rows[sst.SAVING_ROW.format(seeds="seed 0 (tuned on)")][0].startswith("**")
+
+
+def test_a_tuning_seeds_walks_never_reach_the_fresh_rows():
+    walks = _walks()
+    changed = copy.deepcopy(walks)
+    for w in changed:
+        if w["seed"] == "seed0" and w["trajectory"] == "learned":
+            w["battery_used_pct"] *= 0.5
+            w["electrical_energy_J"] *= 0.5
+    before, after = _rows(sst.searched_start_markdown(walks)), _rows(sst.searched_start_markdown(changed))
+    fresh = [k for k in before if "never tuned on" in k]
+    tuned = [k for k in before if "(tuned on)" in k]
+    assert fresh and tuned
+    assert all(before[k] == after[k] for k in fresh)
+    assert any(before[k] != after[k] for k in tuned)
+
+
+def test_no_learned_walk_is_refused_in_one_line():
+    with pytest.raises(ValueError, match="no learned path"):
+        sst.searched_start_markdown([w for w in _walks() if w["trajectory"] != "learned"])
+
+
+def test_the_table_is_made_only_where_its_walks_are_shipped(tmp_path):
+    assert sst.make_table(tmp_path) is None
+    (tmp_path / sst.PROTOTYPE_SOURCE).write_text(SHIPPED.read_text())
+    assert sst.make_table(tmp_path).startswith(f"| `{sst.RECIPE}`")
