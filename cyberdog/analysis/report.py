@@ -45,12 +45,14 @@ def markdown_table(rows: list[dict], columns: list[str] | None = None) -> str:
 
 def write_rows(rows: list[dict], folder: Path, stem: str, columns: list[str] | None = None) -> None:
     """Write rows as `<stem>.csv`, `<stem>.json` and `<stem>.md` in `folder` (columns: `columns` in that order,
-    else every row's keys; empty cells where a row lacks one)."""
+    else every row's keys; empty cells where a row lacks one). No rows, no files: an absent table is an empty
+    one (`prototype_gaps` where one robot walked)."""
     folder.mkdir(parents=True, exist_ok=True)
-    if rows:
-        with open(folder / f"{stem}.csv", "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=columns or all_columns(rows), restval="", extrasaction="ignore")
-            w.writeheader()
-            w.writerows(rows)
+    if not rows:
+        return
+    with open(folder / f"{stem}.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns or all_columns(rows), restval="", extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
     (folder / f"{stem}.json").write_text(json.dumps(rows, indent=2))
     (folder / f"{stem}.md").write_text(markdown_table(rows, columns) + "\n")

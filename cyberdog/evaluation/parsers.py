@@ -19,7 +19,8 @@ HELP = {  # name: (one line for the list of sub-commands, the paragraph of its o
             "prototype on results/battery/paths/, the battery recipe's; --learned "
             "FILE|DIR... (both), or --policies/--sweep to extract them first). Writes table5.md, "
             "table5_summary.*, table5.*, comparison.*, "
-            "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.*, "
+            "learned_mean_ci.* (several seeds), walks.json, power_traces.npz, prototype.*, prototype_gaps.* (both "
+            "robots), "
             "figure{4,6,7,10,13}_*.{png,pdf} and learned/<label>.json (the trajectories used)."),
     "baselines": ("walk the composite cycloid and the straight line at each speed",
                   "walk --duration s at each of --speeds with the composite cycloid and straight-line "
@@ -44,7 +45,8 @@ HELP = {  # name: (one line for the list of sub-commands, the paragraph of its o
                   "--prototype-distance m (default "
                   "20; the paper's 100) on the ideal robot and on --prototype-draws hardware-like robots: battery "
                   "use (Eq. 13), range, energy per 100 m, cost of transport, mean ± 95 % CI across seeds, the "
-                  "learned path's battery saving. Writes prototype.*, prototype_summary.* and prototype_gaps.*."),
+                  "learned path's battery saving. Writes prototype.*, prototype_summary.* and, where both robots "
+                  "walked, prototype_gaps.*."),
     "stiffness": ("the prototype run at several joint-PD stiffnesses: does the saving survive the gains?",
                   "the prototype run's walks (hardware-like robots by default) with every walk's joint PD scaled "
                   "by each of --pd-scales (kp x s, kd x sqrt(s), the damping ratio kept): the learned paths, the "
