@@ -380,7 +380,7 @@ def _resumable_config(run_dir: Path):
         cfg = C.load(C.ExperimentConfig, cfg_path)
     except (ValueError, OSError) as e:
         try:
-            C.load(C.WalkConfig, cfg_path)
+            C.load_walked(cfg_path)
             what = "an evaluate.py output folder (its config.yaml is a walk config)"
         except (ValueError, OSError):
             what = f"its config.yaml is not an experiment config ({str(e)[:300]})"

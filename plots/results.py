@@ -45,7 +45,7 @@ def _json(path: Path):
 def load_gait(folder: Path) -> C.GaitConfig:
     """The gait of the walks (config.yaml, which evaluate.py writes first); the defaults if absent."""
     path = folder / "config.yaml"
-    return C.load(C.WalkConfig, path).gait if path.is_file() else C.WalkConfig().gait
+    return C.load_walked(path).walk.gait if path.is_file() else C.WalkConfig().gait
 
 
 def load_power(folder: Path) -> dict[int, np.ndarray] | None:

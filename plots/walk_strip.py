@@ -100,7 +100,7 @@ def video_run(folder: str | Path) -> tuple[Path, str, float, float]:
         raise ValueError(f"{folder} should hold one GIF written by `evaluate.py video`, found {len(gifs)}")
     m = VIDEO_NAME.match(gifs[0].name)
     name, speed = m["name"], float(m["speed"])
-    gait = C.load(C.WalkConfig, folder / "config.yaml").gait
+    gait = C.load_walked(folder / "config.yaml").walk.gait
     if name.startswith("learned_"):
         seed = name.removeprefix("learned_")
         lift = LearnedSet.load([folder / "learned"]).at(speed)[seed].figure_path().lift_height

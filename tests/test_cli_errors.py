@@ -118,13 +118,14 @@ def test_the_video_of_a_learned_path_names_its_seed(tmp_path, monkeypatch, capsy
     import cyberdog.analysis.video as video
     recorded = {}
 
-    def record(cfg, trajectory, path, duration, label=""):
-        recorded.update(path=Path(path), label=label)
+    def record(cfg, trajectory, path, duration, label="", hardware=None):
+        recorded.update(path=Path(path), label=label, hardware=hardware)
         return Path(path)
 
     monkeypatch.setattr(video, "record_video", record)
     assert evaluate.main(["video", "--video-duration", "0.1", "--out", str(tmp_path / "v")]) == 0
     assert recorded["label"] == "learned, seed0" and recorded["path"].name == "trot_learned_seed0_1mps.gif"
+    assert recorded["hardware"] is None  # the ideal robot: no hardware setting given
     assert "the learned, seed0 trajectory" in capsys.readouterr().out
 
 

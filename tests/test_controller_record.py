@@ -133,7 +133,7 @@ def test_the_prototype_run_walks_every_trajectory_under_the_learned_trot(tmp_pat
                           "--no-prototype-reference", "--workers", "1", "--out", str(out)]) == 0
     assert "recorded under the trot controller controller.sagittal_placement_gain=0.1" in capsys.readouterr().out
     assert len(built) >= 3 and all(c == PLACED for c in built)  # learned, cycloid, straight line
-    assert C.load(C.WalkConfig, out / "config.yaml").controller == PLACED
+    assert C.load_walked(out / "config.yaml").walk.controller == PLACED
 
 
 def _shape(**provenance) -> SampledTrajectory:

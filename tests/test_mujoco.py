@@ -241,7 +241,7 @@ def test_evaluate_py_walks_on_mujoco(tmp_path):
     done = _run(["evaluate.py", "baselines", "--speeds", "1.0", "--trajectories", "cycloid", "--duration", "2",
                  "--set", "sim.engine=mujoco", "--out", str(tmp_path / "out")], timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert C.load(C.WalkConfig, tmp_path / "out" / "config.yaml").sim.engine == "mujoco"
+    assert C.load_walked(tmp_path / "out" / "config.yaml").walk.sim.engine == "mujoco"
 
 
 def test_the_two_engines_share_no_run_of_six_identical_lines():

@@ -91,9 +91,9 @@ def test_unknown_keys_and_bad_yaml_are_clear(tmp_path):
 
 # ---- both command lines answer user mistakes with one line, no traceback ------------------------------------
 def test_train_cli_answers_user_mistakes_with_one_line(tmp_path):
-    evaluation = tmp_path / "eval_out"  # an evaluate.py folder: a walk config, no checkpoint
+    evaluation = tmp_path / "eval_out"  # an evaluate.py folder: a walk config and its hardware, no checkpoint
     evaluation.mkdir()
-    C.save(C.WalkConfig(), evaluation / "config.yaml")
+    C.save_walked(C.WalkedRobot(C.WalkConfig(), C.HARDWARE_LIKE), evaluation / "config.yaml")
     train = [ROOT / "train.py", "--no-progress"]
     cases = [
         (["--config", tmp_path / "missing.yaml"], ["missing.yaml"]),
@@ -146,7 +146,7 @@ def test_a_second_out_into_a_used_folder_is_refused_and_force_replaces_it(tmp_pa
     text = capsys.readouterr().out
     assert not (out / "stale_table5.md").exists() and (out / "my_notes.txt").read_text() == "mine"
     assert "my_notes.txt" in text and "removed 5 file(s)" in text
-    assert C.load(C.WalkConfig, out / "config.yaml").gait.lift_height == 0.1
+    assert C.load_walked(out / "config.yaml").walk.gait.lift_height == 0.1
     *listed, last = [ln.strip() for ln in text.split("wrote ")[-1].splitlines()[1:] if ln.strip()]
     assert last == f"output folder: {out}/"  # the last line names the folder
     assert sorted(Path(p).name for p in listed) == ["baselines.csv", "baselines.json", "baselines.md", "config.yaml",

@@ -129,18 +129,24 @@ def _robot(seed: int, pd: float) -> str:
     return f"hardware-like robot (seed {seed}{f', PD {pd:g}x' if pd != 1 else ''})"
 
 
-def check_walks(speed: float, cfg: WalkConfig | None = None) -> list[CheckWalk]:
-    """The check's walks at `speed` (m/s), in the order it walks them (the module docstring)."""
+def check_walks(speed: float, cfg: WalkConfig | None = None,
+                hardware: HardwareConfig = HARDWARE_LIKE) -> list[CheckWalk]:
+    """The check's walks at `speed` (m/s), in the order it walks them (the module docstring). `hardware`: the
+    hardware-like robots' model, each robot with its seed + `hardware.seed` (HARDWARE_LIKE: the seeds above)."""
     cfg = cfg or WalkConfig()
     cap = time_cap(CHECK_DISTANCE_M, speed, cfg)
     spread_cap = time_cap(SPREAD_CHECK_DISTANCE_M, speed, cfg, PROTOTYPE_RUN_UP_S)
+
+    def robot(seed: int) -> HardwareConfig:
+        return dataclasses.replace(hardware, seed=hardware.seed + seed)
+
     walks = [CheckWalk("ideal robot, 10 s", "ideal", REPLAY_CHECK_S, None, None)]
-    walks += [CheckWalk(f"{_robot(seed, pd)}, {SPREAD_CHECK_DISTANCE_M:g} m", "spread", spread_cap,
-                        dataclasses.replace(HARDWARE_LIKE, seed=seed), SPREAD_CHECK_DISTANCE_M, pd, PROTOTYPE_RUN_UP_S)
+    walks += [CheckWalk(f"{_robot(robot(seed).seed, pd)}, {SPREAD_CHECK_DISTANCE_M:g} m", "spread", spread_cap,
+                        robot(seed), SPREAD_CHECK_DISTANCE_M, pd, PROTOTYPE_RUN_UP_S)
               for pd in SPREAD_CHECK_PD_SCALES for seed in SPREAD_CHECK_SEEDS]
     walks += [CheckWalk(f"ideal robot, {CHECK_DISTANCE_M:g} m", "ideal", cap, None, CHECK_DISTANCE_M)]
-    walks += [CheckWalk(f"{_robot(seed, pd)}, {CHECK_DISTANCE_M:g} m", "hardware", cap,
-                        dataclasses.replace(HARDWARE_LIKE, seed=seed), CHECK_DISTANCE_M, pd, counted=True)
+    walks += [CheckWalk(f"{_robot(robot(seed).seed, pd)}, {CHECK_DISTANCE_M:g} m", "hardware", cap,
+                        robot(seed), CHECK_DISTANCE_M, pd, counted=True)
               for seed, pd in zip(HARDWARE_CHECK_SEEDS, HARDWARE_CHECK_PD_SCALES)]
     return walks
 

@@ -1,9 +1,11 @@
 """A video of the scripted trot with a chosen foot trajectory, rendered headless (PyBullet TinyRenderer).
 
-The walk is the same trot controller as `cyberdog.analysis.walk.walk` (ideal robot, true state feedback);
-every `1 / fps` s of simulated time the camera that follows the body (`Robot.render`) takes a frame, with the
-trajectory, speed, time and the energy so far written on it. GIF is written with Pillow (no ffmpeg needed);
-MP4 needs `imageio` with its ffmpeg plugin, or matplotlib with an `ffmpeg` binary on the PATH.
+The walk is the same trot controller as `cyberdog.analysis.walk.walk`, on the ideal robot (true state feedback)
+or on a hardware-like one (`HardwareConfig`); every `1 / fps` s of simulated time the camera that follows the
+body (`Robot.render`) takes a frame, with the trajectory, speed, time, the energy so far and the robot walked
+(ideal or hardware-like, the settings that differ from HARDWARE_LIKE's, the PD gains) written on it. GIF is
+written with Pillow (no ffmpeg needed); MP4 needs `imageio` with its ffmpeg plugin, or matplotlib with an `ffmpeg`
+binary on the PATH.
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cyberdog.config import WalkConfig
+from cyberdog.config import HardwareConfig, WalkConfig, robot_words
 from cyberdog.control.trot import TrotController
 from cyberdog.core.trajectories import FootTrajectory
 from cyberdog.loop.walker import Walker
@@ -21,8 +23,10 @@ FORMATS = (".gif", ".mp4")
 
 
 def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, duration: float = 4.0,
-                fps: int = 25, width: int = 480, height: int = 360, label: str = "") -> list[np.ndarray]:
-    """Frames (height, width, 3) uint8 of a `duration` s trot at `cfg.gait.speed`; stops early on a fall."""
+                fps: int = 25, width: int = 480, height: int = 360, label: str = "",
+                hardware: HardwareConfig | None = None) -> list[np.ndarray]:
+    """Frames (height, width, 3) uint8 of a `duration` s trot at `cfg.gait.speed` on the robot of `hardware`
+    (None: the ideal robot); stops early on a fall."""
     if not duration > 0:
         raise ValueError(f"video duration must be > 0 s, got {duration!r}")
     if not 1 <= fps <= 100:
@@ -32,8 +36,9 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
     dt = cfg.sim.controller_dt
     every = max(1, int(round(1.0 / (fps * dt))))
     ctrl = TrotController(cfg, trajectory)
+    robot = robot_words(hardware, cfg.pid)
     frames = []
-    with Walker(cfg, ctrl) as walker:
+    with Walker(cfg, ctrl, hardware=hardware) as walker:
         start = walker.start
         for k in range(int(round(duration / dt))):
             walker.step()
@@ -44,7 +49,7 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
                                                           pitch_deg=-15.0))
                 text = (f"{label or ctrl.trajectory.name}  v_cmd = {ctrl.speed:.1f} m/s  H = "
                         f"{cfg.gait.lift_height:.3f} m\nt = {k * dt:5.2f} s  x = {s.base_position[0] - start[0]:5.2f} m"
-                        f"  E = {energy:6.1f} J (Eq. 7)" + ("  FELL" if fell else ""))
+                        f"  E = {energy:6.1f} J (Eq. 7)" + ("  FELL" if fell else "") + f"\n{robot}")
                 ImageDraw.Draw(img).multiline_text((8, 6), text, fill=(0, 0, 0))
                 frames.append(np.asarray(img))
             if fell:
@@ -108,12 +113,14 @@ def write_video(frames: list[np.ndarray], path: str | Path, fps: int = 25) -> Pa
 
 
 def record_video(cfg: WalkConfig, trajectory: FootTrajectory | None, path: str | Path, duration: float = 4.0,
-                 fps: int = 25, width: int = 480, height: int = 360, label: str = "") -> Path:
-    """Render a trot (`render_walk`) and write it to `path` (.gif or .mp4); returns the path."""
+                 fps: int = 25, width: int = 480, height: int = 360, label: str = "",
+                 hardware: HardwareConfig | None = None) -> Path:
+    """Render a trot (`render_walk`, on the robot of `hardware`) and write it to `path` (.gif or .mp4); returns
+    the path."""
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
         raise ValueError(f"video file must end in one of {FORMATS}, got {path.name!r}")
-    return write_video(render_walk(cfg, trajectory, duration, fps, width, height, label), path, fps)
+    return write_video(render_walk(cfg, trajectory, duration, fps, width, height, label, hardware), path, fps)
 
 
 __all__ = ["FORMATS", "record_video", "render_walk", "write_video"]

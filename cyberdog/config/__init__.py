@@ -10,8 +10,9 @@ allowed range, so that bad input fails before any long work starts.
 The settings live in these modules: `walk_settings` (one scripted walk on the paper's ideal robot: robot, actuator,
 sim, gait, PID, controller, energy), `hardware` (sensors, the hardware model, domain randomisation), `env`
 (reward and environment), `learning` (agent, training, experiment), `schedule` (when a training updates),
-`preset` (a recipe: `base:`, phases, extraction) and `io` (YAML and overrides); everything is re-exported here,
-so `from cyberdog import config as C; C.EnvConfig()` works.
+`preset` (a recipe: `base:`, phases, extraction), `walked` (a walk config with its hardware model, as one file)
+and `io` (YAML and overrides); everything is re-exported here, so `from cyberdog import config as C;
+C.EnvConfig()` works.
 """
 from cyberdog.config.io import add_override_option, from_dict, override, replace, save, to_dict  # noqa: F401
 from cyberdog.config.env import *  # noqa: F401,F403
@@ -21,5 +22,6 @@ from cyberdog.config.learning import stage_reward  # noqa: F401
 from cyberdog.config.walk_settings import *  # noqa: F401,F403
 from cyberdog.config.hardware import *  # noqa: F401,F403
 from cyberdog.config.schedule import *  # noqa: F401,F403
+from cyberdog.config.walked import *  # noqa: F401,F403
 from cyberdog.config.preset import (Phase, Preset, changed_settings, current_run, describe, final_run,  # noqa: F401
                                     is_lineage, load, load_preset, read_phases, write_phases)

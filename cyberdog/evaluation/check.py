@@ -4,10 +4,11 @@ walk alone at the paper's speeds?
 - Path files (`evaluate.py check PATH ...`, commanded paths as `extract` writes them): every walk of the replay
   check (`cyberdog.analysis.replay_check.check_walks`: the ideal robot, the spread walks at the PD
   stiffness's ends, the 100 m hardware-like walks; or the `--parts` asked for) at the speed each path serves,
-  under the trot it was recorded with, as extraction checks it. `extract` stops a candidate's check at its
-  first failing walk; this walks them all and prints per walk the mean speed as a share of the command, a fall
-  and the electrical energy per metre (J/m), then each path's verdict ("ok", or the walks that failed). Writes
-  replay_check.json; the exit status is 1 where a path fails a walk.
+  under the trot it was recorded with, as extraction checks it; `--set hardware.*` changes the hardware-like
+  robots' model (HARDWARE_LIKE; each check robot keeps its own seed, offset by hardware.seed). `extract` stops
+  a candidate's check at its first failing walk; this walks them all and prints per walk the mean speed as a
+  share of the command, a fall and the electrical energy per metre (J/m), then each path's verdict ("ok", or the
+  walks that failed). Writes replay_check.json; the exit status is 1 where a path fails a walk.
 - `--runs RUN ...` (train.py run folders, a recipe's seed folders, shipped policy folders): each run's stage-1
   and stage-2 actors walk `--duration` s from the stand at each speed, deterministically, alone
   (`cyberdog.analysis.policy_check`), on each of `--robots` (default the ideal robot; `hardware:N` the
@@ -32,7 +33,8 @@ PARTS = ("ideal", "spread", "hardware")  # the replay check's parts (`CheckWalk.
 ACTORS = ("final", "best")  # stage<N>_final_actor.pt or stage<N>_best_actor.pt of a run folder
 LINE = "do learned paths pass the replay check, walk by walk (PATH...); do trained policies walk alone (--runs)"
 PARAGRAPH = ("path files (commanded paths, as `extract` writes them; folders of them): every walk of the replay "
-             "check at the speed each serves, under the trot it was recorded with, and a verdict per path "
+             "check at the speed each serves, under the trot it was recorded with (its hardware-like robots "
+             "HARDWARE_LIKE, or as --set hardware.* makes them), and a verdict per path "
              "(replay_check.json; exit status 1 where one fails). --runs RUN...: each run's stage-1 and stage-2 "
              "actors walk alone at each speed on the ideal robot (or --robots; in MuJoCo with --set sim.engine=mujoco), "
              "and stage 2's reduction against stage 1 on Eq. 7 and the electrical energy per metre "
@@ -74,21 +76,23 @@ def cmd_check(args, cfg) -> int:
 
 # ---- path files ---------------------------------------------------------------------------------------------
 
-def check_walks_of(path, cfg, parts) -> list:
-    """The replay check's walks of `parts` for `path` at the speed it serves, under `cfg`."""
+def check_walks_of(path, cfg, parts, hardware) -> list:
+    """The replay check's walks of `parts` for `path` at the speed it serves, under `cfg`, its hardware-like robots
+    `hardware`'s (`check_walks`)."""
     from cyberdog.analysis.replay_check import check_walks
 
-    return [w for w in check_walks(path.speed, cfg) if w.part in parts]
+    return [w for w in check_walks(path.speed, cfg, hardware) if w.part in parts]
 
 
 def walk_job(job: tuple) -> dict:
-    """One check walk of one path file: (file, walk index, parts, walk config) → a row (in a worker process)."""
+    """One check walk of one path file: (file, walk index, parts, walk config, hardware model) → a row (in a
+    worker process)."""
     from cyberdog.analysis.replay_check import walk_status
     from cyberdog.core.learned_set import LearnedSet
 
-    file, index, parts, cfg = job
+    file, index, parts, cfg, hardware = job
     path = LearnedSet.load([file]).paths()[0]
-    w = check_walks_of(path, cfg, parts)[index]
+    w = check_walks_of(path, cfg, parts, hardware)[index]
     r = w.run(path, path.speed, cfg)
     return {"file": str(file), "speed_mps": path.speed, "walk": w.name, "part": w.part, "pd_scale": w.pd_scale,
             "status": walk_status(r), "fell": r.fell, "speed_share": r.mean_speed / path.speed,
@@ -126,7 +130,8 @@ def _check_paths(args, cfg) -> int:
     jobs = []
     for f, path in zip(files, paths):
         walk_cfg = trot_for(args, cfg, path.recorded_controller, f"{f.name}", walked="its check walks under it")
-        jobs += [(str(f), i, parts, walk_cfg) for i in range(len(check_walks_of(path, walk_cfg, parts)))]
+        jobs += [(str(f), i, parts, walk_cfg, args.hardware)
+                 for i in range(len(check_walks_of(path, walk_cfg, parts, args.hardware)))]
     run = open_run(args, cfg)
     print(f"{len(jobs)} walks of {len(files)} paths ({', '.join(parts)})", flush=True)
 

@@ -15,25 +15,11 @@ from cyberdog.evaluation.options import UsageError
 from cyberdog.evaluation.output import Run, open_run
 from cyberdog.evaluation.pd_match import cmd_pd_match
 from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
+from cyberdog.evaluation.robot import walk_config, walked_hardware
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",
                     "cost_of_transport", "peak_torque_Nm", "peak_joint_speed_radps"]
-
-
-def walk_config(args) -> C.WalkConfig:
-    """The walk config of --config and --set; --set's `hardware.*` settings change the hardware-like robot the
-    prototype and stiffness walks use instead (`args.hardware`, HARDWARE_LIKE by default), as training's
-    env.hardware does: e.g. --set hardware.latency_s=0.005 hardware.mass_uncertainty=0.1."""
-    sets = list(getattr(args, "overrides", []))
-    robot = [s.split("=", 1)[0].strip().removeprefix("hardware.") + "=" + s.split("=", 1)[1]
-             for s in sets if s.strip().startswith("hardware.") and "=" in s]
-    try:
-        args.hardware = C.override(C.HARDWARE_LIKE, robot)
-        cfg = C.load(C.WalkConfig, args.config) if args.config else C.WalkConfig()
-        return C.override(cfg, [s for s in sets if not s.strip().startswith("hardware.")])
-    except (ValueError, OSError) as err:
-        raise UsageError(f"config error: {err}") from None
 
 
 def trot_of(args, run: Run, cfg: C.WalkConfig, learned, name: str = "config.yaml",
@@ -42,7 +28,7 @@ def trot_of(args, run: Run, cfg: C.WalkConfig, learned, name: str = "config.yaml
     run's `name` where that changed it; a note where the searched shape `reference` was searched under another."""
     walked = walk_under_recorded_trot(args, cfg, learned)
     if walked != cfg:
-        C.save(walked, run.out / name)
+        run.save_config(walked, name)
     note_searched_trot(reference, walked)
     return walked
 
@@ -145,7 +131,7 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
                                                                      for_prototype=True)
         proto_cfg = table5_cfg if given else walk_under_recorded_trot(args, cfg, proto_learned)
         if proto_cfg != table5_cfg:  # the prototype's paths were recorded under another trot than Table 5's
-            C.save(proto_cfg, run.out / "prototype_config.yaml")
+            run.save_config(proto_cfg, "prototype_config.yaml")
         run_prototype_part(proto_cfg, proto_learned, args.speeds, args.prototype_distance, args.prototype_modes,
                            args.workers, run.out, brief=True, draws=args.prototype_draws, reference=proto_reference,
                            run_up_s=args.prototype_run_up, policies=L.closed_loop_policies(args, proto_learned),
@@ -205,10 +191,12 @@ def run(args, argv: list[str], draw_figures=None) -> int:
     returns the exit status. draw_figures: `plots.draw_all` or the like (see `parts.run_figures`); None:
     results without figures."""
     args.argv = list(argv)  # as typed, for outputs.json
-    args.run = None
+    args.run = args.walked_hardware = None
     args.draw_figures = draw_figures
     try:
-        return COMMAND_FUNCTIONS[args.command](args, walk_config(args))
+        cfg = walk_config(args)
+        args.walked_hardware = walked_hardware(args, cfg)  # config.yaml's hardware section
+        return COMMAND_FUNCTIONS[args.command](args, cfg)
     except (UsageError, LearnedSetError) as err:  # LearnedSetError: a learned path unreadable or missing
         _abandon(args, "failed")
         print(f"evaluate.py: error: {err}", file=sys.stderr)

@@ -68,12 +68,16 @@ def add_output_options(p) -> None:
     g = p.add_argument_group("walk config and output folder")
     g.add_argument("--config", type=Path, default=None,
                    help="YAML walk config (WalkConfig sections: robot, actuator, sim, gait, pid, controller, "
-                        "energy); default: the built-in defaults (paper lift height 0.15 m)")
+                        "energy, and optionally hardware, as an output's config.yaml holds them); default: the "
+                        "built-in defaults (paper lift height 0.15 m)")
     add_override_option(g, "gait.lift_height=0.1 --set gait.straight_shape=trapezoid",
-                        "; hardware.FIELD sets the hardware-like robot of the prototype and stiffness walks, as "
-                        "training's env.hardware (HardwareConfig: friction, latency_s, joint_angle_noise_std, "
-                        "joint_velocity_noise_std, estimated_velocity, imu_noise, mass_uncertainty, ...), e.g. "
-                        "--set hardware.latency_s=0.005")
+                        "; hardware.FIELD sets the hardware-like robot (HARDWARE_LIKE by default, or the --config "
+                        "file's hardware section) of the walks that use one (prototype, stiffness, check's "
+                        "hardware-like walks, video), as training's env.hardware (HardwareConfig: friction, "
+                        "latency_s, joint_angle_noise_std, joint_velocity_noise_std, estimated_velocity, imu_noise, "
+                        "mass_uncertainty, seed, ...), e.g. --set hardware.latency_s=0.005; refused where no "
+                        "hardware-like robot walks. The output's config.yaml holds the walk config and the "
+                        "hardware section (null: the ideal robot only); --config reads it back")
     g.add_argument("--no-recorded-trot", action="store_true",
                    help="walk under the config's trot controller even where the learned paths (or the policies "
                         "extracted) were recorded under another; by default every trajectory of a comparison walks "
@@ -199,5 +203,10 @@ def add_video_options(p) -> None:
                         "frame and the file name) or a common one (default learned)")
     g.add_argument("--video-speed", type=positive, default=1.0, help="commanded speed, m/s (default 1.0)")
     g.add_argument("--video-duration", type=positive, default=4.0, help="s of simulated walking (default 4)")
+    g.add_argument("--video-robot", default=None, choices=["ideal", "hardware"],
+                   help="the robot the video walks: ideal (the paper's simulation) or hardware (the hardware-like "
+                        "robot of --set hardware.*, HARDWARE_LIKE by default); default: hardware where hardware "
+                        "settings are given (--set hardware.* or a --config file's hardware section), else ideal. "
+                        "The frame names the robot and its PD gains")
     g.add_argument("--video-format", default="gif", choices=["gif", "mp4"],
                    help="gif (Pillow, always available) or mp4 (needs imageio[ffmpeg] or ffmpeg; default gif)")

@@ -1,5 +1,6 @@
 """One `evaluate.py` run's output folder: refused if it holds results (unless --force), config.yaml written for a
-run that walks, and at the end the list of exactly the files the run wrote."""
+run that walks (the whole robot it walks: the walk config and the hardware model, `cyberdog.config.walked`), and
+at the end the list of exactly the files the run wrote."""
 from __future__ import annotations
 
 import time
@@ -17,6 +18,7 @@ class Run:
         from cyberdog.output_folder import OutputFolder, OutputFolderError
 
         self.out, self.t0 = out, time.perf_counter()
+        self.hardware = args.walked_hardware  # the hardware-like walks' model (None: the ideal robot only)
         try:
             self.folder = OutputFolder(out, force=args.force, append=append, command=args.command,
                                        argv=getattr(args, "argv", ()))
@@ -25,6 +27,11 @@ class Run:
         for note in self.folder.notes:
             print(note)
         args.run = self  # so that `run` can record this run's files if the command fails
+
+    def save_config(self, cfg: C.WalkConfig, name: str = "config.yaml") -> None:
+        """Write the robot the run walks as `name`: `cfg` and the run's hardware model (`cyberdog.config.walked`),
+        which --config reads back."""
+        C.save_walked(C.WalkedRobot(cfg, self.hardware), self.out / name)
 
     def abandon(self, status: str) -> None:
         """Record the files written so far, the run as `status` ("failed", "interrupted")."""
@@ -59,11 +66,12 @@ def new_out() -> Path:
 
 
 def open_run(args, cfg: C.WalkConfig) -> Run:
-    """The output folder of a sub-command that walks: --out (default runs/evaluate-<time>) with config.yaml."""
+    """The output folder of a sub-command that walks: --out (default runs/evaluate-<time>) with config.yaml, the
+    walk config `cfg` and the hardware model of the run's hardware-like walks (`Run.save_config`)."""
     out = args.out or new_out()
     try:
         run = Run(args, out)
-        C.save(cfg, run.out / "config.yaml")
+        run.save_config(cfg)
     except OSError as err:  # an unwritable place, or a path through a file
         raise UsageError(f"cannot write the output folder --out {out}: {err.strerror or err}; choose a folder "
                          f"you can write") from None

@@ -58,7 +58,9 @@ HELP = {  # name: (one line for the list of sub-commands, the paragraph of its o
                 "Figures 4, 6, 7, 10 and 13 from saved results (--from DIR: a folder written by `all` or "
                 "`compare`); by default they are written beside those results."),
     "video": ("a GIF (or MP4) of the trot with one trajectory",
-              "a GIF (or MP4) of the trot with one trajectory (--video-trajectory, --video-speed)."),
+              "a GIF (or MP4) of the trot with one trajectory (--video-trajectory, --video-speed) on the ideal or "
+              "the hardware-like robot (--video-robot; --set hardware.* sets the latter), named in every frame "
+              "with its PD gains."),
     "check": (check.LINE, check.PARAGRAPH),
     "pd-match": (pd_match.LINE, pd_match.PARAGRAPH),
     "export": (export.LINE, export.PARAGRAPH),

@@ -183,8 +183,10 @@ def run_figures(draw, results_dir: Path, out: Path | None = None, *, metrics: di
 
 
 def run_video(cfg: C.WalkConfig, learned: LearnedSet | None, args, out: Path) -> Path:
-    """A GIF/MP4 of the trot with --video-trajectory at --video-speed."""
+    """A GIF/MP4 of the trot with --video-trajectory at --video-speed, on the robot of --video-robot (the
+    hardware-like one: `args.hardware`, as --set hardware.* and --config make it)."""
     from cyberdog.analysis.video import record_video
+    from cyberdog.evaluation.robot import video_robot
 
     name = label = args.video_trajectory
     traj = None
@@ -196,9 +198,11 @@ def run_video(cfg: C.WalkConfig, learned: LearnedSet | None, args, out: Path) ->
         label = f"learned, {seed}"  # which of the learned paths the video walks
         name = f"learned_{seed}"
     vcfg = cmp.walk_config(cfg, args.video_trajectory, args.video_speed, lift)
+    hardware = args.hardware if video_robot(args) == "hardware" else None
     path = out / f"trot_{name}_{args.video_speed:g}mps.{args.video_format}"
-    print(f"video: the trot with the {label} trajectory at {args.video_speed:g} m/s, {args.video_duration:g} s")
-    return record_video(vcfg, traj, path, args.video_duration, label=label)
+    print(f"video: the trot with the {label} trajectory at {args.video_speed:g} m/s, {args.video_duration:g} s, "
+          f"on the {C.robot_words(hardware, vcfg.pid)}")
+    return record_video(vcfg, traj, path, args.video_duration, label=label, hardware=hardware)
 
 
 __all__ = ["FIGURES", "run_compare", "run_figures", "run_prototype_part", "run_video"]

@@ -1,0 +1,89 @@
+"""The robot an `evaluate.py` sub-command walks: the walk config of --config and --set, and the hardware model of
+its hardware-like walks.
+
+`--set hardware.FIELD=V` changes that model, HARDWARE_LIKE by default or the --config file's `hardware:` section,
+as training's env.hardware does. The prototype and stiffness runs walk it (`--prototype-modes hardware`, each
+draw its own seed), `check` on paths walks its spread and hardware parts on it (each check robot its own seed),
+and the video walks it with `--video-robot hardware`, the default where hardware settings are given. A
+sub-command that walks no hardware-like robot refuses hardware settings in one line: they would change nothing.
+The output's config.yaml records the walk config and that model (null where the run walks the ideal robot
+only, `cyberdog.config.walked`), so that --config of it walks the same robot.
+"""
+from __future__ import annotations
+
+from cyberdog import config as C
+from cyberdog.evaluation.options import UsageError
+
+HARDWARE = "hardware."  # the --set prefix of the hardware model's fields
+# where a sub-command walks no hardware-like robot: what it walks instead, or the option that made it so
+IDEAL_ONLY = {
+    "all": "with --no-prototype or --prototype-modes ideal and no hardware video (Table 5 walks the ideal robot)",
+    "baselines": "(the baselines walk the ideal robot of Section 4.1)",
+    "compare": "(Table 5, Section 4.1, walks the ideal robot; the prototype run walks hardware-like ones)",
+    "extract": "(the policies roll out in their own env, and the replay check walks its own validation robots)",
+    "prototype": "with --prototype-modes ideal", "stiffness": "with --prototype-modes ideal",
+    "video": "with --video-robot ideal", "check": "with --parts ideal",
+    "pd-match": "(the paths are re-commanded from walks on the ideal robot)",
+    "export": "(the joint table is made and replayed on the ideal robot)",
+    "figures": "(it draws saved results)",
+}
+
+
+def walk_config(args) -> C.WalkConfig:
+    """The walk config of --config and --set. Sets `args.hardware`, the hardware model the run's hardware-like
+    walks use (HARDWARE_LIKE, or the --config file's hardware section, with --set's `hardware.*` laid over it:
+    e.g. --set hardware.latency_s=0.005 hardware.mass_uncertainty=0.1), and `args.hardware_settings`, the
+    hardware settings given (for the line that refuses them where no hardware-like robot walks)."""
+    sets = [str(s) for s in getattr(args, "overrides", [])]
+    is_hardware = [s.strip().startswith(HARDWARE) and "=" in s for s in sets]
+    robot = [s.split("=", 1)[0].strip().removeprefix(HARDWARE) + "=" + s.split("=", 1)[1]
+             for s, hw in zip(sets, is_hardware) if hw]
+    try:
+        given = C.load_walked(args.config) if args.config else C.WalkedRobot(C.WalkConfig())
+        args.hardware = C.override(given.hardware or C.HARDWARE_LIKE, robot)
+        cfg = C.override(given.walk, [s for s, hw in zip(sets, is_hardware) if not hw])
+    except (ValueError, OSError) as err:
+        raise UsageError(f"config error: {err}") from None
+    args.hardware_settings = ([f"--config {args.config}'s hardware section"] if given.hardware is not None else [])
+    args.hardware_settings += [f"--set {s.split('=', 1)[0].strip()}" for s, hw in zip(sets, is_hardware) if hw]
+    return cfg
+
+
+def video_robot(args) -> str:
+    """The robot the video walks: --video-robot, else "hardware" where hardware settings are given, else "ideal"."""
+    return args.video_robot or ("hardware" if args.hardware_settings else "ideal")
+
+
+def _walks_hardware(args) -> bool | None:
+    """Whether the sub-command of `args` walks a hardware-like robot (None: `check --runs`, whose policies walk
+    in their own env and which refuses every --set but the engine itself)."""
+    command = args.command
+    prototype = "hardware" in getattr(args, "prototype_modes", ())
+    if command in ("prototype", "stiffness"):
+        return prototype
+    if command == "video":
+        return video_robot(args) == "hardware"
+    if command == "all":
+        return (prototype and not args.no_prototype) or (args.video and video_robot(args) == "hardware")
+    if command == "check":
+        return None if args.runs else args.parts is None or set(args.parts) != {"ideal"}
+    return False
+
+
+def walked_hardware(args, cfg: C.WalkConfig) -> C.HardwareConfig | None:
+    """The hardware model of the run's hardware-like walks (`args.hardware`, after `walk_config` made `cfg`), None
+    where the run walks the ideal robot only; hardware settings given to such a run, or a model whose latency or
+    filter period is no whole number of `cfg`'s controller periods, are a UsageError."""
+    walks = _walks_hardware(args)
+    if walks is False and args.hardware_settings:
+        raise UsageError(f"{', '.join(args.hardware_settings)}: evaluate.py {args.command} walks no hardware-like "
+                         f"robot {IDEAL_ONLY[args.command]}, so hardware settings change nothing; leave them out")
+    if not walks:
+        return None
+    try:
+        return C.WalkedRobot(cfg, args.hardware).hardware
+    except ValueError as err:
+        raise UsageError(f"config error: {err}") from None
+
+
+__all__ = ["HARDWARE", "IDEAL_ONLY", "video_robot", "walk_config", "walked_hardware"]
