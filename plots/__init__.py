@@ -9,7 +9,7 @@ One module per figure; none runs physics or imports the simulator or torch (`tes
     figure13         energy (comparison.json) and battery use (prototype.json) against speed
     learning_curves  a seed sweep's curves with a 95 % band, from its learning_curves.csv
     results          reading a results folder written by `evaluate.py`
-    walk_strip       the README's picture: frames of the trot (learned, cycloid), cut from `evaluate.py video`
+    walk_strip       the README's picture: the trot's frames (learned, cycloid) from `evaluate.py video`, the feet's paths
     shipped          the README's copies of Figures 7, 10 and 13 and the small inputs they are drawn from
 
 `draw_all(results_dir, out_dir)` draws every figure the folder has inputs for; each module's `figureN(...)`

@@ -1,5 +1,6 @@
 """The picture at the top of the README: the robot trotting at 1.0 m/s with the learned battery gait (above)
-and with the composite cycloid at the same lift height (below), five frames over the last whole gait period.
+and with the composite cycloid at the same lift height (below), five frames over the last whole gait period,
+and beside them the foot paths the two walks command, where they differ.
 
 Rendering runs physics, so `evaluate.py video` renders the walks (PyBullet's TinyRenderer, headless, the
 camera following the body, a frame every 0.04 s); this module only picks frames out of the two GIFs it
@@ -8,17 +9,19 @@ writes, crops them, saves them as the strip's input and draws the strip. The shi
     .venv/bin/python evaluate.py video --learned results/battery/paths --video-speed 1.0 \\
         --video-duration 3 --out runs/walk_strip/learned --force
     .venv/bin/python evaluate.py video --config runs/walk_strip/learned/config.yaml \\
-        --video-trajectory cycloid --set gait.lift_height=0.110 --video-speed 1.0 \\
+        --video-trajectory cycloid --set gait.lift_height=0.0989 --video-speed 1.0 \\
         --video-duration 3 --out runs/walk_strip/cycloid --force
     .venv/bin/python -m plots.walk_strip runs/walk_strip/learned runs/walk_strip/cycloid \\
         --save-inputs results/figures_input --out plots/png
 
-The cycloid walks under the learned run's config.yaml (the trot controller the battery paths were recorded
-under) at the learned path's lift height, 0.110 m: the LF leg's peak of seed 0's path, which the video
-replays on all four legs; each row's label gives the H its run walked. The last command writes
-`results/figures_input/walk_strip.npz` (the cropped frames, their times and the rows' labels) and
-`plots/png/walk_strip.png`; `python -m plots --from results/figures_input --out plots/png --readme` redraws the
-PNG from the saved frames.
+The learned row walks seed 0's commanded path as the tables walk it, each foot on its own path; the cycloid
+walks under the learned run's config.yaml (the trot controller the battery paths were recorded under) at that
+path's own lift height, 0.0989 m (its four feet's mean peak, the H the prototype run matches the common
+trajectories at); each row's label gives the H its run walked. The last command writes
+`results/figures_input/walk_strip.npz` (the cropped frames, their times, the rows' labels, lifts and foot paths)
+and `plots/png/walk_strip.png`; `python -m plots --from results/figures_input --out plots/png --readme` redraws the
+PNG from the saved frames. Where the folder also holds the prototype run's walks (`prototype.json`), each row's
+label adds the battery that path and that cycloid used there (per 100 m, the same seed's hardware-like robots).
 """
 from __future__ import annotations
 
@@ -33,39 +36,55 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from cyberdog import config as C
+from cyberdog.analysis.prototype_summary import METRICS, walk_counts
+from cyberdog.core.commanded_path import LEG_NAMES
 from cyberdog.core.learned_set import LearnedSet
-from plots.style import NAMES, save_figure, styled
+from cyberdog.core.trajectories import make_trajectory
+from plots.figure4 import cycle_path
+from plots.style import COLORS, NAMES, save_figure, styled
 
 STEM = "walk_strip"
 INPUT_NAME = "walk_strip.npz"  # in a figures-input folder (results/figures_input/)
 FRAMES = 5  # per row, evenly over one gait period
 CROP = (110, 100, 430, 360)  # px (left, top, right, bottom) of evaluate.py's 480 x 360 frame: the robot, no text
-TILE_PX = 180  # px: each frame's width in the strip (the saved frames are scaled to it)
+TILE_PX = 160  # px: each frame's width in the strip (the saved frames are scaled to it)
+PATH_POINTS = 200  # per foot path drawn
+PANEL_PX = 300  # px: the foot paths' panel width
+LIFT_TOLERANCE_M = 5e-4  # a common trajectory's lift matches a learned path's (rows of prototype.json) within this
 VIDEO_NAME = re.compile(r"^trot_(?P<name>.+)_(?P<speed>[0-9.]+)mps\.gif$")  # as `evaluate.py video` names it
 
 
 @dataclass
 class StripInput:
-    """The strip's saved input: per row (walk) the same frame times, and the row's label."""
+    """The strip's saved input: per row (walk) the same frame times, the row's label, what it walked (trajectory,
+    the seed of the learned path it walks or matches, lift) and the four feet's commanded x–z paths."""
 
     frames: np.ndarray  # uint8 (rows, frames, height, width, 3)
     times_s: np.ndarray  # s since the walk started, one per column (the same in every row)
     labels: list[str]  # per row
     speed_mps: float
     period_s: float  # the gait period the columns span
+    trajectories: list[str]  # per row: "learned", "cycloid", ... (prototype.json's `trajectory`)
+    seeds: list[str]  # per row: the learned path's seed ("seed0"), a common trajectory's at its lift, else ""
+    lifts_m: np.ndarray  # (rows,) m: the H each row walked (a learned path's own)
+    feet_xz: np.ndarray  # (rows, 4, PATH_POINTS, 2) m: LF, RF, LH, RH's commanded path, contact level z = 0
 
     def save(self, folder: str | Path) -> Path:
         path = Path(folder) / INPUT_NAME
         path.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(path, frames=self.frames, times_s=self.times_s, labels=np.array(self.labels),
-                            speed_mps=self.speed_mps, period_s=self.period_s)
+                            speed_mps=self.speed_mps, period_s=self.period_s,
+                            trajectories=np.array(self.trajectories), seeds=np.array(self.seeds),
+                            lifts_m=self.lifts_m, feet_xz=self.feet_xz)
         return path
 
     @classmethod
     def load(cls, path: str | Path) -> "StripInput":
         with np.load(path, allow_pickle=False) as z:
             return cls(frames=z["frames"], times_s=z["times_s"], labels=[str(s) for s in z["labels"]],
-                       speed_mps=float(z["speed_mps"]), period_s=float(z["period_s"]))
+                       speed_mps=float(z["speed_mps"]), period_s=float(z["period_s"]),
+                       trajectories=[str(s) for s in z["trajectories"]], seeds=[str(s) for s in z["seeds"]],
+                       lifts_m=z["lifts_m"], feet_xz=z["feet_xz"])
 
 
 def read_gif(path: str | Path) -> tuple[list[np.ndarray], np.ndarray]:
@@ -91,9 +110,23 @@ def learned_recipe(folder: Path) -> str:
     return src.parent.name if src.name == "paths" else src.stem
 
 
-def video_run(folder: str | Path) -> tuple[Path, str, float, float]:
-    """(GIF, row label, speed m/s, gait period s) of an `evaluate.py video` run folder, from what it saved: the
-    GIF's name (trajectory, seed, speed), config.yaml (period; a baseline's H) and learned/ (a learned H)."""
+@dataclass
+class VideoRun:
+    """What an `evaluate.py video` run folder walked (`video_run`)."""
+
+    gif: Path
+    label: str
+    speed: float  # m/s
+    period: float  # s
+    trajectory: str  # "learned" or the common trajectory's name
+    seed: str  # the learned path's ("seed0"), "" for a common trajectory
+    lift: float  # m: the H walked (a learned path's own: a commanded path's four feet's mean peak)
+    feet_xz: np.ndarray  # (4, PATH_POINTS, 2) m: each foot's commanded x–z path over one gait cycle
+
+
+def video_run(folder: str | Path) -> VideoRun:
+    """What an `evaluate.py video` run folder walked, from what it saved: the GIF's name (trajectory, seed,
+    speed), config.yaml (gait; a common trajectory's H) and learned/ (the learned path, its H and its feet)."""
     folder = Path(folder)
     gifs = [p for p in sorted(folder.glob("trot_*.gif")) if VIDEO_NAME.match(p.name)]
     if len(gifs) != 1:
@@ -103,12 +136,20 @@ def video_run(folder: str | Path) -> tuple[Path, str, float, float]:
     gait = C.load_walked(folder / "config.yaml").walk.gait
     if name.startswith("learned_"):
         seed = name.removeprefix("learned_")
-        lift = LearnedSet.load([folder / "learned"]).at(speed)[seed].figure_path().lift_height
+        path = LearnedSet.load([folder / "learned"]).at(speed)[seed]
+        feet = [path.path.as_sampled(leg) for leg in LEG_NAMES] if path.commanded else [path.figure_path()] * 4
+        xz = [cycle_path(f, f.step_length, f.lift_height, gait.swing_time, gait.stance_time, PATH_POINTS)[1]
+              for f in feet]
         recipe = learned_recipe(folder)
         label = f"{NAMES['learned']}, {recipe + ' recipe, ' if recipe else ''}{seed.replace('seed', 'seed ')}"
+        trajectory, lift = "learned", path.lift_height
     else:
-        lift, label = gait.lift_height, NAMES.get(name, name)
-    return gifs[0], f"{label}, H = {lift:.3f} m", speed, gait.period
+        seed, trajectory, lift, label = "", name, gait.lift_height, NAMES.get(name, name)
+        walked = C.replace(gait, trajectory=name, speed=speed)
+        xz = [cycle_path(make_trajectory(walked), walked.step_length, lift, gait.swing_time, gait.stance_time,
+                         PATH_POINTS)[1]] * 4
+    return VideoRun(gifs[0], f"{label}, H = {lift:.3f} m", speed, gait.period, trajectory, seed, lift,
+                    np.stack(xz))
 
 
 def pick(times: list[np.ndarray], period: float, n: int = FRAMES) -> list[np.ndarray]:
@@ -129,45 +170,97 @@ def crop(frame: np.ndarray, width: int = TILE_PX) -> np.ndarray:
 
 
 def extract(folders: list[str | Path], n: int = FRAMES) -> StripInput:
-    """The strip's input from `evaluate.py video` run folders (one row each, in order)."""
+    """The strip's input from `evaluate.py video` run folders (one row each, in order). A common trajectory
+    walked at a learned row's lift is that row's seed's matched trajectory (its seed, for the prototype's rows)."""
     runs = [video_run(f) for f in folders]
-    speeds, periods = {r[2] for r in runs}, {r[3] for r in runs}
+    speeds, periods = {r.speed for r in runs}, {r.period for r in runs}
     if len(speeds) != 1 or len(periods) != 1:
         raise ValueError(f"the videos differ in speed {sorted(speeds)} or gait period {sorted(periods)}")
-    videos = [read_gif(r[0]) for r in runs]
+    videos = [read_gif(r.gif) for r in runs]
     period = periods.pop()
     picks = pick([t for _, t in videos], period, n)
     frames = np.stack([[crop(f[i]) for i in idx] for (f, _), idx in zip(videos, picks)])
-    return StripInput(frames=frames, times_s=videos[0][1][picks[0]], labels=[r[1] for r in runs],
-                      speed_mps=speeds.pop(), period_s=period)
+    learned = [r for r in runs if r.trajectory == "learned"]
+    seeds = [r.seed or next((q.seed for q in learned if abs(q.lift - r.lift) <= LIFT_TOLERANCE_M), "") for r in runs]
+    return StripInput(frames=frames, times_s=videos[0][1][picks[0]], labels=[r.label for r in runs],
+                      speed_mps=speeds.pop(), period_s=period, trajectories=[r.trajectory for r in runs],
+                      seeds=seeds, lifts_m=np.array([r.lift for r in runs]),
+                      feet_xz=np.stack([r.feet_xz for r in runs]))
+
+
+def prototype_battery(strip: StripInput, walks: list[dict]) -> list[float | None]:
+    """Per row, battery % per 100 m of the prototype run's walks (`walks`, prototype.json's rows) of the same
+    trajectory, seed, speed and lift on the hardware-like robots at the default PD, averaged over the draws that
+    count; None where none does."""
+    out = []
+    for trajectory, seed, lift in zip(strip.trajectories, strip.seeds, strip.lifts_m):
+        used = [METRICS["battery_pct_per_100m"](w) for w in walks
+                if w["trajectory"] == trajectory and str(w.get("seed", "")) == seed and seed
+                and w.get("robot") == "hardware" and w.get("pd_scale", 1.0) == 1.0 and not w.get("pd_matched")
+                and abs(w["speed_mps"] - strip.speed_mps) < 1e-9
+                and abs(w["lift_height_m"] - lift) <= LIFT_TOLERANCE_M and walk_counts(w)]
+        out.append(sum(used) / len(used) if used else None)
+    return out
 
 
 @styled
-def draw(strip: StripInput, dpi: int = 80) -> Figure:
-    """One row per walk (its label above it), one column per frame (its time at the top); each frame drawn at
-    its own pixel size at `dpi`, the layout laid out in pixels."""
+def draw(strip: StripInput, dpi: int = 80, battery: list[float | None] | None = None) -> Figure:
+    """One row per walk (its label above it, with `battery`'s % per 100 m where given), one column per frame (its
+    time at the top), each frame at its own pixel size at `dpi`; at the right, every row's commanded foot paths."""
     rows, cols, h, w, _ = strip.frames.shape
     gap, title, head, label = (round(pt * dpi / 72) for pt in (3, 17, 12, 13))  # pt → px: the text scales
-    width, height = cols * w + (cols - 1) * gap, title + head + rows * (label + h + gap)
+    battery = battery or [None] * rows
+    note = label if any(b is not None for b in battery) else 0  # a line saying where the battery comes from
+    frames_w = cols * w + (cols - 1) * gap
+    width, height = frames_w + 4 * gap + PANEL_PX, title + head + rows * (label + h + gap) + note
     fig = Figure(figsize=(width / dpi, height / dpi))
     fig.text(0.5, 1 - 4 / height, f"The trot at {strip.speed_mps:g} m/s over one gait period (T = "
-             f"{strip.period_s:g} s), simulated in PyBullet", ha="center", va="top", fontsize=10)
+             f"{strip.period_s:g} s), simulated in PyBullet (ideal robot)", ha="center", va="top", fontsize=10)
     for c, t in enumerate(strip.times_s):
         fig.text((c * (w + gap) + w / 2) / width, 1 - (title + 2) / height, f"t = {t:.2f} s", ha="center",
                  va="top", fontsize=8)
-    for r, (row, text) in enumerate(zip(strip.frames, strip.labels)):
+    for r, (row, text, b) in enumerate(zip(strip.frames, strip.labels, battery)):
         top = title + head + r * (label + h + gap)  # px from the figure's top
+        text += "" if b is None else f"; battery {b:.2f} % per 100 m in the prototype run"
         fig.text(2 / width, 1 - (top + 2) / height, text, ha="left", va="top", fontsize=9)
         for c, frame in enumerate(row):
             ax = fig.add_axes(((c * (w + gap)) / width, 1 - (top + label + h) / height, w / width, h / height))
             ax.imshow(frame, interpolation="none")
             ax.set_axis_off()
+    if note:
+        fig.text(2 / width, note / height, "battery: the prototype run's walks of the same path and cycloid (same "
+                 "seed, speed and H) on hardware-like robots, the mean of the draws", ha="left", va="top", fontsize=8)
+    panel = (frames_w + 4 * gap + 34, note + 30, PANEL_PX - 40, rows * (label + h + gap) - 30)  # px: x, y, w, h
+    feet_panel(fig.add_axes((panel[0] / width, panel[1] / height, panel[2] / width, panel[3] / height)), strip)
     return fig
 
 
+def feet_panel(ax, strip: StripInput) -> None:
+    """Each row's four feet's commanded x–z paths (cm; a common trajectory's four are one), in the row's colour."""
+    for trajectory, seed, lift, feet in zip(strip.trajectories, strip.seeds, strip.lifts_m, strip.feet_xz):
+        color = COLORS.get(trajectory, "black")
+        name = NAMES.get(trajectory, trajectory) + (f", {seed.replace('seed', 'seed ')}" if trajectory == "learned"
+                                                    and seed else "")
+        alike = all(np.allclose(f, feet[0]) for f in feet)
+        for k, f in enumerate(feet[:1] if alike else feet):
+            ax.plot(100 * f[:, 0], 100 * f[:, 1], color=color, lw=2.0 if alike else 1.2, ls="--" if alike else "-",
+                    label=None if k else f"{name}{'' if alike else ', its 4 feet'}, H = {lift:.3f} m")
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high + 0.45 * (high - low))  # room for the legend above the paths
+    ax.set_title("the feet's commanded paths", fontsize=9)
+    ax.set_xlabel("x from the hip's neutral point (cm)", fontsize=8)
+    ax.set_ylabel("z above the contact level (cm)", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=7, loc="upper center", frameon=False)
+
+
 def walk_strip(input_dir: str | Path, out_dir: str | Path, dpi: int = 80, pdf: bool = True) -> list[Path]:
-    """Draw the strip from `input_dir`'s walk_strip.npz into `out_dir` (its frames at their own size at `dpi`)."""
-    return save_figure(draw(StripInput.load(Path(input_dir) / INPUT_NAME), dpi), out_dir, STEM, dpi, pdf)
+    """Draw the strip from `input_dir`'s walk_strip.npz into `out_dir` (its frames at their own size at `dpi`),
+    each row's battery from the prototype run's walks beside it (`prototype.json`) where it has them."""
+    strip = StripInput.load(Path(input_dir) / INPUT_NAME)
+    walks = Path(input_dir) / "prototype.json"
+    battery = prototype_battery(strip, json.loads(walks.read_text())) if walks.is_file() else None
+    return save_figure(draw(strip, dpi, battery), out_dir, STEM, dpi, pdf)
 
 
 def main(argv=None) -> int:
@@ -191,8 +284,8 @@ def main(argv=None) -> int:
     return 0
 
 
-__all__ = ["CROP", "FRAMES", "INPUT_NAME", "STEM", "StripInput", "draw", "extract", "main", "pick", "read_gif",
-           "video_run", "walk_strip"]
+__all__ = ["CROP", "FRAMES", "INPUT_NAME", "STEM", "StripInput", "VideoRun", "draw", "extract", "feet_panel", "main",
+           "pick", "prototype_battery", "read_gif", "video_run", "walk_strip"]
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -114,18 +114,22 @@ def test_the_main_job_prints_a_short_summary_ending_with_the_headline_and_the_fo
     assert (out / "comparison.md").is_file() and (out / "prototype.md").is_file()
 
 
-def test_the_video_of_a_learned_path_names_its_seed(tmp_path, monkeypatch, capsys):
+def test_the_video_of_a_learned_path_names_its_seed_and_walks_it_as_the_tables_do(tmp_path, monkeypatch, capsys):
     import cyberdog.analysis.video as video
     recorded = {}
 
-    def record(cfg, trajectory, path, duration, label="", hardware=None):
-        recorded.update(path=Path(path), label=label, hardware=hardware)
+    def record(cfg, trajectory, path, duration, label="", hardware=None, foot_offsets=None, lift_height=None):
+        recorded.update(path=Path(path), label=label, hardware=hardware, offsets=foot_offsets, lift=lift_height)
         return Path(path)
 
     monkeypatch.setattr(video, "record_video", record)
     assert evaluate.main(["video", "--video-duration", "0.1", "--out", str(tmp_path / "v")]) == 0
     assert recorded["label"] == "learned, seed0" and recorded["path"].name == "trot_learned_seed0_1mps.gif"
     assert recorded["hardware"] is None  # the ideal robot: no hardware setting given
+    # the commanded path as the tables walk it: each foot its own shift, at the path's own lift (its feet's mean)
+    from cyberdog.core.learned_set import LearnedSet
+    path = LearnedSet.load([Path(evaluate.__file__).parent / "results/table5/paths"]).at(1.0)["seed0"]
+    assert recorded["offsets"].to_dict() == path.path.offsets.to_dict() and recorded["lift"] == path.lift_height
     assert "the learned, seed0 trajectory" in capsys.readouterr().out
 
 

@@ -305,16 +305,30 @@ def fake_video_run(folder: Path, name: str, frames: int, lift: float = 0.11) -> 
 
 def test_walk_strip_takes_the_same_frames_of_the_last_whole_gait_period_from_each_video(tmp_path):
     learned = fake_video_run(tmp_path / "learned", "learned_seed0", 30)  # 1.2 s at 25 frames/s
-    cycloid = fake_video_run(tmp_path / "cycloid", "cycloid", 40)  # 1.6 s: the shorter video decides
+    cycloid = fake_video_run(tmp_path / "cycloid", "cycloid", 40, lift=0.095)  # 1.6 s: the shorter video decides
     strip = walk_strip.extract([learned, cycloid])
     assert np.allclose(strip.times_s, [0.40, 0.48, 0.56, 0.64, 0.72])  # the period [0.4, 0.8) s, T = 0.4 s
     for row in strip.frames:  # frame i is grey 4·i: frames 10, 12, ..., 18 in both rows
         assert [int(np.median(f)) for f in row] == [40, 48, 56, 64, 72]
-    assert strip.labels[0].startswith("learned (RL), battery recipe, seed 0, H = 0.")
-    assert strip.labels[1] == "composite cycloid, H = 0.110 m"
+    # the learned row at its path's own lift (the feet's mean peak, 0.095 m), the cycloid at the same: its seed's
+    assert strip.labels == ["learned (RL), battery recipe, seed 0, H = 0.095 m", "composite cycloid, H = 0.095 m"]
+    assert strip.trajectories == ["learned", "cycloid"] and strip.seeds == ["seed0", "seed0"]
+    assert strip.feet_xz.shape == (2, 4, walk_strip.PATH_POINTS, 2)
+    assert np.allclose(strip.feet_xz[:, :, :, 1].max(axis=2), 0.095, atol=1e-3)  # every foot's peak: the H walked
     saved = strip.save(tmp_path / "in")
     back = walk_strip.StripInput.load(saved)
     assert np.array_equal(back.frames, strip.frames) and back.labels == strip.labels
+    assert back.seeds == strip.seeds and np.array_equal(back.feet_xz, strip.feet_xz)
+    # the battery beside each row: the prototype run's walks of the same trajectory, seed, speed and lift that count
+    walk = dict(seed="seed0", speed_mps=1.0, robot="hardware", pd_scale=1.0, pd_matched=False, lift_height_m=0.095,
+                reached=True, fell=False, mean_speed_mps=1.0, distance_m=20.0)
+    walks = [dict(walk, trajectory="learned", battery_used_pct=0.7),
+             dict(walk, trajectory="learned", battery_used_pct=0.8),
+             dict(walk, trajectory="learned", battery_used_pct=0.1, fell=True),  # does not count
+             dict(walk, trajectory="cycloid", battery_used_pct=1.0),
+             dict(walk, trajectory="cycloid", battery_used_pct=2.0, lift_height_m=0.15)]  # the paper's lift
+    assert walk_strip.prototype_battery(back, walks) == pytest.approx([3.75, 5.0])
+    (tmp_path / "in" / "prototype.json").write_text(json.dumps(walks))
     (png,) = plots.draw_all(tmp_path / "in", tmp_path / "out", only=["walk_strip"], pdf=False)
     assert png.name == "walk_strip.png"
     with pytest.raises(ValueError, match="one GIF"):

@@ -16,6 +16,7 @@ import numpy as np
 
 from cyberdog.config import HardwareConfig, WalkConfig, robot_words
 from cyberdog.control.trot import TrotController
+from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import FootTrajectory
 from cyberdog.loop.walker import Walker
 
@@ -24,9 +25,12 @@ FORMATS = (".gif", ".mp4")
 
 def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, duration: float = 4.0,
                 fps: int = 25, width: int = 480, height: int = 360, label: str = "",
-                hardware: HardwareConfig | None = None) -> list[np.ndarray]:
+                hardware: HardwareConfig | None = None, foot_offsets: FootOffsetPath | None = None,
+                lift_height: float | None = None) -> list[np.ndarray]:
     """Frames (height, width, 3) uint8 of a `duration` s trot at `cfg.gait.speed` on the robot of `hardware`
-    (None: the ideal robot); stops early on a fall."""
+    (None: the ideal robot); stops early on a fall. foot_offsets: a learned path's shift of each foot target
+    (as `cyberdog.analysis.walk.walk` takes it); lift_height: m, the H written on the frames (default: the
+    gait's)."""
     if not duration > 0:
         raise ValueError(f"video duration must be > 0 s, got {duration!r}")
     if not 1 <= fps <= 100:
@@ -35,7 +39,8 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
 
     dt = cfg.sim.controller_dt
     every = max(1, int(round(1.0 / (fps * dt))))
-    ctrl = TrotController(cfg, trajectory)
+    ctrl = TrotController(cfg, trajectory, foot_offsets)
+    lift = cfg.gait.lift_height if lift_height is None else lift_height
     robot = robot_words(hardware, cfg.pid)
     frames = []
     with Walker(cfg, ctrl, hardware=hardware) as walker:
@@ -48,7 +53,7 @@ def render_walk(cfg: WalkConfig, trajectory: FootTrajectory | None = None, durat
                 img = Image.fromarray(walker.robot.render(width, height, distance=1.0, yaw_deg=60.0,
                                                           pitch_deg=-15.0))
                 text = (f"{label or ctrl.trajectory.name}  v_cmd = {ctrl.speed:.1f} m/s  H = "
-                        f"{cfg.gait.lift_height:.3f} m\nt = {k * dt:5.2f} s  x = {s.base_position[0] - start[0]:5.2f} m"
+                        f"{lift:.3f} m\nt = {k * dt:5.2f} s  x = {s.base_position[0] - start[0]:5.2f} m"
                         f"  E = {energy:6.1f} J (Eq. 7)" + ("  FELL" if fell else "") + f"\n{robot}")
                 ImageDraw.Draw(img).multiline_text((8, 6), text, fill=(0, 0, 0))
                 frames.append(np.asarray(img))
@@ -114,13 +119,15 @@ def write_video(frames: list[np.ndarray], path: str | Path, fps: int = 25) -> Pa
 
 def record_video(cfg: WalkConfig, trajectory: FootTrajectory | None, path: str | Path, duration: float = 4.0,
                  fps: int = 25, width: int = 480, height: int = 360, label: str = "",
-                 hardware: HardwareConfig | None = None) -> Path:
-    """Render a trot (`render_walk`, on the robot of `hardware`) and write it to `path` (.gif or .mp4); returns
-    the path."""
+                 hardware: HardwareConfig | None = None, foot_offsets: FootOffsetPath | None = None,
+                 lift_height: float | None = None) -> Path:
+    """Render a trot (`render_walk`, on the robot of `hardware`, the feet shifted by `foot_offsets`) and write
+    it to `path` (.gif or .mp4); returns the path."""
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
         raise ValueError(f"video file must end in one of {FORMATS}, got {path.name!r}")
-    return write_video(render_walk(cfg, trajectory, duration, fps, width, height, label, hardware), path, fps)
+    frames = render_walk(cfg, trajectory, duration, fps, width, height, label, hardware, foot_offsets, lift_height)
+    return write_video(frames, path, fps)
 
 
 __all__ = ["FORMATS", "record_video", "render_walk", "write_video"]

@@ -189,20 +189,21 @@ def run_video(cfg: C.WalkConfig, learned: LearnedSet | None, args, out: Path) ->
     from cyberdog.evaluation.robot import video_robot
 
     name = label = args.video_trajectory
-    traj = None
+    traj = offsets = None
     lift = cfg.gait.lift_height
-    if name == "learned":  # a commanded path is shown as its LF leg's x-z path on all four legs
-        seed, path = next(iter(learned.at(args.video_speed).items()))
-        traj = path.figure_path()
-        lift = traj.lift_height  # the reference leg's own peak: the drawn path replayed as recorded
+    vcfg = cmp.walk_config(cfg, name, args.video_speed, lift)
+    if name == "learned":  # walked as the tables walk it: a commanded path moves each foot on its own path
+        seed, learned_path = next(iter(learned.at(args.video_speed).items()))
+        vcfg, traj, offsets = learned_path.walk_args(cfg, args.video_speed)
+        lift = learned_path.lift_height  # its own, the H the tables match (a commanded path's: its feet's mean peak)
         label = f"learned, {seed}"  # which of the learned paths the video walks
         name = f"learned_{seed}"
-    vcfg = cmp.walk_config(cfg, args.video_trajectory, args.video_speed, lift)
     hardware = args.hardware if video_robot(args) == "hardware" else None
     path = out / f"trot_{name}_{args.video_speed:g}mps.{args.video_format}"
     print(f"video: the trot with the {label} trajectory at {args.video_speed:g} m/s, {args.video_duration:g} s, "
           f"on the {C.robot_words(hardware, vcfg.pid)}")
-    return record_video(vcfg, traj, path, args.video_duration, label=label, hardware=hardware)
+    return record_video(vcfg, traj, path, args.video_duration, label=label, hardware=hardware,
+                        foot_offsets=offsets, lift_height=lift)
 
 
 __all__ = ["FIGURES", "run_compare", "run_figures", "run_prototype_part", "run_video"]
