@@ -13,7 +13,9 @@ JOINT_NAMES = ("abad", "hip", "knee")  # per leg; joint index = 3 * leg + joint
 
 @dataclass(frozen=True)
 class RobotConfig:
-    """Geometry and mass of the first-generation CyberDog (docs/robot.md, tags [X])."""
+    """Geometry and mass of the first-generation CyberDog (docs/robot.md, tags [X]). The geometry and total_mass
+    state the URDF's (the trot's kinematics and weight feed-forward read them; a robot built from a URDF that
+    disagrees is refused); `payload` changes the simulated body."""
 
     urdf: str = "urdf/cyberdog.urdf"  # absolute, or relative: the package's shipped file, else the repository root
     abad_offset_x: float = 0.23035  # m, body centre → abad joint, forward (±x per leg)

@@ -18,7 +18,7 @@ import numpy as np
 from cyberdog.config import JOINT_NAMES, LEG_NAMES, ActuatorConfig, RobotConfig, SimConfig
 from cyberdog.core.actuator import ActuatorModel
 from cyberdog.core.drivers import JointCommand, driver_torque
-from cyberdog.core.kinematics import standing_joint_angles
+from cyberdog.core.kinematics import foot_position_body, standing_joint_angles
 from cyberdog.sim.state import RobotState, StateReading
 
 # The robot's files ship inside the package (cyberdog/urdf/, package data in setup.cfg) so that an installed
@@ -61,6 +61,7 @@ def rest_pose(robot: RobotConfig, joint_angles=None, base_position=None, base_ya
     return q.tolist(), pos.tolist(), quat
 
 
+GEOMETRY_TOLERANCE = 1e-3  # m, a foot's position by the URDF and by RobotConfig's kinematics
 MODEL_MASS_TOLERANCE = 1e-3  # RobotConfig.total_mass within 0.1 % of the URDF's links (13.573 of 13.577 kg)
 
 
@@ -113,6 +114,19 @@ class EngineRobot:
     def _scale_masses(self, scale: float) -> None:
         """Every link's mass and inertia × `scale` of the URDF's."""
         raise NotImplementedError
+
+    def _check_geometry(self) -> None:
+        """Refuse a `RobotConfig` whose leg geometry (abad offsets, l1, l2, l3) is not the URDF's: those settings
+        state the model the trot's kinematics use, they do not change the body. Two poses, the body at the origin:
+        each foot where `cyberdog.core.kinematics` puts it, within `GEOMETRY_TOLERANCE`."""
+        stand = standing_joint_angles(self.robot_config).reshape(4, 3)
+        for q in (stand, stand + np.array([0.2, 0.3, -0.3])):
+            self.reset(q, base_position=(0.0, 0.0, 0.0))
+            error = float(np.abs(self.foot_positions_world() - foot_position_body(q, self.robot_config)).max())
+            if error > GEOMETRY_TOLERANCE:
+                raise ValueError(f"RobotConfig's leg geometry (abad_offset_x/y, l1, l2, l3) is not {self.urdf.name}'s: "
+                                 f"a foot sits {1e3 * error:.1f} mm from where it puts it; these settings state the "
+                                 "URDF's legs; for other legs make a URDF (tools/make_urdf.py) and set robot.urdf")
 
     def _body_with_payload(self, links_mass: float, body_mass: float, body_inertia):
         """(mass kg, principal inertia) of the body carrying `RobotConfig.payload` at its centre of mass, spread as

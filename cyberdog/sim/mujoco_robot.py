@@ -129,6 +129,7 @@ class MujocoRobot(EngineRobot):
             self._scale_masses(1.0)
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
         self._view: MujocoView | None = None
+        self._check_geometry()
         self.reset()
 
     # ---- reset and step -------------------------------------------------------------------------------------

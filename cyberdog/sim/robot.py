@@ -92,6 +92,7 @@ class Robot(EngineRobot):
         self._get_euler = c.getEulerFromQuaternion
         self._multiply_transforms = c.multiplyTransforms
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
+        self._check_geometry()
         self.reset()
 
     def _map_links(self, urdf: Path) -> None:

@@ -1,5 +1,6 @@
-"""A payload changes the simulated body (both engines); `RobotConfig.total_mass` states the URDF's mass and a value
-that is not it is refused, naming the setting that would make the robot heavier."""
+"""The robot's settings act on the simulated body or are refused: a payload changes the body (both engines);
+`RobotConfig.total_mass` and the leg geometry state the URDF's, and a value that is not the URDF's is refused in one
+line naming what would change the body."""
 from __future__ import annotations
 
 import dataclasses
@@ -70,3 +71,11 @@ def test_a_loaded_walk_reports_its_mass_and_pays_for_it():
     mass = loaded.energy / (loaded.cost_of_transport * CFG.sim.gravity * loaded.distance)
     assert mass == pytest.approx(CFG.robot.total_mass + PAYLOAD, rel=1e-6)
     assert np.isfinite(plain.cost_of_transport)
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+@pytest.mark.parametrize("setting", [dict(l2=0.21), dict(l3=0.19), dict(l1=0.11), dict(abad_offset_x=0.25)])
+def test_a_leg_geometry_that_is_not_the_urdfs_is_refused_naming_the_urdf(engine, setting):
+    with pytest.raises(ValueError, match=r"leg geometry .* is not cyberdog\.urdf's.*robot\.urdf") as err:
+        _robot(engine, **setting)
+    assert "\n" not in str(err.value)
