@@ -17,15 +17,17 @@ writes, crops them, saves them as the strip's input and draws the strip. The shi
 The learned row walks seed 0's commanded path as the tables walk it, each foot on its own path; the cycloid
 walks under the learned run's config.yaml (the trot controller the battery paths were recorded under) at that
 path's own lift height, 0.0989 m (its four feet's mean peak, the H the prototype run matches the common
-trajectories at); each row's label gives the H its run walked. The last command writes
-`results/figures_input/walk_strip.npz` (the cropped frames, their times, the rows' labels, lifts and foot paths)
-and `plots/png/walk_strip.png`; `python -m plots --from results/figures_input --out plots/png --readme` redraws the
-PNG from the saved frames. Where the folder also holds the prototype run's walks (`prototype.json`), each row's
-label adds the battery that path and that cycloid used there (per 100 m, the same seed's hardware-like robots).
+trajectories at); each row's label gives the H its run walked, and the title the robot (config.yaml's hardware
+section; a row's label where the rows differ). The last command writes `results/figures_input/walk_strip.npz` (the
+cropped frames, their times, the rows' labels, lifts, robots and foot paths) and `plots/png/walk_strip.png`;
+`python -m plots --from results/figures_input --out plots/png --readme` redraws the PNG from the saved frames.
+Where the folder also holds the prototype run's walks (`prototype.json`), each row's label adds the battery that
+path and that cycloid used there (per 100 m, the same seed's hardware-like robots).
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import re
 import sys
@@ -37,6 +39,7 @@ from matplotlib.figure import Figure
 
 from cyberdog import config as C
 from cyberdog.analysis.prototype_summary import METRICS, walk_counts
+from cyberdog.analysis.robot_words import robot_name
 from cyberdog.core.commanded_path import LEG_NAMES
 from cyberdog.core.learned_set import LearnedSet
 from cyberdog.core.trajectories import make_trajectory
@@ -57,7 +60,7 @@ VIDEO_NAME = re.compile(r"^trot_(?P<name>.+)_(?P<speed>[0-9.]+)mps\.gif$")  # as
 @dataclass
 class StripInput:
     """The strip's saved input: per row (walk) the same frame times, the row's label, what it walked (trajectory,
-    the seed of the learned path it walks or matches, lift) and the four feet's commanded x–z paths."""
+    the seed of the learned path it walks or matches, lift, robot) and the four feet's commanded x–z paths."""
 
     frames: np.ndarray  # uint8 (rows, frames, height, width, 3)
     times_s: np.ndarray  # s since the walk started, one per column (the same in every row)
@@ -68,6 +71,7 @@ class StripInput:
     seeds: list[str]  # per row: the learned path's seed ("seed0"), a common trajectory's at its lift, else ""
     lifts_m: np.ndarray  # (rows,) m: the H each row walked (a learned path's own)
     feet_xz: np.ndarray  # (rows, 4, PATH_POINTS, 2) m: LF, RF, LH, RH's commanded path, contact level z = 0
+    robots: list[str]  # per row: the robot walked ("ideal robot", "hardware-like robot (latency 5 ms)")
 
     def save(self, folder: str | Path) -> Path:
         path = Path(folder) / INPUT_NAME
@@ -75,16 +79,22 @@ class StripInput:
         np.savez_compressed(path, frames=self.frames, times_s=self.times_s, labels=np.array(self.labels),
                             speed_mps=self.speed_mps, period_s=self.period_s,
                             trajectories=np.array(self.trajectories), seeds=np.array(self.seeds),
-                            lifts_m=self.lifts_m, feet_xz=self.feet_xz)
+                            lifts_m=self.lifts_m, feet_xz=self.feet_xz, robots=np.array(self.robots))
         return path
 
     @classmethod
     def load(cls, path: str | Path) -> "StripInput":
+        """The input saved at `path`; a file without every field is a ValueError naming the command that re-makes
+        it from the video runs."""
         with np.load(path, allow_pickle=False) as z:
-            return cls(frames=z["frames"], times_s=z["times_s"], labels=[str(s) for s in z["labels"]],
-                       speed_mps=float(z["speed_mps"]), period_s=float(z["period_s"]),
-                       trajectories=[str(s) for s in z["trajectories"]], seeds=[str(s) for s in z["seeds"]],
-                       lifts_m=z["lifts_m"], feet_xz=z["feet_xz"])
+            missing = [f.name for f in dataclasses.fields(cls) if f.name not in z.files]
+            if missing:
+                raise ValueError(f"{path} has no {', '.join(missing)} (another format of the strip's input): re-make "
+                                 f"it from the video runs with python -m plots.walk_strip RUN... --save-inputs "
+                                 f"{Path(path).parent} --out DIR (plots/walk_strip.py's docstring has the commands)")
+            strings = {name: [str(s) for s in z[name]] for name in ("labels", "trajectories", "seeds", "robots")}
+            return cls(frames=z["frames"], times_s=z["times_s"], speed_mps=float(z["speed_mps"]),
+                       period_s=float(z["period_s"]), lifts_m=z["lifts_m"], feet_xz=z["feet_xz"], **strings)
 
 
 def read_gif(path: str | Path) -> tuple[list[np.ndarray], np.ndarray]:
@@ -116,27 +126,31 @@ class VideoRun:
 
     gif: Path
     label: str
-    speed: float  # m/s
-    period: float  # s
+    speed_mps: float
+    period_s: float  # the gait period walked
     trajectory: str  # "learned" or the common trajectory's name
     seed: str  # the learned path's ("seed0"), "" for a common trajectory
-    lift: float  # m: the H walked (a learned path's own: a commanded path's four feet's mean peak)
+    lift_m: float  # the H walked (a learned path's own: a commanded path's four feet's mean peak)
     feet_xz: np.ndarray  # (4, PATH_POINTS, 2) m: each foot's commanded x–z path over one gait cycle
+    robot: str  # the robot walked (`robot_name` of config.yaml's hardware section)
 
 
 def video_run(folder: str | Path) -> VideoRun:
     """What an `evaluate.py video` run folder walked, from what it saved: the GIF's name (trajectory, seed,
-    speed), config.yaml (gait; a common trajectory's H) and learned/ (the learned path, its H and its feet)."""
+    speed), config.yaml (the robot; the gait of a common trajectory or a measured path, a common trajectory's H)
+    and learned/ (the learned path, its H and its feet; a commanded path's own gait)."""
     folder = Path(folder)
     gifs = [p for p in sorted(folder.glob("trot_*.gif")) if VIDEO_NAME.match(p.name)]
     if len(gifs) != 1:
         raise ValueError(f"{folder} should hold one GIF written by `evaluate.py video`, found {len(gifs)}")
     m = VIDEO_NAME.match(gifs[0].name)
     name, speed = m["name"], float(m["speed"])
-    gait = C.load_walked(folder / "config.yaml").walk.gait
+    walked = C.load_walked(folder / "config.yaml")
+    gait = walked.walk.gait
     if name.startswith("learned_"):
         seed = name.removeprefix("learned_")
         path = LearnedSet.load([folder / "learned"]).at(speed)[seed]
+        gait = path.path.gait if path.commanded else gait  # a commanded path walks its own gait
         feet = [path.path.as_sampled(leg) for leg in LEG_NAMES] if path.commanded else [path.figure_path()] * 4
         xz = [cycle_path(f, f.step_length, f.lift_height, gait.swing_time, gait.stance_time, PATH_POINTS)[1]
               for f in feet]
@@ -145,11 +159,11 @@ def video_run(folder: str | Path) -> VideoRun:
         trajectory, lift = "learned", path.lift_height
     else:
         seed, trajectory, lift, label = "", name, gait.lift_height, NAMES.get(name, name)
-        walked = C.replace(gait, trajectory=name, speed=speed)
-        xz = [cycle_path(make_trajectory(walked), walked.step_length, lift, gait.swing_time, gait.stance_time,
+        common = C.replace(gait, trajectory=name, speed=speed)
+        xz = [cycle_path(make_trajectory(common), common.step_length, lift, gait.swing_time, gait.stance_time,
                          PATH_POINTS)[1]] * 4
     return VideoRun(gifs[0], f"{label}, H = {lift:.3f} m", speed, gait.period, trajectory, seed, lift,
-                    np.stack(xz))
+                    np.stack(xz), robot_name(walked.hardware))
 
 
 def pick(times: list[np.ndarray], period: float, n: int = FRAMES) -> list[np.ndarray]:
@@ -173,7 +187,7 @@ def extract(folders: list[str | Path], n: int = FRAMES) -> StripInput:
     """The strip's input from `evaluate.py video` run folders (one row each, in order). A common trajectory
     walked at a learned row's lift is that row's seed's matched trajectory (its seed, for the prototype's rows)."""
     runs = [video_run(f) for f in folders]
-    speeds, periods = {r.speed for r in runs}, {r.period for r in runs}
+    speeds, periods = {r.speed_mps for r in runs}, {r.period_s for r in runs}
     if len(speeds) != 1 or len(periods) != 1:
         raise ValueError(f"the videos differ in speed {sorted(speeds)} or gait period {sorted(periods)}")
     videos = [read_gif(r.gif) for r in runs]
@@ -181,11 +195,12 @@ def extract(folders: list[str | Path], n: int = FRAMES) -> StripInput:
     picks = pick([t for _, t in videos], period, n)
     frames = np.stack([[crop(f[i]) for i in idx] for (f, _), idx in zip(videos, picks)])
     learned = [r for r in runs if r.trajectory == "learned"]
-    seeds = [r.seed or next((q.seed for q in learned if abs(q.lift - r.lift) <= LIFT_TOLERANCE_M), "") for r in runs]
+    seeds = [r.seed or next((q.seed for q in learned if abs(q.lift_m - r.lift_m) <= LIFT_TOLERANCE_M), "")
+             for r in runs]
     return StripInput(frames=frames, times_s=videos[0][1][picks[0]], labels=[r.label for r in runs],
                       speed_mps=speeds.pop(), period_s=period, trajectories=[r.trajectory for r in runs],
-                      seeds=seeds, lifts_m=np.array([r.lift for r in runs]),
-                      feet_xz=np.stack([r.feet_xz for r in runs]))
+                      seeds=seeds, lifts_m=np.array([r.lift_m for r in runs]),
+                      feet_xz=np.stack([r.feet_xz for r in runs]), robots=[r.robot for r in runs])
 
 
 def prototype_battery(strip: StripInput, walks: list[dict]) -> list[float | None]:
@@ -206,7 +221,8 @@ def prototype_battery(strip: StripInput, walks: list[dict]) -> list[float | None
 @styled
 def draw(strip: StripInput, dpi: int = 80, battery: list[float | None] | None = None) -> Figure:
     """One row per walk (its label above it, with `battery`'s % per 100 m where given), one column per frame (its
-    time at the top), each frame at its own pixel size at `dpi`; at the right, every row's commanded foot paths."""
+    time at the top), each frame at its own pixel size at `dpi`; at the right, every row's commanded foot paths.
+    The robot walked is named in the title where every row walked the same one, else in each row's label."""
     rows, cols, h, w, _ = strip.frames.shape
     gap, title, head, label = (round(pt * dpi / 72) for pt in (3, 17, 12, 13))  # pt → px: the text scales
     battery = battery or [None] * rows
@@ -214,14 +230,17 @@ def draw(strip: StripInput, dpi: int = 80, battery: list[float | None] | None = 
     frames_w = cols * w + (cols - 1) * gap
     width, height = frames_w + 4 * gap + PANEL_PX, title + head + rows * (label + h + gap) + note
     fig = Figure(figsize=(width / dpi, height / dpi))
+    one_robot = len(set(strip.robots)) == 1
     fig.text(0.5, 1 - 4 / height, f"The trot at {strip.speed_mps:g} m/s over one gait period (T = "
-             f"{strip.period_s:g} s), simulated in PyBullet (ideal robot)", ha="center", va="top", fontsize=10)
+             f"{strip.period_s:g} s), simulated in PyBullet" + (f" ({strip.robots[0]})" if one_robot else ""),
+             ha="center", va="top", fontsize=10)
     for c, t in enumerate(strip.times_s):
         fig.text((c * (w + gap) + w / 2) / width, 1 - (title + 2) / height, f"t = {t:.2f} s", ha="center",
                  va="top", fontsize=8)
-    for r, (row, text, b) in enumerate(zip(strip.frames, strip.labels, battery)):
+    for r, (row, text, b, robot) in enumerate(zip(strip.frames, strip.labels, battery, strip.robots)):
         top = title + head + r * (label + h + gap)  # px from the figure's top
-        text += "" if b is None else f"; battery {b:.2f} % per 100 m in the prototype run"
+        text += ("" if one_robot else f", {robot}") + ("" if b is None else f"; battery {b:.2f} % per 100 m in "
+                                                                             "the prototype run")
         fig.text(2 / width, 1 - (top + 2) / height, text, ha="left", va="top", fontsize=9)
         for c, frame in enumerate(row):
             ax = fig.add_axes(((c * (w + gap)) / width, 1 - (top + label + h) / height, w / width, h / height))

@@ -1,14 +1,18 @@
 """Every `evaluate.py` sub-command's config.yaml holds the whole robot it walked: the walk config and the hardware
 model of its hardware-like walks (null: the ideal robot only), read back by the project's loader
 (`cyberdog.config.load_walked`) and by --config. Hardware settings reach the walks that use one (the video's among
-them) and are refused in one line where no hardware-like robot walks. Tiny budgets: walks of 0.3 m or 0.3 s."""
+them) and are refused in one line where no hardware-like robot walks, where a --config file's hardware section is
+not used (a note says so). Tiny budgets: walks of 0.3 m or 0.3 s."""
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 
 from cyberdog import config as C
 from cyberdog.analysis import video
-from cyberdog.evaluation import commands
+from cyberdog.analysis.robot_words import robot_words
+from cyberdog.evaluation import commands, walked_robot
 from cyberdog.evaluation.cli import parse_args
 from cyberdog.loop.walker import Walker
 
@@ -21,6 +25,8 @@ TINY_VIDEO = ["video", "--video-trajectory", "cycloid", "--video-duration", "0.1
 TINY_PROTOTYPE = ["--speeds", "1.0", "--prototype-distance", "0.3", "--prototype-run-up", "0", "--prototype-draws", "1",
                   "--no-prototype-reference", "--workers", "1"]
 TINY_COMPARE = ["--speeds", "1.0", "--duration", "0.3", "--no-same-lift", "--no-reference", "--workers", "1"]
+TINY_BASELINES = ["baselines", "--speeds", "1.0", "--duration", "0.3", "--trajectories", "cycloid"]
+PRESET = Path(__file__).resolve().parents[1] / "configs" / "battery.yaml"  # a training preset (base: table5.yaml)
 
 
 @pytest.fixture
@@ -78,9 +84,9 @@ def test_the_video_walks_the_ideal_robot_unless_a_hardware_one_is_asked(tmp_path
 
 
 def test_the_robot_is_named_by_what_differs_from_the_hardware_like_one():
-    assert C.robot_words(None, C.PIDConfig()) == "ideal robot  kp 60/60/60  kd 2/2/2"
+    assert robot_words(None, C.PIDConfig()) == "ideal robot  kp 60/60/60  kd 2/2/2"
     hw = C.replace(C.HARDWARE_LIKE, latency_s=0.005, mass_uncertainty=0.1, friction=False, seed=3)
-    assert C.robot_words(hw, C.PIDConfig(kp=(84, 84, 84))) == ("hardware-like robot (friction off, latency 5 ms, "
+    assert robot_words(hw, C.PIDConfig(kp=(84, 84, 84))) == ("hardware-like robot (friction off, latency 5 ms, "
                                                                "mass ±10 %, seed 3)  kp 84/84/84  kd 2/2/2")
 
 
@@ -128,7 +134,7 @@ def test_all_records_the_hardware_its_prototype_and_video_walk(path_file, tmp_pa
 
 @pytest.mark.parametrize("argv", [
     ["compare", "--learned", "PATH", *TINY_COMPARE],
-    ["baselines", "--speeds", "1.0", "--duration", "0.3", "--trajectories", "cycloid"],
+    TINY_BASELINES,
     ["pd-match", "PATH", "--pd-scale", "1.4"],
 ], ids=lambda argv: argv[0])
 def test_a_sub_command_on_the_ideal_robot_records_its_walk_and_no_hardware(argv, path_file, tmp_path):
@@ -179,24 +185,62 @@ def test_hardware_settings_where_no_hardware_like_robot_walks_are_refused_in_one
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--set hardware.latency_s" in err[0] and why in err[0], err
     assert not out.exists()
+    # a --config file's hardware section there is not walked: one note says so, and the run goes on
+    file = tmp_path / "robot.yaml"
+    C.save_walked(ASKED_ROBOT, file)
+    args = parse_args([*argv, "--config", str(file)])
+    assert commands.walk_config(args) == WALK and walked_robot.walked_hardware(args, WALK) is None
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--config {file}'s hardware section is not used" in err[0] and why in err[0], err
 
 
-def test_a_config_files_hardware_section_is_read_back_and_refused_where_nothing_walks_it(tmp_path, capsys):
+def test_every_sub_command_says_whether_it_walks_a_hardware_like_robot():
+    assert set(walked_robot.IDEAL_ONLY) == set(commands.COMMAND_FUNCTIONS)
+
+
+def test_a_config_files_hardware_section_is_read_back_as_training_reads_env_hardware(tmp_path):
     file = tmp_path / "robot.yaml"
     C.save_walked(ASKED_ROBOT, file)
     assert C.load_walked(file) == ASKED_ROBOT
+    assert all(f"{name}:" in file.read_text() for name in C.to_dict(HARDWARE))  # every field written
     args = parse_args(["prototype", "--config", str(file), "--set", "hardware.seed=2"])
     assert commands.walk_config(args) == WALK and args.hardware == C.replace(HARDWARE, seed=2)
-    file.write_text("pid: {kd: [3, 3, 3]}\nhardware: {latency_s: 0.005}\n")  # a partial section: over HARDWARE_LIKE
-    assert C.load_walked(file) == ASKED_ROBOT
+    # a partial section: its fields over HardwareConfig()'s (every effect off), as training's env.hardware reads it
+    file.write_text("pid: {kd: [3, 3, 3]}\nhardware: {latency_s: 0.005, friction: true}\n")
+    in_training = C.from_dict(C.EnvConfig, {"hardware": {"latency_s": 0.005, "friction": True}}).hardware
+    assert C.load_walked(file) == C.WalkedRobot(WALK, in_training)
+    assert in_training == C.HardwareConfig(latency_s=0.005, friction=True)
+    args = parse_args(["prototype", "--config", str(file), "--set", "hardware.seed=2"])  # --set over the section
+    assert commands.walk_config(args) == WALK and args.hardware == C.replace(in_training, seed=2)
     C.save(WALK, file)  # a plain walk config: the ideal robot
     assert C.load_walked(file) == IDEAL_ROBOT
     file.write_text("hardware: {latency_s: 0.003}\n")
-    with pytest.raises(ValueError, match="latency_s.*whole multiple of sim.controller_dt"):
+    with pytest.raises(ValueError, match="hardware.latency_s.*whole multiple of sim.controller_dt"):
         C.load_walked(file)
+
+
+def test_a_config_files_hardware_section_is_not_walked_where_no_hardware_like_robot_walks(tmp_path, capsys):
+    file, out = tmp_path / "robot.yaml", tmp_path / "out"
     C.save_walked(ASKED_ROBOT, file)
-    assert evaluate(["compare", "--config", file, "--out", tmp_path / "out"]) == 2
-    assert "--config" in capsys.readouterr().err and not (tmp_path / "out").exists()
+    assert evaluate([*TINY_BASELINES, "--config", file, "--out", out]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "hardware section is not used" in err[0], err
+    assert robot(out) == IDEAL_ROBOT  # the walk config as given, no hardware walked
+    assert evaluate([*TINY_BASELINES, "--config", file, "--set", "hardware.seed=2", "--out", tmp_path / "set"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--set hardware.seed" in err[0] and "hardware section" not in err[0], err
+
+
+def test_a_training_preset_given_as_a_walk_config_is_named_as_one(tmp_path, capsys):
+    with pytest.raises(ValueError, match="is a training preset \\(train.py --config\\), not a WalkConfig file"):
+        C.load_walked(PRESET)
+    assert evaluate(["compare", "--config", PRESET, "--out", tmp_path / "out"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is a training preset (train.py --config), not a WalkConfig file" in err[0], err
+    assert "hardware" in err[0] and not (tmp_path / "out").exists()  # the sections a walk config file may have
+    with pytest.raises(ValueError, match="is a training preset"):
+        C.load(C.WalkConfig, PRESET)
+    assert C.load(C.ExperimentConfig, PRESET) == C.load_preset(PRESET).config
 
 
 def test_a_latency_of_no_whole_controller_period_is_refused_before_the_video(tmp_path, capsys):

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cyberdog.config import HardwareConfig, WalkConfig, robot_words
+from cyberdog.analysis.robot_words import robot_words
+from cyberdog.config import HardwareConfig, WalkConfig
 from cyberdog.control.trot import TrotController
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.trajectories import FootTrajectory

@@ -9,7 +9,7 @@ from typing import Optional, Tuple
 
 from cyberdog.config._validate import _check, _non_negative, _positive
 
-from cyberdog.config.hardware import HardwareConfig, RandomizationConfig
+from cyberdog.config.hardware import HardwareConfig, RandomizationConfig, check_controller_periods
 from cyberdog.config.walk_settings import GaitConfig, WalkConfig
 
 
@@ -198,12 +198,7 @@ class EnvConfig:
         dt = self.walk.sim.controller_dt
         _check(abs(self.control_dt / dt - round(self.control_dt / dt)) < 1e-6 and self.control_dt >= dt,
                "EnvConfig.control_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", self.control_dt)
-        hw_dt = self.hardware.estimator_dt
-        _check(abs(hw_dt / dt - round(hw_dt / dt)) < 1e-6 and hw_dt >= dt,
-               "EnvConfig.hardware.estimator_dt", f"a whole multiple of walk.sim.controller_dt ({dt} s)", hw_dt)
-        _check(abs(self.hardware.latency_s / dt - round(self.hardware.latency_s / dt)) < 1e-6,
-               "EnvConfig.hardware.latency_s", f"a whole multiple of walk.sim.controller_dt ({dt} s)",
-               self.hardware.latency_s)
+        check_controller_periods(self.hardware, dt, "EnvConfig.hardware", "walk.sim.controller_dt")
         _check(self.action_mode in ACTION_MODES, "EnvConfig.action_mode", f"one of {ACTION_MODES}",
                self.action_mode)
         _check(self.randomization.joint_friction_scale == (1.0, 1.0) or self.hardware.friction,

@@ -101,6 +101,16 @@ HARDWARE_LIKE = HardwareConfig(friction=True, latency_s=0.0025, joint_angle_nois
                                mass_uncertainty=0.05)
 
 
+def check_controller_periods(hardware: HardwareConfig, controller_dt: float, where: str, dt_name: str) -> None:
+    """ValueError unless `hardware`'s latency_s and estimator_dt are whole controller periods (`controller_dt` s,
+    named `dt_name`; the filter at least one): the command FIFO and the Kalman filter step with the controller.
+    `where`: the model's name in the error ("EnvConfig.hardware", or "hardware" as --set names it)."""
+    for name, least in (("latency_s", 0.0), ("estimator_dt", controller_dt)):
+        value = getattr(hardware, name)
+        _check(abs(value / controller_dt - round(value / controller_dt)) < 1e-6 and value >= least - 1e-12,
+               f"{where}.{name}", f"a whole multiple of {dt_name} ({controller_dt} s)", value)
+
+
 @dataclass(frozen=True)
 class RandomizationConfig:
     """Domain randomisation: the ranges the robot of each training episode is drawn from (beyond the paper).

@@ -152,17 +152,43 @@ def merged(base: dict, changes: dict) -> dict:
     return out
 
 
-def load_fields(cls: type, path: str | Path) -> Any:
-    """Read a YAML file of `cls`'s fields; a missing file raises `OSError`, bad YAML or values `ValueError`.
-    (`cyberdog.config.load` also reads a preset file as its ExperimentConfig.)"""
+PRESET_KEYS = ("base", "summary", "phases", "extract")  # keys only a preset file has (`cyberdog.config.preset`)
+
+
+def read_config_file(path: str | Path) -> Any:
+    """The YAML content of a config file. A missing file raises `FileNotFoundError` (`not_found`'s line), a folder
+    or bad YAML `ValueError`."""
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"config {path} is a folder, expected a YAML file")
-    with open(path) as f:
-        try:
-            data = yaml.safe_load(f)
-        except yaml.YAMLError as e:
-            raise ValueError(f"config {path} is not valid YAML: {' '.join(str(e).split())}") from None
+    if not path.is_file():
+        raise FileNotFoundError(not_found(path, "config file"))
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as e:
+        raise ValueError(f"config {path} is not valid YAML: {' '.join(str(e).split())}") from None
+
+
+def is_preset(data: Any) -> bool:
+    """Whether a config file's content (`read_config_file`) is a training preset (it has a key of PRESET_KEYS)."""
+    return isinstance(data, dict) and bool(set(PRESET_KEYS) & set(data))
+
+
+def read_settings(path: str | Path, what: str, allowed: list[str]) -> Any:
+    """`read_config_file` of a file of `what`'s settings (sections `allowed`); a training preset is a `ValueError`
+    saying which file it is."""
+    data = read_config_file(path)
+    if is_preset(data):
+        raise ValueError(f"{path} is a training preset (train.py --config), not a {what} file; allowed in one: "
+                         f"{', '.join(allowed)}")
+    return data
+
+
+def load_fields(cls: type, path: str | Path) -> Any:
+    """Read a YAML file of `cls`'s fields (`read_settings`: a missing file raises `FileNotFoundError`, a folder,
+    bad YAML, a preset or bad values `ValueError` naming the file). (`cyberdog.config.load` also reads a preset
+    file as its ExperimentConfig.)"""
+    data = read_settings(path, cls.__name__, [f.name for f in fields(cls)])
     try:
         return from_dict(cls, data)
     except ValueError as e:

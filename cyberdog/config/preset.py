@@ -28,13 +28,14 @@ key over the base, and a phase's `set:` over the settings it changes (a list rep
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from cyberdog.config.io import from_dict, load_fields, merged, not_found, override, replace, to_dict
+from cyberdog.config.io import (from_dict, is_preset, load_fields, merged, override, read_config_file, replace,
+                                to_dict)
 from cyberdog.config.learning import ExperimentConfig
 
 SECTIONS = ("env", "agent", "train")
@@ -151,19 +152,9 @@ def load_preset(path: str | Path, overrides: list[str] = ()) -> Preset:
 
 def load(cls: type, path: str | Path) -> Any:
     """Read a YAML config file of `cls` (`cyberdog.config.load`): a file of its fields, or for ExperimentConfig
-    also a preset file (its settings, `load_preset(path).config`). A missing file raises `OSError`, bad YAML or
-    values `ValueError`."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(not_found(path, "config file"))
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError:
-        data = None  # load_fields says what is wrong with it
-    if isinstance(data, dict) and {"base", "summary", "phases", "extract"} & set(data):
-        if cls is not ExperimentConfig:
-            raise ValueError(f"{path} is a training preset (train.py --config), not a {cls.__name__} file; allowed "
-                             f"in one: {', '.join(f.name for f in fields(cls))}")
+    also a preset file (its settings, `load_preset(path).config`). A missing file raises `FileNotFoundError`, a
+    folder, bad YAML or values `ValueError` (a preset given for another class: one line saying so)."""
+    if cls is ExperimentConfig and is_preset(read_config_file(path)):
         return load_preset(path).config
     return load_fields(cls, path)
 

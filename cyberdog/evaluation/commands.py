@@ -15,7 +15,7 @@ from cyberdog.evaluation.options import UsageError
 from cyberdog.evaluation.output import Run, open_run
 from cyberdog.evaluation.pd_match import cmd_pd_match
 from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
-from cyberdog.evaluation.robot import walk_config, walked_hardware
+from cyberdog.evaluation.walked_robot import walk_config, walked_hardware
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",
                     "height_max_m", "max_roll_rad", "max_pitch_rad", "fell", "energy_J", "energy_per_100m_kJ",

@@ -67,17 +67,19 @@ def at_least_one(text: str) -> int:
 def add_output_options(p) -> None:
     g = p.add_argument_group("walk config and output folder")
     g.add_argument("--config", type=Path, default=None,
-                   help="YAML walk config (WalkConfig sections: robot, actuator, sim, gait, pid, controller, "
-                        "energy, and optionally hardware, as an output's config.yaml holds them); default: the "
-                        "built-in defaults (paper lift height 0.15 m)")
+                   help="YAML walk config, as an output's config.yaml holds it: WalkConfig sections (robot, "
+                        "actuator, sim, gait, pid, controller, energy) and optionally hardware (read as training "
+                        "reads env.hardware: over HardwareConfig(), every effect off); default: the built-in "
+                        "defaults (paper lift height 0.15 m)")
     add_override_option(g, "gait.lift_height=0.1 --set gait.straight_shape=trapezoid",
-                        "; hardware.FIELD sets the hardware-like robot (HARDWARE_LIKE by default, or the --config "
-                        "file's hardware section) of the walks that use one (prototype, stiffness, check's "
-                        "hardware-like walks, video), as training's env.hardware (HardwareConfig: friction, "
-                        "latency_s, joint_angle_noise_std, joint_velocity_noise_std, estimated_velocity, imu_noise, "
-                        "mass_uncertainty, seed, ...), e.g. --set hardware.latency_s=0.005; refused where no "
-                        "hardware-like robot walks. The output's config.yaml holds the walk config and the "
-                        "hardware section (null: the ideal robot only); --config reads it back")
+                        "; hardware.FIELD sets a field (HardwareConfig: friction, latency_s, joint_angle_noise_std, "
+                        "joint_velocity_noise_std, estimated_velocity, imu_noise, mass_uncertainty, seed, ...) of "
+                        "the hardware-like robot of the walks that use one (prototype, stiffness, check's "
+                        "hardware-like walks, video), laid over HARDWARE_LIKE, or over the --config file's hardware "
+                        "section, e.g. --set hardware.latency_s=0.005; refused where no hardware-like robot walks "
+                        "(there a --config file's hardware section is not used, and a note says so). The output's "
+                        "config.yaml holds the walk config and the hardware section (null: the ideal robot only); "
+                        "--config reads it back")
     g.add_argument("--no-recorded-trot", action="store_true",
                    help="walk under the config's trot controller even where the learned paths (or the policies "
                         "extracted) were recorded under another; by default every trajectory of a comparison walks "

@@ -185,8 +185,9 @@ def run_figures(draw, results_dir: Path, out: Path | None = None, *, metrics: di
 def run_video(cfg: C.WalkConfig, learned: LearnedSet | None, args, out: Path) -> Path:
     """A GIF/MP4 of the trot with --video-trajectory at --video-speed, on the robot of --video-robot (the
     hardware-like one: `args.hardware`, as --set hardware.* and --config make it)."""
+    from cyberdog.analysis.robot_words import robot_words
     from cyberdog.analysis.video import record_video
-    from cyberdog.evaluation.robot import video_robot
+    from cyberdog.evaluation.walked_robot import video_robot
 
     name = label = args.video_trajectory
     traj = offsets = None
@@ -201,7 +202,7 @@ def run_video(cfg: C.WalkConfig, learned: LearnedSet | None, args, out: Path) ->
     hardware = args.hardware if video_robot(args) == "hardware" else None
     path = out / f"trot_{name}_{args.video_speed:g}mps.{args.video_format}"
     print(f"video: the trot with the {label} trajectory at {args.video_speed:g} m/s, {args.video_duration:g} s, "
-          f"on the {C.robot_words(hardware, vcfg.pid)}")
+          f"on the {robot_words(hardware, vcfg.pid)}")
     return record_video(vcfg, traj, path, args.video_duration, label=label, hardware=hardware,
                         foot_offsets=offsets, lift_height=lift)
 
