@@ -41,7 +41,7 @@ class ReferenceTrot:
         self.scheduler = GaitScheduler.from_config(cfg.gait)
         self.pid = JointPID.from_config(cfg.pid, cfg.sim.controller_dt, cfg.actuator.torque_limit)
         self.stand_height = self.robot.body_height - self.robot.foot_radius
-        self.body_weight = self.robot.total_mass * cfg.sim.gravity
+        self.body_weight = self.robot.carried_mass * cfg.sim.gravity
         self.speed, self.speed_correction = cfg.gait.speed, 0.0
 
     def step_lengths(self, t, body):

@@ -99,16 +99,17 @@ def test_bad_requests_fail_before_any_walk(tmp_path):
 
 
 def test_the_prototype_walks_a_policy_in_the_walk_configs_engine(monkeypatch):
-    """`prototype --closed-loop --set sim.engine=mujoco`: the policy walks in its own env, in the paths' engine and
-    with their PD (the rollout itself is stubbed: only the env it is given is checked)."""
+    """`prototype --closed-loop --set sim.engine=mujoco`: the policy walks in its own env, in the paths' engine,
+    with their PD and their payload (the rollout itself is stubbed: only the env it is given is checked)."""
     import cyberdog.rl.rollout as rollout_module
     from cyberdog.analysis import prototype as proto
 
     seen = {}
     monkeypatch.setattr(rollout_module, "rollout", lambda actor, speed, cap, env_config, **kw: seen.update(
         env=env_config))
-    cfg = C.override(C.WalkConfig(), ["sim.engine=mujoco", "pid.kp=[70,70,70]"])
+    cfg = C.override(C.WalkConfig(), ["sim.engine=mujoco", "pid.kp=[70,70,70]", "robot.payload=3"])
     job = proto._Job("policy", None, 1.2, "hardware", cfg, C.HARDWARE_LIKE, 20.0,
                      policy=str(Path(__file__).resolve().parents[1] / "results/battery/policy/seed0/stage2_actor.pt"))
     proto._policy_walk(job, C.HARDWARE_LIKE, 30.0)
     assert seen["env"].walk.sim.engine == "mujoco" and seen["env"].walk.pid == cfg.pid
+    assert seen["env"].walk.robot.payload == 3.0  # the policy carries the paths' payload

@@ -309,10 +309,10 @@ def test_fresh_seeds_prototype_rows_are_those_seeds_walks_as_the_prototype_summa
     assert "(4 of 5 seeds)" in row[FRESH_PROTOTYPE_ROW][2] and "seeds)" not in row[FRESH_PROTOTYPE_ROW][0]
 
 
-def test_every_readme_table_names_the_command_that_prints_it_as_shown(capsys):
+def test_every_readme_table_names_the_command_that_prints_it_as_shown(capsys, monkeypatch):
     """Each README table's caption (the text since the table before it) names `--table NAME`, and
     `tools/make_readme_tables.py --table NAME` prints exactly the table the README shows."""
-    sys.path.insert(0, str(ROOT / "tools"))
+    monkeypatch.syspath_prepend(str(ROOT / "tools"))
     import make_readme_tables
     from cyberdog.analysis.readme_tables import readme_blocks
     for name, block in readme_blocks(README).items():

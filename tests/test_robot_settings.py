@@ -79,3 +79,9 @@ def test_a_leg_geometry_that_is_not_the_urdfs_is_refused_naming_the_urdf(engine,
     with pytest.raises(ValueError, match=r"leg geometry .* is not cyberdog\.urdf's.*robot\.urdf") as err:
         _robot(engine, **setting)
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_a_foot_radius_that_is_not_the_urdfs_is_refused(engine):
+    with pytest.raises(ValueError, match=r"foot_radius = 0\.03 m, but cyberdog\.urdf's foot spheres are 0\.0180 m"):
+        _robot(engine, foot_radius=0.03)

@@ -12,6 +12,39 @@ POLICY_ROW = "the policy, closed loop"  # the gains table's rows of the policies
 GAINS_DEFAULT_POLICY_ROW = f"default gains, {POLICY_ROW}"
 
 
+def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) -> list[str] | None:
+    """The battery saving of `trajectory`'s walks at each speed (with the walks that did not count), None if it
+    has none."""
+    by = {r["speed_mps"]: r for r in ps.summary_rows(walks) if r["robot"] == robot and r["trajectory"] == trajectory}
+    if not by:
+        return None
+    return ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + missed_walks(by[v])
+            for v in speeds]
+
+
+def _speeds(default_walks: list[dict], robot: str) -> list[float]:
+    return sorted({w["speed_mps"] for w in default_walks if w["robot"] == robot and w["trajectory"] == "learned"})
+
+
+def gains_rows(walks: list[dict], default_walks: list[dict], robot: str = "hardware") -> list[tuple[str, list[str]]]:
+    """(label, cells) per gain and factor (kp first), as commanded then re-commanded (bold), then the policies'
+    own where the run walked them: the rows after the default gains' (`gains_markdown`)."""
+    speeds = _speeds(default_walks, robot)
+    rows = []
+    factors = sorted({(w["gain"], w["gain_scale"]) for w in walks}, key=lambda f: (f[0] != "kp", f[1]))  # kp first
+    for gain, scale in factors:
+        at = [w for w in walks if (w["gain"], w["gain_scale"]) == (gain, scale)]
+        for matched in (False, True):  # as commanded, then re-commanded
+            cells = _cells([w for w in at if bool(w["pd_matched"]) == matched], "learned", robot, speeds)
+            if cells is not None:
+                label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
+                rows.append((f"**{label}**", [f"**{c}**" for c in cells]) if matched else (label, cells))
+        policy = _cells([w for w in at if not w["pd_matched"]], "policy", robot, speeds)  # against the commons as commanded
+        if policy:
+            rows.append((f"{gain} {scale:g}×, {POLICY_ROW}", policy))
+    return rows
+
+
 def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "hardware",
                    default_policy_walks: list[dict] | None = None) -> str:
     """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
@@ -20,30 +53,13 @@ def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "h
     policies too (`prototype --closed-loop`), their row follows that factor's: the policy itself under those
     gains, nothing re-solved; `default_policy_walks` (walks at the default gains with the policies among them,
     e.g. the stiffness run's PD 1× walks) give the default gains' policy row."""
-    def cells(rows: list[dict], trajectory: str) -> list[str] | None:
-        by = {r["speed_mps"]: r for r in ps.summary_rows(rows) if r["robot"] == robot and r["trajectory"] == trajectory}
-        if not by:
-            return None
-        return ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + missed_walks(by[v])
-                for v in speeds]
-
+    speeds = _speeds(default_walks, robot)
     default = {r["speed_mps"]: r for r in ps.summary_rows(default_walks)
                if r["robot"] == robot and r["trajectory"] == "learned"}
-    speeds = sorted(default)
     lines = _header("battery saving against the cheaper common trajectory", speeds)
     lines.append(_line(GAINS_DEFAULT_ROW, [mean_ci(default[v], "battery_saving_pct", ".1f", " %") for v in speeds]))
-    policy = cells(default_policy_walks or [], "policy")
+    policy = _cells(default_policy_walks or [], "policy", robot, speeds)
     if policy:
         lines.append(_line(GAINS_DEFAULT_POLICY_ROW, policy))
-    factors = sorted({(w["gain"], w["gain_scale"]) for w in walks}, key=lambda f: (f[0] != "kp", f[1]))  # kp first
-    for gain, scale in factors:
-        at = [w for w in walks if (w["gain"], w["gain_scale"]) == (gain, scale)]
-        for matched in (False, True):  # as commanded, then re-commanded
-            row = cells([w for w in at if bool(w["pd_matched"]) == matched], "learned")
-            if row is not None:
-                label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
-                lines.append(_line(f"**{label}**" if matched else label, [f"**{c}**" if matched else c for c in row]))
-        policy = cells([w for w in at if not w["pd_matched"]], "policy")  # against the commons as commanded
-        if policy:
-            lines.append(_line(f"{gain} {scale:g}×, {POLICY_ROW}", policy))
+    lines += [_line(label, cells) for label, cells in gains_rows(walks, default_walks, robot)]
     return "\n".join(lines)

@@ -87,7 +87,8 @@ def _job_config(base: WalkConfig, name: str, trajectory: FootTrajectory | None, 
 
 def _policy_walk(job: _Job, hardware: HardwareConfig | None, cap: float):
     """The actor of `job.policy` walks the protocol in its own env (its observation, its trot under the action),
-    on the same robot, in the same physics engine and with the same joint PD as the paths: `job.cfg.pid`,
+    on the same robot, in the same physics engine and with the same joint PD as the paths: `job.cfg.robot` (its
+    payload), `job.cfg.pid`,
     `job.cfg.sim.engine`, the hardware draw's mass and sensor streams (`hardware_robot`), the domain
     randomisation off."""
     from cyberdog.rl.rollout import load_actor, rollout  # torch: only in the processes that walk a policy
@@ -95,7 +96,7 @@ def _policy_walk(job: _Job, hardware: HardwareConfig | None, cap: float):
     actor = load_actor(job.policy)
     env = actor.config.env
     sim = dataclasses.replace(env.walk.sim, engine=job.cfg.sim.engine)
-    env = dataclasses.replace(env, walk=dataclasses.replace(env.walk, pid=job.cfg.pid, sim=sim),
+    env = dataclasses.replace(env, walk=dataclasses.replace(env.walk, robot=job.cfg.robot, pid=job.cfg.pid, sim=sim),
                               hardware=hardware or HardwareConfig(), randomization=RandomizationConfig())
     return rollout(actor, job.speed, cap, seed=job.draw, env_config=env, distance=job.distance_m,
                    run_up=job.run_up_s, hardware_robot=True)
@@ -123,7 +124,7 @@ def _run_job(job: _Job) -> dict:
         "trajectory": job.trajectory_name, "seed": job.seed, "draw": job.draw, "speed_mps": job.speed,
         "robot": job.mode, "pd_scale": job.pd_scale, "pd_matched": job.pd_matched_from is not None, "fell": r.fell,
         "reached": r.reached, "mass_scale": r.mass_scale,
-        "mass_kg": job.cfg.robot.carried_mass * r.mass_scale,  # the payload's and the mass draw's body
+        "mass_kg": r.mass_kg,  # the payload's and the mass draw's body
         # one meaning in every row: the lift height of the foot path walked (a learned path's own); the trot a
         # commanded path shifts has its own, under its own name
         "lift_height_m": (math.nan if job.policy is not None  # a policy's own foot lift is not an input
@@ -134,7 +135,7 @@ def _run_job(job: _Job) -> dict:
         "run_up_s": job.run_up_s, "distance_m": r.distance, "time_s": r.duration, "lateral_drift_m": r.lateral_drift,
         "energy_J": r.energy,  # Eq. (7)
         "electrical_energy_J": r.electrical_energy,
-        "electrical_cost_of_transport": (en.cost_of_transport(r.electrical_energy, job.cfg.robot.carried_mass,
+        "electrical_cost_of_transport": (en.cost_of_transport(r.electrical_energy, r.mass_kg,
                                                               job.cfg.sim.gravity, r.distance) if ok else float("nan")),
         "battery_start_pct": start_pct,  # E_f
         "battery_end_pct": en.remaining_percent(r.electrical_energy, e_cfg),  # E_n

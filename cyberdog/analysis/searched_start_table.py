@@ -18,7 +18,7 @@ from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
-from cyberdog.analysis.gains_table import gains_markdown
+from cyberdog.analysis.gains_table import gains_rows
 from cyberdog.analysis.markdown_cells import header, line, mean_ci, missed_walks, seeds_named
 
 PROTOTYPE_SOURCE = "prototype_searched_start.json"
@@ -31,14 +31,18 @@ VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}
 EQ7_ROW = "learned against the shape searched on Eq. 7 at {lift:.3f} m, on E (ideal robot), {seeds}"
 
 
-def _groups(walks: list[dict]) -> list[tuple[str, list[dict]]]:
-    """(name, walks) of the fresh seeds, then of the tuning seeds, each where it has walks; a walk of no seed (a
-    comparison's common trajectories, shared by the paths of a lift) belongs to both."""
+def _is_tuned(walk: dict) -> bool:
+    return str(walk.get("seed", "")) in TUNED_SEEDS
+
+
+def _groups(walks: list[dict]) -> dict[str, tuple[str, list[dict]]]:
+    """{"fresh" | "tuned": (name, walks)} where that group has walks; a walk of no seed (a comparison's common
+    trajectories, shared by the paths of a lift) belongs to both."""
     shared = [w for w in walks if not w.get("seed")]
-    fresh = [w for w in walks if w.get("seed") and str(w["seed"]) not in TUNED_SEEDS]
-    tuned = [w for w in walks if str(w.get("seed", "")) in TUNED_SEEDS]
-    return [(f"{seeds_named(w['seed'] for w in group)}{note}", group + shared)
-            for group, note in ((fresh, " (never tuned on)"), (tuned, " (tuned on)")) if group]
+    fresh = [w for w in walks if w.get("seed") and not _is_tuned(w)]
+    tuned = [w for w in walks if _is_tuned(w)]
+    return {kind: (f"{seeds_named(w['seed'] for w in group)}{note}", group + shared)
+            for kind, group, note in (("fresh", fresh, " (never tuned on)"), ("tuned", tuned, " (tuned on)")) if group}
 
 
 def _prototype_lines(walks: list[dict], name: str, speeds: list[float], robot: str) -> list[str]:
@@ -70,22 +74,22 @@ def _eq7_lines(walks: list[dict], name: str, speeds: list[float]) -> list[str]:
 def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dict] | None = None,
                             gains_walks: list[dict] | None = None, robot: str = "hardware") -> str:
     """The table: per group of seeds (never tuned on, then tuned on) the prototype rows and the Eq. 7 row, then
-    the gains rows of the fresh seeds (`gains_markdown`'s, as commanded)."""
+    the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone)."""
     speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
     if not speeds:
         raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
     lines = header(f"`{RECIPE}`, hardware-like robot", speeds)
-    compared = dict(_groups(compare_walks or []))
-    for name, walks in _groups(prototype_walks):
+    compared = _groups(compare_walks or [])
+    groups = _groups(prototype_walks)
+    for kind, (name, walks) in groups.items():
         lines += _prototype_lines(walks, name, speeds, robot)
-        if name in compared:
-            lines += _eq7_lines(compared[name], name, speeds)
-    fresh = [w for w in prototype_walks if w.get("seed") and str(w["seed"]) not in TUNED_SEEDS]
-    if gains_walks and fresh:
-        named = seeds_named(w["seed"] for w in fresh)
-        for row in gains_markdown(gains_walks, fresh, robot).splitlines()[3:]:  # after the header and default row
-            label, cells = row.split(" | ", 1)
-            lines.append(f"| the saving at {label.removeprefix('| ')}, {named} | {cells}")
+        if kind in compared:
+            lines += _eq7_lines(compared[kind][1], name, speeds)
+    fresh_gains = [w for w in gains_walks or [] if not _is_tuned(w)]
+    if fresh_gains and "fresh" in groups:
+        name = seeds_named(w["seed"] for w in fresh_gains)
+        for label, cells in gains_rows(fresh_gains, groups["fresh"][1], robot):
+            lines.append(line(f"the saving at {label}, {name}", cells))
     return "\n".join(lines)
 
 

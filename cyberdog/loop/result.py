@@ -36,6 +36,7 @@ class WalkResult:
     traces: dict = field(default_factory=dict)  # t, tau, dq, q, power, base_position, contacts
     target_distance: float | None = None  # m, the walk's distance goal (None: a timed walk)
     mass_scale: float = 1.0  # link mass scale the robot walked with (hardware-like: a ±u draw)
+    mass_kg: float = float("nan")  # kg, what the robot weighed in this walk (the payload's and the mass draw's body)
     hardware: HardwareConfig | None = None  # the hardware-like effects, None = the ideal robot
     score: float | None = None  # sum of the env's rewards, for a policy rollout (None for a scripted walk)
     dropped_shifts: int = 0  # leg-periods in which a shifted foot target was out of reach and the unshifted
@@ -131,5 +132,5 @@ def walk_result(walker, speed_command: float, fell: bool, target_distance: float
         peak_torque=float(np.max(np.abs(physics["tau"]))) if n else 0.0,
         peak_joint_speed=float(np.max(np.abs(physics["dq"]))) if n else 0.0,
         non_foot_contacts=sorted(walker.non_foot_contacts), target_distance=target_distance,
-        mass_scale=walker.robot.mass_scale, hardware=walker.hardware, score=score, traces=tr,
+        mass_scale=walker.robot.mass_scale, mass_kg=mass, hardware=walker.hardware, score=score, traces=tr,
         dropped_shifts=int(walker.controller.dropped_shifts))

@@ -61,7 +61,7 @@ def rest_pose(robot: RobotConfig, joint_angles=None, base_position=None, base_ya
     return q.tolist(), pos.tolist(), quat
 
 
-GEOMETRY_TOLERANCE = 1e-3  # m, a foot's position by the URDF and by RobotConfig's kinematics
+GEOMETRY_TOLERANCE_M = 1e-3  # a foot's position, or its radius, by the URDF and by RobotConfig
 MODEL_MASS_TOLERANCE = 1e-3  # RobotConfig.total_mass within 0.1 % of the URDF's links (13.573 of 13.577 kg)
 
 
@@ -115,31 +115,52 @@ class EngineRobot:
         """Every link's mass and inertia × `scale` of the URDF's."""
         raise NotImplementedError
 
-    def _check_geometry(self) -> None:
-        """Refuse a `RobotConfig` whose leg geometry (abad offsets, l1, l2, l3) is not the URDF's: those settings
-        state the model the trot's kinematics use, they do not change the body. Two poses, the body at the origin:
-        each foot where `cyberdog.core.kinematics` puts it, within `GEOMETRY_TOLERANCE`."""
-        stand = standing_joint_angles(self.robot_config).reshape(4, 3)
+    def _foot_radius(self) -> float:
+        """m, the foot sphere's radius as the engine holds it (every foot's: the URDF's)."""
+        raise NotImplementedError
+
+    def _carry_payload(self, body_ratio: float) -> None:
+        """The trunk's mass and inertia × `body_ratio` of the URDF's (its nominal ones, which mass scales scale)."""
+        raise NotImplementedError
+
+    def _settle_model(self) -> None:
+        """Refuse a `RobotConfig` that is not the URDF's model (`model_mismatch`; the engine closed first), then
+        put `RobotConfig.payload` on the body: at its centre of mass, spread as the body's own mass is (the
+        trunk's inertia × the trunk's mass ratio)."""
+        problem = self.model_mismatch()
+        if problem:
+            self.close()
+            raise ValueError(problem)
+        payload = self.robot_config.payload
+        if payload > 0:
+            self._carry_payload((self._trunk_mass() + payload) / self._trunk_mass())
+
+    def _trunk_mass(self) -> float:
+        """kg, the trunk link's mass in the URDF."""
+        raise NotImplementedError
+
+    def model_mismatch(self) -> str:
+        """"" where `RobotConfig` states this URDF's model, else one line on what differs: total_mass (the links'
+        sum, within 0.1 %), the leg geometry (abad offsets, l1, l2, l3: in two poses, the body at the origin, each
+        foot where `cyberdog.core.kinematics` puts it, within 1 mm) and foot_radius. These settings are what the
+        trot's weight feed-forward, kinematics and stand height read; they do not change the body."""
+        cfg, name = self.robot_config, self.urdf.name
+        links_mass = self.total_mass()
+        if abs(links_mass - cfg.total_mass) > MODEL_MASS_TOLERANCE * cfg.total_mass:
+            return (f"RobotConfig.total_mass = {cfg.total_mass} kg, but {name}'s links weigh {links_mass:.3f} kg: "
+                    "total_mass states the URDF's mass; to walk a heavier robot set robot.payload (kg on the body)")
+        stand = standing_joint_angles(cfg).reshape(4, 3)
         for q in (stand, stand + np.array([0.2, 0.3, -0.3])):
             self.reset(q, base_position=(0.0, 0.0, 0.0))
-            error = float(np.abs(self.foot_positions_world() - foot_position_body(q, self.robot_config)).max())
-            if error > GEOMETRY_TOLERANCE:
-                raise ValueError(f"RobotConfig's leg geometry (abad_offset_x/y, l1, l2, l3) is not {self.urdf.name}'s: "
-                                 f"a foot sits {1e3 * error:.1f} mm from where it puts it; these settings state the "
-                                 "URDF's legs; for other legs make a URDF (tools/make_urdf.py) and set robot.urdf")
-
-    def _body_with_payload(self, links_mass: float, body_mass: float, body_inertia):
-        """(mass kg, principal inertia) of the body carrying `RobotConfig.payload` at its centre of mass, spread as
-        its own mass is (the inertia × the same ratio), after refusing a `RobotConfig.total_mass` that is not the
-        URDF's links' `links_mass`: total_mass states the model (the trot's weight feed-forward reads it), the
-        payload changes the body."""
-        stated = self.robot_config.total_mass
-        if abs(links_mass - stated) > MODEL_MASS_TOLERANCE * stated:
-            raise ValueError(f"RobotConfig.total_mass = {stated} kg, but {self.urdf.name}'s links weigh "
-                             f"{links_mass:.3f} kg: total_mass states the URDF's mass; to walk a heavier robot set "
-                             "robot.payload (kg carried on the body)")
-        ratio = (body_mass + self.robot_config.payload) / body_mass
-        return body_mass * ratio, np.asarray(body_inertia) * ratio
+            error = float(np.abs(self.foot_positions_world() - foot_position_body(q, cfg)).max())
+            if error > GEOMETRY_TOLERANCE_M:
+                return (f"RobotConfig's leg geometry (abad_offset_x/y, l1, l2, l3) is not {name}'s: a foot sits "
+                        f"{1e3 * error:.1f} mm from where it puts it; these settings state the URDF's legs: for "
+                        "another robot point robot.urdf at its URDF and set them to its geometry")
+        if abs(self._foot_radius() - cfg.foot_radius) > GEOMETRY_TOLERANCE_M:
+            return (f"RobotConfig.foot_radius = {cfg.foot_radius} m, but {name}'s foot spheres are "
+                    f"{self._foot_radius():.4f} m: foot_radius states the URDF's feet")
+        return ""
 
     def joint_lists(self) -> tuple[list, list]:
         """(q, dq) as 12 floats each, read now and cached until the next step or reset (do not modify)."""

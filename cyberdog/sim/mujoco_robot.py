@@ -122,14 +122,10 @@ class MujocoRobot(EngineRobot):
         self.link_names = {b: m.body(b).name for b in range(1, m.nbody)}  # body id → URDF link name
         self._geom_body = m.geom_bodyid.tolist()
         self._nominal_dynamics = (m.body_mass.copy(), m.body_inertia.copy())
-        trunk = m.body("trunk").id
-        body = self._body_with_payload(float(m.body_mass[1:].sum()), m.body_mass[trunk], m.body_inertia[trunk])
-        if self.robot_config.payload > 0:
-            self._nominal_dynamics[0][trunk], self._nominal_dynamics[1][trunk] = body
-            self._scale_masses(1.0)
+        self._trunk = m.body("trunk").id
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
         self._view: MujocoView | None = None
-        self._check_geometry()
+        self._settle_model()
         self.reset()
 
     # ---- reset and step -------------------------------------------------------------------------------------
@@ -211,6 +207,19 @@ class MujocoRobot(EngineRobot):
     def _set_friction(self, coefficient: float) -> None:
         """The ground's sliding friction: the higher-priority geom's friction is the contact's."""
         self.model.geom_friction[self.ground_id, 0] = coefficient
+
+    def _foot_radius(self) -> float:
+        foot_geoms = [g for g in range(self.model.ngeom) if self._geom_body[g] == self.foot_body_ids[0]]
+        return float(self.model.geom_size[foot_geoms[0], 0])
+
+    def _trunk_mass(self) -> float:
+        return float(self._nominal_dynamics[0][self._trunk])
+
+    def _carry_payload(self, body_ratio: float) -> None:
+        mass, inertia = self._nominal_dynamics
+        mass[self._trunk] *= body_ratio
+        inertia[self._trunk] *= body_ratio
+        self._scale_masses(self.mass_scale)
 
     def _scale_masses(self, scale: float) -> None:
         """Every body's mass and inertia × scale; MuJoCo's constants that depend on them recomputed, the state

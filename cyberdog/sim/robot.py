@@ -92,7 +92,7 @@ class Robot(EngineRobot):
         self._get_euler = c.getEulerFromQuaternion
         self._multiply_transforms = c.multiplyTransforms
         self._joint_cache: tuple[list, list] | None = None  # (q, dq) as floats, until the next step or reset
-        self._check_geometry()
+        self._settle_model()
         self.reset()
 
     def _map_links(self, urdf: Path) -> None:
@@ -123,11 +123,6 @@ class Robot(EngineRobot):
         for link in self.link_names:
             info = c.getDynamicsInfo(self.body_id, link)
             self._nominal_dynamics[link] = (info[0], info[2])
-        links_mass = sum(mass for mass, _ in self._nominal_dynamics.values())
-        body = self._body_with_payload(links_mass, *self._nominal_dynamics[-1])
-        if self.robot_config.payload > 0:
-            self._nominal_dynamics[-1] = (body[0], tuple(body[1]))
-            self._scale_masses(1.0)
         inertial_pos, inertial_orn = c.getDynamicsInfo(self.body_id, -1)[3:5]  # inertial frame in the link frame
         self._link_to_inertial = (inertial_pos, inertial_orn)
         self._inertial_to_link = c.invertTransform(inertial_pos, inertial_orn)
@@ -215,6 +210,17 @@ class Robot(EngineRobot):
     def _set_friction(self, coefficient: float) -> None:
         """The plane's lateral friction: every robot link has 1.0, and Bullet multiplies the two."""
         self.client.changeDynamics(self.plane_id, -1, lateralFriction=coefficient)
+
+    def _foot_radius(self) -> float:
+        return float(self.client.getCollisionShapeData(self.body_id, self.foot_link_ids[0])[0][3][0])
+
+    def _trunk_mass(self) -> float:
+        return float(self._nominal_dynamics[-1][0])
+
+    def _carry_payload(self, body_ratio: float) -> None:
+        mass, inertia = self._nominal_dynamics[-1]
+        self._nominal_dynamics[-1] = (mass * body_ratio, tuple(i * body_ratio for i in inertia))
+        self._scale_masses(self.mass_scale)
 
     def _scale_masses(self, scale: float) -> None:
         for link, (mass, inertia) in self._nominal_dynamics.items():
