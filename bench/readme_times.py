@@ -4,7 +4,8 @@
 The README's times were measured on an idle 2-core x86-64 machine; they scale with the cores (`evaluate.py`
 walks in one process per core, the test suite and a training run use one or two) and with whatever else runs
 (a loaded machine took 5-6x as long). This script prints the machine (CPU model, cores, load average before
-and after) and times each command as the README writes it, one after another:
+and after) and times each command as the README writes it, one after another, in wall and CPU time (user +
+system of every process it started):
 
     python bench/readme_times.py                       # evaluate.py (command 1's job) and the tiny training run
     python bench/readme_times.py --tests               # + the quick test tier and the full test run (command 2)
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import resource
 import subprocess
 import sys
 import tempfile
@@ -51,6 +53,16 @@ def load() -> str:
         return "load average unknown"
 
 
+def _children_cpu_s() -> float:
+    """s of CPU (user + system) the finished child processes used so far (their workers included)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _minutes(seconds: float) -> str:
+    return f"{seconds // 60:.0f} min {seconds % 60:.0f} s"
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--tests", action="store_true", help="also time the quick test tier and the full test run")
@@ -62,11 +74,11 @@ def main(argv=None) -> int:
         names = [args.only] if args.only else ["evaluate", "tiny"] + (["quick_tests", "tests"] if args.tests else [])
         for name in names:
             print(f"{name}: {' '.join(todo[name][1:])} ...", flush=True)
-            t0 = time.perf_counter()
+            t0, cpu0 = time.perf_counter(), _children_cpu_s()
             done = subprocess.run(todo[name], cwd=REPO)
-            seconds = time.perf_counter() - t0
+            seconds, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
             status = "ok" if done.returncode == 0 else f"failed (exit {done.returncode})"
-            print(f"{name}: {seconds // 60:.0f} min {seconds % 60:.0f} s, {status}; {load()}", flush=True)
+            print(f"{name}: {_minutes(seconds)} wall, {_minutes(cpu)} CPU, {status}; {load()}", flush=True)
     return 0
 
 
