@@ -85,3 +85,25 @@ def test_a_leg_geometry_that_is_not_the_urdfs_is_refused_naming_the_urdf(engine,
 def test_a_foot_radius_that_is_not_the_urdfs_is_refused(engine):
     with pytest.raises(ValueError, match=r"foot_radius = 0\.03 m, but cyberdog\.urdf's foot spheres are 0\.0180 m"):
         _robot(engine, foot_radius=0.03)
+
+
+def test_evaluate_walks_the_payload_asked_and_its_rows_show_the_mass(tmp_path):
+    """`evaluate.py prototype --set robot.payload=3`: every row's mass_kg is the loaded body's, times its draw, and
+    the output's config.yaml records the payload."""
+    import json
+
+    from conftest import commanded
+    from cyberdog.core.learned_set import LearnedPath
+    from cyberdog.evaluation import commands
+    from cyberdog.evaluation.cli import parse_args
+
+    path = LearnedPath("seed0", commanded(1.0, 0.0, 0)).save(tmp_path / "paths")
+    out = tmp_path / "out"
+    argv = ["prototype", "--learned", str(path), "--speeds", "1.0", "--prototype-distance", "0.3",
+            "--prototype-run-up", "0", "--prototype-draws", "1", "--no-prototype-reference", "--workers", "1",
+            "--set", f"robot.payload={PAYLOAD}", "--out", str(out)]
+    assert commands.run(parse_args(argv), argv) == 0
+    rows = json.loads((out / "prototype.json").read_text())
+    assert rows and all(r["mass_kg"] == pytest.approx((CFG.robot.total_mass + PAYLOAD) * r["mass_scale"])
+                        for r in rows)
+    assert C.load_walked(out / "config.yaml").walk.robot.payload == PAYLOAD
