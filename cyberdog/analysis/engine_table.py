@@ -14,6 +14,8 @@ its PyBullet file is refused. The rows, per commanded speed, means over the seed
 - The battery policies closed loop on the same robots: PyBullet's are the stiffness run's walks at PD 1×
   (`stiffness_walks.json`, whose paths' walks are the prototype run's), MuJoCo's the policy walks of
   `prototype_mujoco.json` (`prototype --closed-loop`).
+- The battery recipe from the searched shape (`prototype_searched_start.json`, the same run on its paths): the
+  battery saving against the cheaper common trajectory and against the searched shape.
 - The torque agent's stage-2 actors alone on the ideal robot (`torque_check.json`, `torque_check_fresh.json`):
   the walks in the band.
 
@@ -37,11 +39,14 @@ TABLE5 = ("comparison.json", "comparison_fresh.json")
 PROTOTYPE = ("prototype.json", "prototype_fresh.json")
 POLICY_PYBULLET = "stiffness_walks.json"  # the PD 1× walks: the policies beside the prototype's robots and paths
 TORQUE = ("torque_check.json", "torque_check_fresh.json")
+SEARCHED_START = ("prototype_searched_start.json",)
 HARDWARE = "hardware"  # the prototype's robot
 TABLE5_SAVING_ROW = "Table 5: D_t on E (%)"
 PROTOTYPE_SAVING_ROW = "prototype: battery saving (%)"
 POLICY_SAVING_ROW = "policies, closed loop: battery saving (%)"
 TORQUE_WALKS_ROW = "torque agent, stage 2: walks in the band"
+SEARCHED_START_SAVING_ROW = "from the searched shape: battery saving (%)"
+SEARCHED_START_VS_ROW = "from the searched shape: against the searched shape (%)"
 # the README's rows of the full table, by first cell
 HEADLINE_ROWS = (f"**{TABLE5_SAVING_ROW}**", f"**{PROTOTYPE_SAVING_ROW}**", POLICY_SAVING_ROW,
                  TORQUE_WALKS_ROW)  # the saving rows in bold, as the table has them
@@ -182,8 +187,8 @@ def _walk_count(rows: list[dict], speed: float, name: str) -> tuple[int, int, in
     return sum(map(ps.walk_counts, here)), len(here), sum(bool(r["fell"]) for r in here)
 
 
-def _saving(rows: list[dict], speed: float, name: str) -> dict[str, float]:
-    return ps.battery_savings_by_seed(rows, HARDWARE, speed, of=name)
+def _saving(rows: list[dict], speed: float, name: str, against: tuple[str, ...] = ps.COMMON) -> dict[str, float]:
+    return ps.battery_savings_by_seed(rows, HARDWARE, speed, against=against, of=name)
 
 
 def _prototype_lines(engines: tuple[list, list], speeds: list[float]) -> list[str]:
@@ -200,6 +205,14 @@ def _policy_lines(engines: tuple[list, list], speeds: list[float]) -> list[str]:
     return [_row(POLICY_SAVING_ROW, _saving_cells([tuple(_saving(e, v, "policy") for e in engines) for v in speeds],
                                                   [tuple(_walk_count(e, v, "policy") for e in engines)
                                                    for v in speeds]))]
+
+
+def _searched_start_lines(engines: tuple[list, list], speeds: list[float]) -> list[str]:
+    counts = [tuple(_walk_count(e, v, "learned") for e in engines) for v in speeds]
+    vs_searched = [tuple(_saving(e, v, "learned", against=(ps.REFERENCE,)) for e in engines) for v in speeds]
+    return [_row(SEARCHED_START_SAVING_ROW, _saving_cells([tuple(_saving(e, v, "learned") for e in engines)
+                                                          for v in speeds], counts)),
+            _row(SEARCHED_START_VS_ROW, _saving_cells(vs_searched, counts))]
 
 
 # ---- the torque agent -----------------------------------------------------------------------------------------
@@ -232,6 +245,9 @@ def engine_markdown(results: Path) -> str | None:
         policy = ([w for w in policy[0] if w.get("pd_scale", 1.0) == 1.0], policy[1])
         if all(any(w["trajectory"] == "policy" for w in e) for e in policy):
             lines += _policy_lines(policy, speeds)
+    searched_start = _twins(results, SEARCHED_START)
+    if searched_start is not None:
+        lines += _searched_start_lines(searched_start, speeds)
     torque = _twins(results, TORQUE)
     if torque is not None:
         lines += _torque_lines(torque, speeds)
