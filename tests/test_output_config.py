@@ -248,3 +248,13 @@ def test_a_latency_of_no_whole_controller_period_is_refused_before_the_video(tmp
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "hardware.latency_s" in err[0] and "whole multiple" in err[0], err
     assert not (tmp_path / "out").exists()
+
+
+def test_figures_refuses_walk_settings_it_would_not_use(tmp_path, capsys):
+    """`evaluate.py figures` draws saved results: a --set or --config there is refused in one line."""
+    source = Path(__file__).resolve().parents[1] / "results" / "figures_input"
+    for extra in (["--set", "gait.lift_height=0.1"], ["--config", str(source / "config.yaml")]):
+        out = tmp_path / extra[0].strip("-")
+        assert evaluate(["figures", "--from", source, *extra, "--out", out]) == 2
+        err = capsys.readouterr().err
+        assert "walks nothing" in err and len(err.strip().splitlines()) == 1 and not out.exists()

@@ -145,6 +145,9 @@ def cmd_all(args, cfg: C.WalkConfig) -> int:
 def cmd_figures(args, cfg: C.WalkConfig) -> int:
     from cyberdog.evaluation.parts import run_figures
 
+    if getattr(args, "overrides", None) or getattr(args, "config", None):
+        raise UsageError("evaluate.py figures draws saved results and walks nothing, so --set and --config change "
+                         "nothing; leave them out (the results' own config.yaml says how they were walked)")
     if args.draw_figures is None:
         raise UsageError("figures need the figure code of a checkout: python evaluate.py figures, or python -m plots")
     src = args.from_dir or args.out
