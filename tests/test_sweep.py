@@ -218,6 +218,29 @@ def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_pat
     assert [s["attempts"] for s in status["seeds"]] == [1, 4] and status["seeds"][1]["state"] == "failed"
 
 
+def test_a_seed_stopped_by_ctrl_c_is_not_retried_and_a_resume_continues_it(tmp_path, monkeypatch, capsys):
+    """A stand-in trainer: seed 1's process exits 130 (train.py's exit on Ctrl-C) the first time, then trains."""
+    fake = tmp_path / "fake_train.py"
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    fake.write_text("import pathlib, sys\n"
+                    "run = pathlib.Path(sys.argv[sys.argv.index('--run-dir') + 1])\n"
+                    f"marker = pathlib.Path({str(tmp_path / 'stopped_once')!r})\n"
+                    "if run.name == 'seed1' and not marker.exists():\n"
+                    "    marker.write_text('')\n"
+                    "    sys.exit(130)\n"
+                    "(run / 'stage2_final_actor.pt').write_bytes(b'')\n")
+    sweep = tmp_path / "s"
+    create_sweep(sweep, C.load(C.ExperimentConfig, TINY), [0, 1])
+    status = run_sweep(sweep, backend="local", workers=2, max_retries=2, progress=False, entry_point="fake_train",
+                       poll_s=0.05)
+    by_seed = {s["seed"]: s for s in status["seeds"]}
+    assert by_seed[0]["state"] == "done"
+    assert by_seed[1]["state"] == "interrupted" and by_seed[1]["attempts"] == 1
+    assert "seed 1 attempt 1 interrupted (exit code 130); not retried" in capsys.readouterr().out
+    status = run_sweep(sweep, backend="local", max_retries=0, progress=False, entry_point="fake_train", poll_s=0.05)
+    assert [s["state"] for s in status["seeds"]] == ["done", "done"], status["seeds"][1]
+
+
 # ---- inputs and errors ------------------------------------------------------------------------------------------
 def test_parse_seeds():
     assert parse_seeds("0-9") == list(range(10))

@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 LOG_FILE, ATTEMPT_FILE, SWEEP_FILE = "train.log", "sweep_attempt.json", "sweep.json"
 ENTRY_POINT = "cyberdog.train_cli"  # the package's training command line: `python -m cyberdog.train_cli`
@@ -99,6 +100,23 @@ def _ray_attempt(cmd: list, run_dir: str, sweep_file: str, attempt: int, code_ro
             "error": None if rc == 0 else _describe_exit(rc, run_dir, proc.log_offset)}
 
 
+class AttemptEnd(NamedTuple):
+    """How a training attempt ended: `ok` (exit 0), else its `error` (how it ended, its log's last lines) and
+    whether it was `interrupted` (exit 130 or SIGINT: a Ctrl-C of that process, which a sweep does not retry)."""
+
+    seed: int
+    ok: bool
+    error: str | None = None
+    interrupted: bool = False
+
+
+def attempt_end(seed: int, rc: int, error: str | None) -> AttemptEnd:
+    return AttemptEnd(seed, rc == 0, error, rc in INTERRUPTED_EXITS)
+
+
+INTERRUPTED_EXITS = (130, -signal.SIGINT)  # train.py's exit on Ctrl-C; a process killed by SIGINT
+
+
 # ---- backends ----------------------------------------------------------------------------------------------------
 class LocalBackend:
     """Up to `workers` training processes on this machine."""
@@ -113,7 +131,7 @@ class LocalBackend:
         proc = _launch([sys.executable, "-m", self.entry_point] + args, None, str(run_dir), attempt, self.code_root)
         self.procs[seed] = (proc, str(run_dir))
 
-    def wait(self, timeout: float) -> list[tuple[int, bool, str | None]]:
+    def wait(self, timeout: float) -> list[AttemptEnd]:
         deadline = time.monotonic() + timeout
         while True:
             finished = [s for s, (p, _) in self.procs.items() if p.poll() is not None]
@@ -124,7 +142,7 @@ class LocalBackend:
         for seed in finished:
             p, run_dir = self.procs.pop(seed)
             rc = p.returncode
-            out.append((seed, rc == 0, None if rc == 0 else _describe_exit(rc, run_dir, p.log_offset)))
+            out.append(attempt_end(seed, rc, None if rc == 0 else _describe_exit(rc, run_dir, p.log_offset)))
         return out
 
     def stop(self) -> None:
@@ -187,7 +205,7 @@ class RayBackend:
         ref = self.task.remote(args, str(run_dir), sweep_file, attempt, self.code_root, self.entry_point)
         self.refs[ref] = seed
 
-    def wait(self, timeout: float) -> list[tuple[int, bool, str | None]]:
+    def wait(self, timeout: float) -> list[AttemptEnd]:
         if not self.refs:
             time.sleep(timeout)
             return []
@@ -197,9 +215,10 @@ class RayBackend:
             seed = self.refs.pop(ref)
             try:
                 r = self.ray.get(ref)
-                out.append((seed, r["rc"] == 0, r["error"]))
+                out.append(attempt_end(seed, r["rc"], r["error"]))
             except self.ray.exceptions.RayError as e:  # the worker or its node died
-                out.append((seed, False, f"Ray task failed: {type(e).__name__}: {str(e).strip().splitlines()[0]}"))
+                out.append(AttemptEnd(seed, False, f"Ray task failed: {type(e).__name__}: "
+                                                   f"{str(e).strip().splitlines()[0]}"))
         return out
 
     def stop(self) -> None:

@@ -190,12 +190,13 @@ class SweepDriver:
 
     def collect_ended_attempts(self) -> None:
         """Wait up to poll_s for attempts to end; a failed one goes back to the front of the queue while its
-        seed has retries left, else the seed is marked failed."""
-        for s, ok, error in self.backend.wait(self.poll_s):
+        seed has retries left, else the seed is marked failed; an interrupted one (Ctrl-C) is marked interrupted."""
+        for end in self.backend.wait(self.poll_s):
+            s, error = end.seed, end.error
             st = self.seeds[s]
             st.wall_s += time.monotonic() - st._started
             st.read_metrics()
-            if ok:
+            if end.ok:
                 st.state = "done"
                 score = "-" if st.window_score is None else f"{st.window_score:.4g}"
                 self.say(f"sweep: seed {s} done: {st.env_steps} env steps, {st.episodes} episodes, "
@@ -206,7 +207,11 @@ class SweepDriver:
                 a = read_attempt(Path(st.run_dir))
                 if a.get("attempt") == st.attempts:
                     break_lock(st.run_dir, a.get("pid"), a.get("host"))
-                if st._tries <= self.max_retries:
+                if end.interrupted:  # a Ctrl-C of that seed's process: stopped on purpose, not retried
+                    st.state = "interrupted"
+                    self.say(f"sweep: seed {s} attempt {st.attempts} interrupted ({error.splitlines()[0]}); not "
+                             "retried: train.py --resume SWEEP_DIR continues it")
+                elif st._tries <= self.max_retries:
                     st.state = "retrying"
                     self.queue.insert(0, s)
                     self.say(f"sweep: seed {s} attempt {st.attempts} failed ({error}); retrying "
