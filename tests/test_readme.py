@@ -27,6 +27,7 @@ EXPENSIVE = {
     "evaluate.py prototype --learned runs/battery_paths/learned": "needs the extraction above; 120 walks of 20 m",
     "evaluate.py stiffness --pd-matched": "the prototype's walks at three PD stiffnesses, re-commanded: about 7 min",
     "train.py --config configs/torque.yaml --seeds 0-4": "the paper's torque agent: 850,000 env steps a seed, hours",
+    "train.py --config configs/battery_searched.yaml --seeds 20-24": "the battery from the searched shape: hours",
 }
 SERVER = {".venv/bin/tensorboard --logdir runs": "a server that runs until stopped: checked to be installed"}
 RUN = ("train.py --config configs/tiny.yaml", "-m plots --from results/figures_input", "train.py --help",
