@@ -194,6 +194,13 @@ def test_commanded_paths_walk_only_at_their_speed_with_baselines_at_their_own_li
     assert base_lifts == {(1.0, 0.15), (1.0, 0.09), (1.2, 0.15), (1.2, 0.08)}
     with pytest.raises(LearnedSetError, match="seed0 has no learned path at 1.4 m/s"):  # never a table without it
         cmp.comparison_jobs(C.WalkConfig(), learned, speeds=(1.0, 1.4))
+    # --skip-missing-paths: a seed without a path at a speed walks nothing there; a speed no seed has is refused
+    two = learned_set(seed0=[commanded(1.0, -0.01, 0)], seed1=[commanded(1.0, -0.01, 0), commanded(1.2, -0.02, 0)])
+    jobs = cmp.comparison_jobs(C.WalkConfig(), two, speeds=(1.0, 1.2), skip_missing=True)
+    assert sorted((j.seed, j.speed) for j in jobs if j.trajectory == "learned") == [
+        ("seed0", 1.0), ("seed1", 1.0), ("seed1", 1.2)]
+    with pytest.raises(LearnedSetError, match="1.4 m/s"):
+        cmp.comparison_jobs(C.WalkConfig(), two, speeds=(1.4,), skip_missing=True)
 
 
 def test_the_prototype_walks_a_seed_without_a_path_at_a_speed_nowhere_at_that_speed_when_asked():

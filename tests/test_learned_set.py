@@ -101,3 +101,14 @@ def test_a_table_row_and_its_figure_use_the_same_path(tmp_path):
     assert fast.learned_speed == 1.2
     assert np.allclose(fast.learned["seed0"].z, LearnedSet.load([only_fast / "learned"]).path("seed0", 1.2)
                        .figure_path().z)
+
+
+def test_a_figure_draws_the_seeds_that_have_a_path_at_its_speed():
+    """A seed whose extraction found no path at 1 m/s (walked with --skip-missing-paths) is left out of the
+    figure at 1 m/s, not an error; a speed no seed has is refused."""
+    learned = learned_set(seed0=[commanded(1.2, -0.02, 0)], seed1=[commanded(1.0, -0.01, 1), commanded(1.2, -0.02, 1)])
+    assert learned.figure_speed(1.0) == 1.0 and list(learned.figure_paths(1.0)) == ["seed1"]
+    assert list(learned.figure_paths(1.2)) == ["seed0", "seed1"]
+    assert learned.figure_speed(1.4) == 1.0  # no seed at 1.4 m/s: the lowest recorded speed
+    with pytest.raises(LearnedSetError, match="1.4 m/s"):
+        learned.figure_paths(1.4)

@@ -82,10 +82,11 @@ def walk_config(base: WalkConfig, trajectory: str, speed: float, lift_height: fl
 
 def comparison_jobs(cfg: WalkConfig, learned: LearnedSet, speeds=PAPER_SPEEDS,
                     duration: float = PAPER_WALK_DURATION, same_lift: bool = True,
-                    reference: SampledTrajectory | None = None) -> list[WalkJob]:
+                    reference: SampledTrajectory | None = None, skip_missing: bool = False) -> list[WalkJob]:
     """Every walk of the comparison: each label's learned path at each speed (`LearnedSet.at`: an error if a
-    label has none there), each baseline walk once per speed and distinct lift height, and the `reference`
-    shape (if given, with `same_lift`) once per speed at its own lift height."""
+    label has none there; with `skip_missing`, the labels that have one, an error only where none has), each
+    baseline walk once per speed and distinct lift height, and the `reference` shape (if given, with
+    `same_lift`) once per speed at its own lift height."""
     if not isinstance(learned, LearnedSet):
         raise TypeError(f"learned must be a LearnedSet, got {type(learned).__name__}")
     if reference is not None and not isinstance(reference, FootTrajectory):
@@ -93,7 +94,8 @@ def comparison_jobs(cfg: WalkConfig, learned: LearnedSet, speeds=PAPER_SPEEDS,
                         f"{type(reference).__name__}")
     jobs: list[WalkJob] = []
     for v in speeds:
-        here = learned.at(v)
+        here = learned.at(v) if not skip_missing else \
+            {label: learned.path(label, v) for label in learned.labels if learned.has(label, v)} or learned.at(v)
         lifts = [round(cfg.gait.lift_height, LIFT_DECIMALS)]
         if same_lift:
             lifts += [round(p.lift_height, LIFT_DECIMALS) for p in here.values()]

@@ -192,13 +192,17 @@ class LearnedSet:
         return LearnedSet(p for label in labels for p in self._by_label[label])
 
     def figure_paths(self, speed: float) -> dict[str, SampledTrajectory]:
-        """The x-z path per label that a figure draws at `speed`: `at(speed)`'s, so a table row at that speed
-        and its figure show the same path."""
-        return {label: p.figure_path() for label, p in self.at(speed).items()}
+        """The x-z path per label that a figure draws at `speed`: `path(label, speed)`'s, so a table row at that
+        speed and its figure show the same path; a label without a path there (an extraction that found none,
+        walked with --skip-missing-paths) is left out, and LearnedSetError where no label has one."""
+        here = {label: self.path(label, speed).figure_path() for label in self.labels if self.has(label, speed)}
+        return here or {label: p.figure_path() for label, p in self.at(speed).items()}
 
     def figure_speed(self, preferred: float) -> float:
-        """`preferred` (m/s) if the set covers it, else its lowest recorded speed (a figure must name one)."""
-        return preferred if self.covers(preferred) or not self.speeds() else self.speeds()[0]
+        """`preferred` (m/s) if a label has a path there, else the set's lowest recorded speed (a figure must
+        name one)."""
+        return preferred if any(self.has(label, preferred) for label in self.labels) or not self.speeds() \
+            else self.speeds()[0]
 
     # ---- files ------------------------------------------------------------------------------------------------
     def save(self, folder: str | Path, overwrite: bool = True) -> list[Path]:

@@ -68,7 +68,7 @@ def cmd_compare(args, cfg: C.WalkConfig) -> int:
     learned = learned_trajectories(args, run.out, args.speeds, cfg=cfg)
     cfg = trot_of(args, run, cfg, learned, reference=reference)
     run_compare(cfg, learned, args.speeds, args.duration, not args.no_same_lift, args.workers, run.out,
-                reference=reference)
+                reference=reference, skip_missing=args.skip_missing_paths)
     run_figures(args.draw_figures, run.out, only=("figure10", "figure13"))  # drawn from the files just written
     return run.finish()
 

@@ -109,6 +109,14 @@ def compare_options(p) -> None:
         add(p)
     _same_lift_option(p)
     _reference_options(p)
+    _skip_missing_option(p)
+
+
+def _skip_missing_option(p) -> None:
+    p.add_argument("--skip-missing-paths", action="store_true",
+                   help="walk each speed with the seeds that have a learned path there: a seed whose extraction "
+                        "found none at a speed walks nothing at it, and that speed's rows are over the other seeds "
+                        "(named in the log; default: every seed must have every speed)")
 
 
 def _prototype_walk_options(p) -> None:
@@ -120,10 +128,7 @@ def _prototype_walk_options(p) -> None:
 
 def prototype_options(p) -> None:
     _prototype_walk_options(p)
-    p.add_argument("--skip-missing-paths", action="store_true",
-                   help="walk each speed with the seeds that have a learned path there: a seed whose extraction "
-                        "found none at a speed walks nothing at it, and that speed's rows are over the other seeds "
-                        "(named in the log; default: every seed must have every speed)")
+    _skip_missing_option(p)
     p.add_argument("--pd-matched-from-default", action="store_true",
                    help="with gains set by --set pid.kp=... pid.kd=...: every walk's command (the learned paths' and "
                         "the common trajectories' alike, not a policy's) is re-solved so that those gains execute "

@@ -18,9 +18,11 @@ FIGURES = ("figure4", "figure6", "figure7", "figure10", "figure13")
 
 
 def run_compare(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], duration: float, same_lift: bool,
-                workers: int | None, out: Path, log=print, reference=None, brief: bool = False) -> tuple[list, list, dict]:
+                workers: int | None, out: Path, log=print, reference=None, brief: bool = False,
+                skip_missing: bool = False) -> tuple[list, list, dict]:
     """Comparison walks → comparison.*, table5.*, walks.json, power_traces.npz; returns (rows, walks, power).
     reference: the direct search's shape (a SampledTrajectory) for the matched-lift table's reference row.
+    skip_missing: a seed without a path at a speed walks nothing there, and is named.
     brief: print a progress line per quarter of the walks and the headline's main rows only (the full tables
     are in the files)."""
     for p in learned.paths():
@@ -33,7 +35,12 @@ def run_compare(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], dur
         log(f"reference row: the direct search's best shape, searched at H = {reference.lift_height:.3f} m"
             + (f" ({1e3 * gap:.1f} mm from the learned paths' mean lift height: compare with care)"
                if gap > 2e-3 else ""))
-    jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift, reference=reference)
+    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
+    if skip_missing and missing:
+        log("comparison: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
+            + ": those speeds' rows are over the other seeds")
+    jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift, reference=reference,
+                               skip_missing=skip_missing)
     log(f"comparison: {len(jobs)} walks of {duration:g} s")
     walks = cmp.run_jobs(jobs, workers, log, every_walk=not brief)
     power = {w["walk_id"]: w.pop("power_W") for w in walks}
