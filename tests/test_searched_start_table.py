@@ -91,3 +91,37 @@ def test_the_eq7_row_follows_its_group_whatever_seeds_the_comparison_holds():
     table = sst.searched_start_markdown([w for w in _walks() if w["seed"] in ("seed0", "seed1")], compared)
     fresh_rows = [k for k in _rows(table) if k.startswith("learned against the shape searched on Eq. 7")]
     assert len(fresh_rows) == 2 and any("seed 1 (never tuned on)" in k for k in fresh_rows)
+
+
+def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path):
+    """With the recipe's walks shipped (the battery walks relabelled seeds 20–24) the README's headline is made:
+    its rows are the full table's, named by the seeds the walks hold; a re-commanded gains row is bold whole."""
+    import shutil
+
+    from cyberdog.analysis.engine_table import TWIN_SUFFIX
+    from cyberdog.analysis.readme_tables import make_tables
+    for f in SHIPPED.parent.glob("*.json"):
+        if not f.name.endswith(TWIN_SUFFIX):
+            shutil.copy(f, tmp_path / f.name)
+
+    def relabel(walks: list[dict]) -> list[dict]:
+        return [{**w, "seed": f"seed{int(w['seed'][4:]) + 20}"} if w.get("seed") else w for w in walks]
+
+    walks = relabel(_walks())
+    compared = relabel(json.loads((SHIPPED.parent / "comparison.json").read_text()))
+    gains = [w for g, k in (("kp", 0.5), ("kp", 2.0), ("kd", 2.0)) for w in _gains(walks, g, k)]
+    gains += [{**w, "pd_matched": True} for w in _gains(walks, "kd", 2.0)]
+    for name, rows in ((sst.PROTOTYPE_SOURCE, walks), (sst.COMPARE_SOURCE, compared), (sst.GAINS_SOURCE, gains)):
+        (tmp_path / name).write_text(json.dumps(rows))
+    assert sst.fresh_seeds_named(tmp_path) == "seeds 20–24"
+    tables = make_tables(tmp_path)
+    full, head = _rows(tables["searched_start"]), _rows(tables["searched_start_headline"])
+    assert list(head) == list(sst.headline_rows("seeds 20–24")) and all(head[k] == full[k] for k in head)
+    assert "**the saving at kd 2×, re-commanded, seeds 20–24**" in full
+    saving = sst.SAVING_ROW.format(seeds="seeds 20–24 (never tuned on)")
+    assert not any("seeds)" in c for c in full[saving])
+    # a seed whose extraction found no path at 1 m/s: that cell says over how many seeds it is
+    (tmp_path / sst.PROTOTYPE_SOURCE).write_text(json.dumps(
+        [w for w in walks if not (w["seed"] == "seed23" and w["speed_mps"] == 1.0)]))
+    cells = _rows(make_tables(tmp_path)["searched_start"])[saving]
+    assert cells[0].endswith("(4 of 5 seeds)") and not cells[1].endswith("seeds)")

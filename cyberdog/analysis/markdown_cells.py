@@ -49,3 +49,12 @@ def missed_walks(row: dict) -> str:
     stood = mean_ci(row, "battery_saving_stood_pct", ".1f", " %")  # "–" where no walk stood without counting
     with_them = f"; with {'it' if off == 1 else 'them'}: {stood}" if off and stood != "–" else ""
     return f" ({', '.join(parts)}, of {row['walks']}{with_them})" if parts else ""
+
+
+def fewer_seeds(walks: list[dict], robot: str, speed: float) -> str:
+    """" (4 of 5 seeds)" where fewer seeds have a learned path at `speed` (m/s) on `robot` than the learned walks
+    name at any speed (an extraction that found no path there), "" where all have."""
+    learned = [w for w in walks if w["trajectory"] == "learned" and w["robot"] == robot]
+    seeds = {str(w["seed"]) for w in learned}
+    here = {str(w["seed"]) for w in learned if w["speed_mps"] == speed}
+    return f" ({len(here)} of {len(seeds)} seeds)" if len(here) < len(seeds) else ""

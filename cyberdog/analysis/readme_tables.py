@@ -43,8 +43,8 @@ from cyberdog.analysis.engine_table import HEADLINE_ROWS as ENGINE_HEADLINE_ROWS
 from cyberdog.analysis.engine_table import engine_markdown
 from cyberdog.analysis.markdown_cells import header as _header
 from cyberdog.analysis.markdown_cells import line as _line
-from cyberdog.analysis.markdown_cells import mean_ci, missed_walks, seeds_named
-from cyberdog.analysis.gains_table import GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW, gains_markdown
+from cyberdog.analysis.markdown_cells import fewer_seeds, mean_ci, missed_walks, seeds_named
+from cyberdog.analysis.gains_table import gains_markdown
 from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
 from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_SAVING_ROW, TORQUE_WALKS_ROW,
                                            torque_markdown)
@@ -53,16 +53,15 @@ from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS
 FRESH_SEEDS = "seeds 5–9"  # the seeds the recipes were never tuned on, as their rows name them
 FRESH_ROW = f"**D_t on E, {FRESH_SEEDS} (never tuned on)**"  # a headline row only where its walks are shipped
 FRESH_PROTOTYPE_ROW = f"**battery saving, {FRESH_SEEDS} (never tuned on)**"  # the same, the prototype run's
+FRESH_VS_SEARCHED_ROW = f"learned against the shape searched for the battery, {FRESH_SEEDS} (never tuned on)"
 # the README's headline tables: a few rows of a full table (docs/results.md), chosen by their first cell
 HEADLINES = {
-    "table5_headline": ("table5", ("E, learned (kJ)", "**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
-    "prototype_headline": ("prototype", ("battery % per 100 m: learned",
-                                         "**battery saving against the cheaper common trajectory**",
+    "table5_headline": ("table5", ("**D_t on E, Eq. 12**", FRESH_ROW, "*paper: D_t*")),
+    "prototype_headline": ("prototype", ("**battery saving against the cheaper common trajectory**",
                                          FRESH_PROTOTYPE_ROW,
                                          "learned against the shape searched for the battery (the best alternative)",
+                                         FRESH_VS_SEARCHED_ROW,
                                          "*paper, 1 m/s: range learned / cycloid*")),
-    "gains_headline": ("gains", (GAINS_DEFAULT_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
-                                 "kd 2×, as commanded", "**kd 2×, re-commanded**")),
     "torque_headline": ("torque", (TORQUE_WALKS_ROW.format(robots="ideal robot, hardware-like draws 0 and 1"),
                                    "electrical J/m, stage 1 (ideal robot)",
                                    "**electrical J/m, stage 2 (ideal robot)**",
@@ -70,9 +69,10 @@ HEADLINES = {
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
     "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
+    "searched_start_headline": ("searched_start", searched_start_table.headline_rows(f"{FRESH_SEEDS}")),
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
-OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
+OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                  *ENGINE_HEADLINE_ROWS[1:]}  # and the engines' rows of the parts whose twins are not all there
 NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", "searched_start", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
@@ -170,20 +170,16 @@ def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -
     by = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
     rows = [by.get(("learned", v)) for v in speeds]
     named = seeds_named(w.get("seed", "") for w in walks)
-    seeds = {str(w["seed"]) for w in walks if w["trajectory"] == "learned" and w["robot"] == robot}
-    return [_line(f"battery % per 100 m: learned, {named}",
-                  ["–" if r is None else mean_ci(r, "battery_pct_per_100m", ".2f") for r in rows]),
-            _line(f"**battery saving, {named} (never tuned on)**",
-                  ["–" if r is None else f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**{missed_walks(r)}"
-                   f"{_fewer_seeds(walks, robot, r['speed_mps'], seeds)}" for r in rows])]
-
-
-def _fewer_seeds(walks: list[dict], robot: str, speed: float, seeds: set) -> str:
-    """" (4 of 5 seeds)" where fewer seeds have a learned path at `speed` than the walks name (an extraction
-    that found no path there), "" where all have."""
-    here = {str(w["seed"]) for w in walks if w["trajectory"] == "learned" and w["robot"] == robot
-            and w["speed_mps"] == speed}
-    return f" ({len(here)} of {len(seeds)} seeds)" if len(here) < len(seeds) else ""
+    lines = [_line(f"battery % per 100 m: learned, {named}",
+                   ["–" if r is None else mean_ci(r, "battery_pct_per_100m", ".2f") for r in rows]),
+             _line(f"**battery saving, {named} (never tuned on)**",
+                   ["–" if r is None else f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**{missed_walks(r)}"
+                    f"{fewer_seeds(walks, robot, r['speed_mps'])}" for r in rows])]
+    if all((ps.REFERENCE, v) in by for v in speeds):  # the run walked the searched shape beside them
+        lines.append(_line(FRESH_VS_SEARCHED_ROW.replace(FRESH_SEEDS, named),
+                           ["–" if r is None else mean_ci(r, "battery_vs_searched_pct", ".1f", " %", sign=True)
+                            for r in rows]))
+    return lines
 
 
 def prototype_markdown(walks: list[dict], robot: str = "hardware", fresh_walks: list[dict] | None = None) -> str:
@@ -202,6 +198,10 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware", fresh_walks: 
                         for c, s in zip(cycloid, straight)]))
     lines.append(_line("**battery saving against the cheaper common trajectory**",
                        [f"**{mean_ci(r, 'battery_saving_pct', '.1f', ' %')}**" for r in learned]))
+    searched = all((ps.REFERENCE, v) in by for v in speeds)  # the run walked the searched shape too
+    if searched:
+        lines.append(_line("learned against the shape searched for the battery (the best alternative)",
+                           [mean_ci(r, "battery_vs_searched_pct", ".1f", " %", sign=True) for r in learned]))
     if fresh_walks:
         lines += _prototype_fresh_lines(fresh_walks, robot, speeds)
     lines.append(_line("range on a full charge (m): learned / cycloid",
@@ -210,11 +210,9 @@ def prototype_markdown(walks: list[dict], robot: str = "hardware", fresh_walks: 
     lines.append(_line("electrical energy per 100 m (kJ): learned / cycloid",
                        [f"{mean_ci(r, 'electrical_kJ_per_100m', '.1f')} / {mean_ci(c, 'electrical_kJ_per_100m', '.1f')}"
                         for r, c in zip(learned, cycloid)]))
-    if all((ps.REFERENCE, v) in by for v in speeds):
+    if searched:
         lines.append(_line("*reference: a shape searched for the battery on this robot, battery % per 100 m*",
                            [f"*{by[(ps.REFERENCE, v)]['battery_pct_per_100m_mean']:.2f}*" for v in speeds]))
-        lines.append(_line("learned against the shape searched for the battery (the best alternative)",
-                           [mean_ci(r, "battery_vs_searched_pct", ".1f", " %", sign=True) for r in learned]))
     gain = PAPER_RANGE_1MPS_M["learned"] / PAPER_RANGE_1MPS_M["cycloid"] - 1.0
     lines.append(_line("*paper, 1 m/s: range learned / cycloid*",
                        [f"*{PAPER_RANGE_1MPS_M['learned']:,.0f} / {PAPER_RANGE_1MPS_M['cycloid']:,.0f} m "
@@ -298,6 +296,9 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         tables["engines"] = engines
     if (searched_start := searched_start_table.make_table(results)) is not None:
         tables["searched_start"] = searched_start
+    if (named := searched_start_table.fresh_seeds_named(results)) is not None:  # its rows name its seeds
+        full, rows = headlines["searched_start_headline"]
+        headlines["searched_start_headline"] = (full, tuple(r.replace(FRESH_SEEDS, named) for r in rows))
     tables.update({name: headline(tables[full], rows) for name, (full, rows) in headlines.items() if full in tables})
     return tables
 

@@ -19,7 +19,7 @@ from pathlib import Path
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
 from cyberdog.analysis.gains_table import gains_rows
-from cyberdog.analysis.markdown_cells import header, line, mean_ci, missed_walks, seeds_named
+from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
 PROTOTYPE_SOURCE = "prototype_searched_start.json"
 COMPARE_SOURCE = "comparison_searched_start.json"
@@ -28,7 +28,8 @@ TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every o
 RECIPE = "configs/battery_searched.yaml"
 SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
 VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
-EQ7_ROW = "learned against the shape searched on Eq. 7 at {lift:.3f} m, on E (ideal robot), {seeds}"
+EQ7_ROW = "learned against the shape searched on Eq. 7 at the paths' lift, on E (ideal robot), {seeds}"
+GAINS_ROW = "the saving at {gains}, {seeds}"  # a gains row: "kp 0.5×, as commanded" (bold where re-commanded)
 
 
 def _is_tuned(walk: dict) -> bool:
@@ -57,7 +58,8 @@ def _prototype_lines(walks: list[dict], name: str, speeds: list[float], robot: s
                  [f"{cell(r, 'battery_pct_per_100m', '.2f')} / {cell(s, 'battery_pct_per_100m', '.2f')}"
                   for r, s in zip(learned, searched)]),
             line(SAVING_ROW.format(seeds=name),
-                 [f"**{cell(r, 'battery_saving_pct', '.1f')}**" + (missed_walks(r) if r else "") for r in learned]),
+                 [f"**{cell(r, 'battery_saving_pct', '.1f')}**" + (missed_walks(r) if r else "")
+                  + fewer_seeds(walks, robot, v) for r, v in zip(learned, speeds)]),
             line(VS_SEARCHED_ROW.format(seeds=name),
                  [f"**{cell(r, 'battery_vs_searched_pct', '.1f', sign=True)}**" for r in learned])]
 
@@ -67,7 +69,7 @@ def _eq7_lines(walks: list[dict], name: str, speeds: list[float]) -> list[str]:
     lifts = {r.get(f"{table5.REFERENCE}_lift_height_m") for r in same.values()}
     if not same or None in lifts or len(lifts) != 1:
         return []
-    return [line(EQ7_ROW.format(lift=lifts.pop(), seeds=name),
+    return [line(EQ7_ROW.format(seeds=name),
                  ["–" if v not in same else mean_ci(same[v], "D_ref_pct", ".1f", " %", sign=True) for v in speeds])]
 
 
@@ -89,8 +91,26 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
     if fresh_gains and "fresh" in groups:
         name = seeds_named(w["seed"] for w in fresh_gains)
         for label, cells in gains_rows(fresh_gains, groups["fresh"][1], robot):
-            lines.append(line(f"the saving at {label}, {name}", cells))
+            bold = label.startswith("**")  # re-commanded: the row bold as a whole
+            row = GAINS_ROW.format(gains=label.strip("*"), seeds=name)
+            lines.append(line(f"**{row}**" if bold else row, cells))
     return "\n".join(lines)
+
+
+def headline_rows(seeds: str) -> tuple[str, ...]:
+    """The README's rows of the table, of the fresh `seeds` ("seeds 20–24"): the saving against the cheaper common
+    trajectory and against the searched shapes, and the gains that cost the most, as commanded."""
+    fresh = f"{seeds} (never tuned on)"
+    return (SAVING_ROW.format(seeds=fresh), VS_SEARCHED_ROW.format(seeds=fresh), EQ7_ROW.format(seeds=fresh),
+            *(GAINS_ROW.format(gains=f"{g}, as commanded", seeds=seeds) for g in ("kp 0.5×", "kp 2×", "kd 2×")))
+
+
+def fresh_seeds_named(results: Path) -> str | None:
+    """"seeds 20–24": the seeds of the shipped prototype walks the recipe was never tuned on (None where none)."""
+    path = Path(results) / PROTOTYPE_SOURCE
+    seeds = [w["seed"] for w in json.loads(path.read_text()) if w.get("seed") and not _is_tuned(w)] \
+        if path.is_file() else []
+    return seeds_named(seeds) if seeds else None
 
 
 def make_table(results: Path) -> str | None:
