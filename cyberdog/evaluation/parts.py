@@ -35,10 +35,8 @@ def run_compare(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[float], dur
         log(f"reference row: the direct search's best shape, searched at H = {reference.lift_height:.3f} m"
             + (f" ({1e3 * gap:.1f} mm from the learned paths' mean lift height: compare with care)"
                if gap > 2e-3 else ""))
-    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
-    if skip_missing and missing:
-        log("comparison: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
-            + ": those speeds' rows are over the other seeds")
+    if skip_missing:
+        _log_skipped("comparison", learned, speeds, log)
     jobs = cmp.comparison_jobs(cfg, learned, speeds, duration, same_lift=same_lift, reference=reference,
                                skip_missing=skip_missing)
     log(f"comparison: {len(jobs)} walks of {duration:g} s")
@@ -135,17 +133,24 @@ def run_prototype_part(cfg: C.WalkConfig, learned: LearnedSet, speeds: list[floa
     return rows
 
 
+def _log_skipped(part: str, learned: LearnedSet, speeds: list[float], log) -> list[tuple[str, float]]:
+    """Name the (label, speed) pairs without a learned path, which `part` does not walk (--skip-missing-paths);
+    returns them."""
+    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
+    if missing:
+        log(f"{part}: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
+            + ": those speeds' rows are over the other seeds")
+    return missing
+
+
 def _log_prototype_walks(learned: LearnedSet, speeds: list[float], distance_m: float, modes: list[str],
                          n_trajectories: int, draws: int, run_up_s: float, policies: dict, skip_missing: bool,
                          searched: bool, log) -> None:
     """The prototype run's plan in one line (how many walks of what, `n_trajectories` beside each learned path),
     after the seeds and speeds it skips."""
     robots = sum(draws if m == "hardware" else 1 for m in modes)
-    missing = [(label, v) for v in speeds for label in learned.labels if not learned.has(label, v)]
-    if skip_missing and missing:
-        log("prototype: no learned path, so no walk, for " + ", ".join(f"{label} at {v:g} m/s" for label, v in missing)
-            + ": those speeds' rows are over the other seeds")
-    pairs = len(learned) * len(speeds) - (len(missing) if skip_missing else 0)
+    missing = _log_skipped("prototype", learned, speeds, log) if skip_missing else []
+    pairs = len(learned) * len(speeds) - len(missing)
     log(f"prototype: {(pairs * (n_trajectories + 1) + len(policies) * len(speeds)) * robots} walks of "
         f"{distance_m:g} m "
         f"{f'after a {run_up_s:g} s run-up ' if run_up_s > 0 else 'from a stand '}"
