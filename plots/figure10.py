@@ -28,7 +28,8 @@ def last_cycles_window(n: int, dt: float, period: float, cycles: int = 2) -> sli
 
 
 def chosen_walks(walks: list[dict], lift_height: float | None = None) -> dict[float, dict[str, dict]]:
-    """Per speed, the walks Figure 10 shows, by key: "learned" = the first seed's; "cycloid", "straight" = the
+    """Per speed, the walks Figure 10 shows, by key: "learned" = the first seed's that walked at that speed (a seed
+    without a path there, skipped by --skip-missing-paths, gives way to the next); "cycloid", "straight" = the
     baselines at that walk's own lift height (matched, as Table 5's headline), where walked; "cycloid paper",
     "straight paper" = the baselines at `lift_height` (default: the highest baseline lift, the paper set's)."""
     base_lifts = [w["lift_height_m"] for w in walks if w["trajectory"] in ("cycloid", "straight")]
@@ -37,7 +38,8 @@ def chosen_walks(walks: list[dict], lift_height: float | None = None) -> dict[fl
     out: dict[float, dict[str, dict]] = {}
     for v in sorted(dict.fromkeys(w["speed_command_mps"] for w in walks)):
         here = [w for w in walks if w["speed_command_mps"] == v]
-        learned = [w for w in here if w["trajectory"] == "learned" and (not seeds or w["seed"] == seeds[0])]
+        walked = [seed for seed in seeds if any(w["trajectory"] == "learned" and w["seed"] == seed for w in here)]
+        learned = [w for w in here if w["trajectory"] == "learned" and (not walked or w["seed"] == walked[0])]
         own = round(learned[0]["lift_height_m"], 4) if learned else None
         for key in ("cycloid", "straight"):
             for suffix, h in (("", own), (" paper", lift)):

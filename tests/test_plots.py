@@ -351,3 +351,16 @@ def test_exported_inputs_keep_the_searched_shapes_rows(tmp_path):
     exported = json.loads((tmp_path / "small" / "comparison.json").read_text())
     assert sum(r["trajectory"] == "searched" for r in exported) == 1
     assert len(exported) == len(rows) + 1
+
+
+def test_figure10_takes_the_first_seed_that_walked_at_each_speed():
+    """A seed without a path at a speed (compare --skip-missing-paths) gives way there to the next seed, whose
+    matched baselines come with it."""
+    def w(i, traj, seed, v, lift):
+        return {"walk_id": i, "trajectory": traj, "seed": seed, "speed_command_mps": v, "lift_height_m": lift}
+    walks = [w(0, "learned", "seed23", 1.2, 0.088), w(1, "learned", "seed24", 1.0, 0.092),
+             w(2, "learned", "seed24", 1.2, 0.087), w(3, "cycloid", "", 1.0, 0.092), w(4, "cycloid", "", 1.2, 0.088),
+             w(5, "cycloid", "", 1.2, 0.087)]
+    chosen = figure10.chosen_walks(walks)
+    assert chosen[1.0]["learned"]["seed"] == "seed24" and chosen[1.0]["cycloid"]["walk_id"] == 3
+    assert chosen[1.2]["learned"]["seed"] == "seed23" and chosen[1.2]["cycloid"]["walk_id"] == 4

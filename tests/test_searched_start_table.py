@@ -125,3 +125,17 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
         [w for w in walks if not (w["seed"] == "seed23" and w["speed_mps"] == 1.0)]))
     cells = _rows(make_tables(tmp_path)["searched_start"])[saving]
     assert cells[0].endswith("(4 of 5 seeds)") and not cells[1].endswith("seeds)")
+    # the Eq. 7 and gains inputs are optional: without them the headline holds the prototype's rows alone
+    (tmp_path / sst.COMPARE_SOURCE).unlink()
+    (tmp_path / sst.GAINS_SOURCE).unlink()
+    assert list(_rows(make_tables(tmp_path)["searched_start_headline"])) == list(sst.headline_rows("seeds 20–24"))[:2]
+
+
+def test_the_gains_rows_are_named_by_the_prototype_seeds_whatever_seeds_the_gains_runs_hold():
+    """Gains runs of fewer seeds than the prototype's: their rows are named as the table's fresh group (the
+    headline's names), not by the gains walks' own seeds."""
+    walks = _walks()
+    fresh = [w for w in walks if w["seed"] != "seed0"]
+    rows = _rows(sst.searched_start_markdown(walks, gains_walks=_gains([w for w in fresh if w["seed"] != "seed4"],
+                                                                        "kd", 2.0)))
+    assert "the saving at kd 2×, as commanded, seeds 1–4" in rows

@@ -94,6 +94,7 @@ def comparison_jobs(cfg: WalkConfig, learned: LearnedSet, speeds=PAPER_SPEEDS,
                         f"{type(reference).__name__}")
     jobs: list[WalkJob] = []
     for v in speeds:
+        # with skip_missing, the labels that have a path at v; where none has, at() raises naming them
         here = learned.at(v) if not skip_missing else \
             {label: learned.path(label, v) for label in learned.labels if learned.has(label, v)} or learned.at(v)
         lifts = [round(cfg.gait.lift_height, LIFT_DECIMALS)]

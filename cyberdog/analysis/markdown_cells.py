@@ -53,8 +53,9 @@ def missed_walks(row: dict) -> str:
 
 def fewer_seeds(walks: list[dict], robot: str, speed: float) -> str:
     """" (4 of 5 seeds)" where fewer seeds have a learned path at `speed` (m/s) on `robot` than the learned walks
-    name at any speed (an extraction that found no path there), "" where all have."""
+    name at any speed (an extraction that found no path there), "" where all have. A seed with no path at any
+    speed has no walk to name it: the walks cannot show it."""
     learned = [w for w in walks if w["trajectory"] == "learned" and w["robot"] == robot]
     seeds = {str(w["seed"]) for w in learned}
     here = {str(w["seed"]) for w in learned if w["speed_mps"] == speed}
-    return f" ({len(here)} of {len(seeds)} seeds)" if len(here) < len(seeds) else ""
+    return f" ({len(here)} of {len(seeds)} seed{'s' * (len(seeds) != 1)})" if here and len(here) < len(seeds) else ""

@@ -178,7 +178,7 @@ def _prototype_fresh_lines(walks: list[dict], robot: str, speeds: list[float]) -
     if all((ps.REFERENCE, v) in by for v in speeds):  # the run walked the searched shape beside them
         lines.append(_line(FRESH_VS_SEARCHED_ROW.replace(FRESH_SEEDS, named),
                            ["–" if r is None else mean_ci(r, "battery_vs_searched_pct", ".1f", " %", sign=True)
-                            for r in rows]))
+                            + fewer_seeds(walks, robot, r["speed_mps"]) for r in rows]))
     return lines
 
 
@@ -296,19 +296,24 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
         tables["engines"] = engines
     if (searched_start := searched_start_table.make_table(results)) is not None:
         tables["searched_start"] = searched_start
-    if (named := searched_start_table.fresh_seeds_named(results)) is not None:  # its rows name its seeds
+    optional = set(OPTIONAL_ROWS)
+    if "searched_start" in tables:  # its rows name its fresh seeds; the Eq. 7 and gains rows' inputs are optional
+        named = searched_start_table.fresh_seeds_named(results)
         full, rows = headlines["searched_start_headline"]
-        headlines["searched_start_headline"] = (full, tuple(r.replace(FRESH_SEEDS, named) for r in rows))
-    tables.update({name: headline(tables[full], rows) for name, (full, rows) in headlines.items() if full in tables})
+        rows = tuple(r.replace(FRESH_SEEDS, named) for r in rows) if named else rows
+        headlines["searched_start_headline"] = (full, rows)
+        optional |= set(rows if named is None else rows[searched_start_table.HEADLINE_REQUIRED:])
+    tables.update({name: headline(tables[full], rows, optional) for name, (full, rows) in headlines.items()
+                   if full in tables})
     return tables
 
 
-def headline(table: str, rows: tuple[str, ...]) -> str:
+def headline(table: str, rows: tuple[str, ...], optional: set[str] | frozenset[str] = frozenset(OPTIONAL_ROWS)) -> str:
     """The header and the `rows` (by first cell, in the full table's order) of a Markdown table; a row that is
-    not there is an error (a renamed row must not vanish from the README unnoticed)."""
+    not there and not `optional` is an error (a renamed row must not vanish from the README unnoticed)."""
     lines = table.splitlines()
     kept = [ln for ln in lines[2:] if ln.split("|")[1].strip() in rows]
-    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept} - OPTIONAL_ROWS
+    missing = set(rows) - {ln.split("|")[1].strip() for ln in kept} - set(optional)
     if missing:
         raise ValueError(f"headline rows {sorted(missing)} are not in the table")
     return "\n".join(lines[:2] + kept)

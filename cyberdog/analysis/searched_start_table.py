@@ -28,7 +28,7 @@ TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every o
 RECIPE = "configs/battery_searched.yaml"
 SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
 VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
-EQ7_ROW = "learned against the shape searched on Eq. 7 at the paths' lift, on E (ideal robot), {seeds}"
+EQ7_ROW = "learned against the shape searched on Eq. 7, on E (ideal robot), {seeds}"  # its lift: the caption's
 GAINS_ROW = "the saving at {gains}, {seeds}"  # a gains row: "kp 0.5×, as commanded" (bold where re-commanded)
 
 
@@ -54,14 +54,18 @@ def _prototype_lines(walks: list[dict], name: str, speeds: list[float], robot: s
     def cell(r: dict | None, key: str, fmt: str, sign: bool = False) -> str:
         return "–" if r is None else mean_ci(r, key, fmt, " %" if key.endswith("pct") else "", sign)
 
+    def note(r: dict | None, v: float) -> str:
+        return fewer_seeds(walks, robot, v) if r else ""
+
     return [line(f"battery % per 100 m: learned / searched shape, {name}",
                  [f"{cell(r, 'battery_pct_per_100m', '.2f')} / {cell(s, 'battery_pct_per_100m', '.2f')}"
                   for r, s in zip(learned, searched)]),
             line(SAVING_ROW.format(seeds=name),
-                 [f"**{cell(r, 'battery_saving_pct', '.1f')}**" + (missed_walks(r) if r else "")
-                  + fewer_seeds(walks, robot, v) for r, v in zip(learned, speeds)]),
+                 [f"**{cell(r, 'battery_saving_pct', '.1f')}**" + (missed_walks(r) if r else "") + note(r, v)
+                  for r, v in zip(learned, speeds)]),
             line(VS_SEARCHED_ROW.format(seeds=name),
-                 [f"**{cell(r, 'battery_vs_searched_pct', '.1f', sign=True)}**" for r in learned])]
+                 [f"**{cell(r, 'battery_vs_searched_pct', '.1f', sign=True)}**" + note(r, v)
+                  for r, v in zip(learned, speeds)])]
 
 
 def _eq7_lines(walks: list[dict], name: str, speeds: list[float]) -> list[str]:
@@ -88,13 +92,17 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
     fresh_gains = [w for w in gains_walks or [] if not _is_tuned(w)]
-    if fresh_gains and "fresh" in groups:
-        name = seeds_named(w["seed"] for w in fresh_gains)
+    if fresh_gains and "fresh" in groups:  # named as the fresh group is (the headline's rows name those seeds)
+        name = seeds_named(w["seed"] for w in groups["fresh"][1] if w.get("seed"))
         for label, cells in gains_rows(fresh_gains, groups["fresh"][1], robot):
             bold = label.startswith("**")  # re-commanded: the row bold as a whole
             row = GAINS_ROW.format(gains=label.strip("*"), seeds=name)
             lines.append(line(f"**{row}**" if bold else row, cells))
     return "\n".join(lines)
+
+
+HEADLINE_REQUIRED = 2  # the headline's first rows, of the prototype walks the table is made from; the others' inputs
+# (the Eq. 7 comparison, the gains runs) are optional
 
 
 def headline_rows(seeds: str) -> tuple[str, ...]:

@@ -137,8 +137,8 @@ def closed_loop_policies(args, learned: LearnedSet) -> dict[str, str]:
 
 def check_speeds_covered(learned: LearnedSet, speeds: list[float], skip_missing: bool | None = None) -> None:
     """UsageError unless every label of `learned` has a path at every speed of `speeds` (`LearnedSet.at`,
-    the comparison's own rule): a table without its learned row is no Table 5. `skip_missing` (the prototype's
-    --skip-missing-paths; None where the command has no such option): one label with a path at each speed is
+    the comparison's own rule): a table without its learned row is no Table 5. `skip_missing` (--skip-missing-paths
+    of compare and prototype; None where the command has no such option): one label with a path at each speed is
     enough."""
     if skip_missing:
         missing = [v for v in speeds if not any(learned.has(label, v) for label in learned.labels)]
