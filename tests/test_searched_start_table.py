@@ -111,13 +111,16 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     compared = relabel(json.loads((SHIPPED.parent / "comparison.json").read_text()))
     gains = [w for g, k in (("kp", 0.5), ("kp", 2.0), ("kd", 2.0)) for w in _gains(walks, g, k)]
     gains += [{**w, "pd_matched": True} for w in _gains(walks, "kd", 2.0)]
-    for name, rows in ((sst.PROTOTYPE_SOURCE, walks), (sst.COMPARE_SOURCE, compared), (sst.GAINS_SOURCE, gains)):
+    for name, rows in ((sst.PROTOTYPE_SOURCE, walks), (sst.COMPARE_SOURCE, compared), (sst.GAINS_SOURCE, gains),
+                       (sst.OWN_START_SOURCE, walks)):  # the own start: here the same reference as the prototype's
         (tmp_path / name).write_text(json.dumps(rows))
     assert sst.fresh_seeds_named(tmp_path) == "seeds 20–24"
     tables = make_tables(tmp_path)
     full, head = _rows(tables["searched_start"]), _rows(tables["searched_start_headline"])
     assert list(head) == list(sst.headline_rows("seeds 20–24")) and all(head[k] == full[k] for k in head)
     assert "**the saving at kd 2×, re-commanded, seeds 20–24**" in full
+    fresh = "seeds 20–24 (never tuned on)"
+    assert full[sst.OWN_START_ROW.format(seeds=fresh)] == [c.strip("*") for c in full[sst.VS_SEARCHED_ROW.format(seeds=fresh)]]
     saving = sst.SAVING_ROW.format(seeds="seeds 20–24 (never tuned on)")
     assert not any("seeds)" in c for c in full[saving])
     # a seed whose extraction found no path at 1 m/s: that cell says over how many seeds it is
@@ -126,8 +129,8 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     cells = _rows(make_tables(tmp_path)["searched_start"])[saving]
     assert cells[0].endswith("(4 of 5 seeds)") and not cells[1].endswith("seeds)")
     # the Eq. 7 and gains inputs are optional: without them the headline holds the prototype's rows alone
-    (tmp_path / sst.COMPARE_SOURCE).unlink()
-    (tmp_path / sst.GAINS_SOURCE).unlink()
+    for name in (sst.COMPARE_SOURCE, sst.GAINS_SOURCE, sst.OWN_START_SOURCE):
+        (tmp_path / name).unlink()
     assert list(_rows(make_tables(tmp_path)["searched_start_headline"])) == list(sst.headline_rows("seeds 20–24"))[:2]
 
 

@@ -9,11 +9,14 @@ From `results/figures_input/` (each optional: the table is made where its protot
 - `comparison_searched_start.json`: `evaluate.py compare --learned <the same paths> --reference <a shape searched
   on Eq. 7 at the paths' lift>` (Table 5's 10 s walk on the ideal robot): the paths against that shape on Eq. 7;
 - `gains_searched_start.json`: `tools/merge_walks.py gains` over four prototype runs with kp or kd alone at 0.5×
-  or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's.
+  or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's;
+- `prototype_searched_start_own.json`: the same prototype run with the recipe's own start as the reference
+  (`--prototype-reference` the shape its trot walks, which a zero action walks): what the policy adds to it.
 """
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
@@ -24,11 +27,13 @@ from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci,
 PROTOTYPE_SOURCE = "prototype_searched_start.json"
 COMPARE_SOURCE = "comparison_searched_start.json"
 GAINS_SOURCE = "gains_searched_start.json"
+OWN_START_SOURCE = "prototype_searched_start_own.json"
 TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every other seed was never seen
 RECIPE = "configs/battery_searched.yaml"
 SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
 VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
 EQ7_ROW = "learned against the shape searched on Eq. 7, on E (ideal robot), {seeds}"  # its lift: the caption's
+OWN_START_ROW = "learned against its own start (a zero action's gait), {seeds}"
 GAINS_ROW = "the saving at {gains}, {seeds}"  # a gains row: "kp 0.5×, as commanded" (bold where re-commanded)
 
 
@@ -77,18 +82,32 @@ def _eq7_lines(walks: list[dict], name: str, speeds: list[float]) -> list[str]:
                  ["–" if v not in same else mean_ci(same[v], "D_ref_pct", ".1f", " %", sign=True) for v in speeds])]
 
 
+def _own_start_lines(walks: list[dict], name: str, speeds: list[float], robot: str) -> list[str]:
+    """The learned paths against the recipe's start (the run's reference row: the shape a zero action walks)."""
+    by = {r["speed_mps"]: r for r in ps.summary_rows(walks) if r["robot"] == robot and r["trajectory"] == "learned"}
+    if not any(math.isfinite(r.get("battery_vs_searched_pct_mean", math.nan)) for r in by.values()):
+        return []
+    return [line(OWN_START_ROW.format(seeds=name), ["–" if v not in by else
+                                                    mean_ci(by[v], "battery_vs_searched_pct", ".1f", " %", sign=True)
+                                                    + fewer_seeds(walks, robot, v) for v in speeds])]
+
+
 def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dict] | None = None,
-                            gains_walks: list[dict] | None = None, robot: str = "hardware") -> str:
-    """The table: per group of seeds (never tuned on, then tuned on) the prototype rows and the Eq. 7 row, then
-    the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone)."""
+                            gains_walks: list[dict] | None = None, robot: str = "hardware",
+                            own_start_walks: list[dict] | None = None) -> str:
+    """The table: per group of seeds (never tuned on, then tuned on) the prototype rows, the row against the
+    recipe's own start (`own_start_walks`: the prototype run with that start as its reference) and the Eq. 7
+    row, then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone)."""
     speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
     if not speeds:
         raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
     lines = header(f"`{RECIPE}`, hardware-like robot", speeds)
-    compared = _groups(compare_walks or [])
+    compared, own = _groups(compare_walks or []), _groups(own_start_walks or [])
     groups = _groups(prototype_walks)
     for kind, (name, walks) in groups.items():
         lines += _prototype_lines(walks, name, speeds, robot)
+        if kind in own:
+            lines += _own_start_lines(own[kind][1], name, speeds, robot)
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
     fresh_gains = [w for w in gains_walks or [] if not _is_tuned(w)]
@@ -102,15 +121,17 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
 
 
 HEADLINE_REQUIRED = 2  # the headline's first rows, of the prototype walks the table is made from; the others' inputs
-# (the Eq. 7 comparison, the gains runs) are optional
+# (the own-start run, the Eq. 7 comparison, the gains runs) are optional
 
 
 def headline_rows(seeds: str) -> tuple[str, ...]:
     """The README's rows of the table, of the fresh `seeds` ("seeds 20–24"): the saving against the cheaper common
-    trajectory and against the searched shapes, and the gains that cost the most, as commanded."""
+    trajectory, against the searched shapes and against the recipe's own start, and the two gains that cost the
+    saving most without a fall, as commanded."""
     fresh = f"{seeds} (never tuned on)"
-    return (SAVING_ROW.format(seeds=fresh), VS_SEARCHED_ROW.format(seeds=fresh), EQ7_ROW.format(seeds=fresh),
-            *(GAINS_ROW.format(gains=f"{g}, as commanded", seeds=seeds) for g in ("kp 0.5×", "kp 2×", "kd 2×")))
+    return (SAVING_ROW.format(seeds=fresh), VS_SEARCHED_ROW.format(seeds=fresh), OWN_START_ROW.format(seeds=fresh),
+            EQ7_ROW.format(seeds=fresh),
+            *(GAINS_ROW.format(gains=f"{g}, as commanded", seeds=seeds) for g in ("kp 0.5×", "kd 2×")))
 
 
 def fresh_seeds_named(results: Path) -> str | None:
@@ -127,5 +148,6 @@ def make_table(results: Path) -> str | None:
     if not (results / PROTOTYPE_SOURCE).is_file():
         return None
     read = {name: json.loads((results / name).read_text()) if (results / name).is_file() else None
-            for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE)}
-    return searched_start_markdown(read[PROTOTYPE_SOURCE], read[COMPARE_SOURCE], read[GAINS_SOURCE])
+            for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE, OWN_START_SOURCE)}
+    return searched_start_markdown(read[PROTOTYPE_SOURCE], read[COMPARE_SOURCE], read[GAINS_SOURCE],
+                                   own_start_walks=read[OWN_START_SOURCE])
