@@ -24,8 +24,8 @@ def _phases(name: str) -> dict[str, C.Phase]:
 
 def test_a_shipped_phase_resolves_to_the_settings_its_shipped_actors_trained_with():
     """results/<recipe>/policy/seed<N>/config.yaml records the settings its actors trained with: the battery
-    recipe's `band` phase is them but for the seed (seeds 0-4 and 5-9 alike; the searched start's 20-24); Table 5's phase is seed 0's but for
-    the seed's own field."""
+    recipe's `band` phase is them but for the seed (seeds 0-4 and 5-9 alike; the searched start's 20-24); Table 5's
+    phase is seed 0's but for the seed's own field."""
     for recipe in ("battery", "battery_searched"):  # the searched start: seeds 20-24, by the README's command
         band = _phases(f"{recipe}.yaml")["band"]
         shipped = sorted((ROOT / "results" / recipe / "policy").glob("seed*"))

@@ -120,7 +120,8 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     assert list(head) == list(sst.headline_rows("seeds 20–24")) and all(head[k] == full[k] for k in head)
     assert "**the saving at kd 2×, re-commanded, seeds 20–24**" in full
     fresh = "seeds 20–24 (never tuned on)"
-    assert full[sst.OWN_START_ROW.format(seeds=fresh)] == [c.strip("*") for c in full[sst.VS_SEARCHED_ROW.format(seeds=fresh)]]
+    vs_searched = [c.strip("*") for c in full[sst.VS_SEARCHED_ROW.format(seeds=fresh)]]
+    assert full[sst.OWN_START_ROW.format(seeds=fresh)] == vs_searched
     saving = sst.SAVING_ROW.format(seeds="seeds 20–24 (never tuned on)")
     assert not any("seeds)" in c for c in full[saving])
     # a seed whose extraction found no path at 1 m/s: that cell says over how many seeds it is

@@ -72,7 +72,8 @@ HEADLINES = {
     "searched_start_headline": ("searched_start", searched_start_table.headline_rows(f"{FRESH_SEEDS}")),
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
-OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW, TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
+OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW,
+                 TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                  *ENGINE_HEADLINE_ROWS[1:]}  # and the engines' rows of the parts whose twins are not all there
 NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", "searched_start", *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
@@ -297,7 +298,7 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     if (searched_start := searched_start_table.make_table(results)) is not None:
         tables["searched_start"] = searched_start
     optional = set(OPTIONAL_ROWS)
-    if "searched_start" in tables:  # its rows name its fresh seeds; the Eq. 7 and gains rows' inputs are optional
+    if "searched_start" in tables:  # its rows name its fresh seeds; all but its first rows' inputs are optional
         named = searched_start_table.fresh_seeds_named(results)
         full, rows = headlines["searched_start_headline"]
         rows = tuple(r.replace(FRESH_SEEDS, named) for r in rows) if named else rows
@@ -308,7 +309,8 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     return tables
 
 
-def headline(table: str, rows: tuple[str, ...], optional: set[str] | frozenset[str] = frozenset(OPTIONAL_ROWS)) -> str:
+def headline(table: str, rows: tuple[str, ...], optional: set[str] | frozenset[str] = frozenset(OPTIONAL_ROWS)
+             ) -> str:
     """The header and the `rows` (by first cell, in the full table's order) of a Markdown table; a row that is
     not there and not `optional` is an error (a renamed row must not vanish from the README unnoticed)."""
     lines = table.splitlines()
