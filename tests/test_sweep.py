@@ -193,17 +193,22 @@ def test_missing_ray_is_a_clear_error(tmp_path, monkeypatch):
     assert json.loads((tmp_path / "s" / STATUS_FILE).read_text())["seeds"][0]["state"] == "pending"
 
 
-def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_path, monkeypatch):
-    """A stand-in for the training entry point (fast): seed 0 trains fine, seed 1 always fails with an error."""
-    fake = tmp_path / "fake_train.py"
+def _stand_in_sweep(tmp_path: Path, monkeypatch, before_training: str) -> Path:
+    """A sweep of seeds 0 and 1 whose trainer is a stand-in module (`fake_train`, fast): it runs `before_training`
+    (Python, with `run` the seed's run folder) and then writes the seed's final actor as a trained seed does."""
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))  # after the package's own folder: `-m fake_train` finds it
-    fake.write_text("import pathlib, sys\n"
-                    "run = sys.argv[sys.argv.index('--run-dir') + 1]\n"
-                    "if run.endswith('seed1'):\n"
-                    "    sys.exit('error: checkpoint seed1/checkpoint.pt is corrupt')\n"
-                    "pathlib.Path(run, 'stage2_final_actor.pt').write_bytes(b'')\n")
+    (tmp_path / "fake_train.py").write_text("import pathlib, sys\n"
+                                            "run = pathlib.Path(sys.argv[sys.argv.index('--run-dir') + 1])\n"
+                                            + before_training + "(run / 'stage2_final_actor.pt').write_bytes(b'')\n")
     sweep = tmp_path / "s"
     create_sweep(sweep, C.load(C.ExperimentConfig, TINY), [0, 1])
+    return sweep
+
+
+def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_path, monkeypatch):
+    """A stand-in for the training entry point (fast): seed 0 trains fine, seed 1 always fails with an error."""
+    sweep = _stand_in_sweep(tmp_path, monkeypatch, "if run.name == 'seed1':\n"
+                                                   "    sys.exit('error: checkpoint seed1/checkpoint.pt is corrupt')\n")
     status = run_sweep(sweep, backend="local", workers=2, max_retries=2, progress=False, entry_point="fake_train",
                        poll_s=0.05)
     by_seed = {s["seed"]: s for s in status["seeds"]}
@@ -220,17 +225,10 @@ def test_failing_seed_is_retried_a_bounded_number_of_times_then_reported(tmp_pat
 
 def test_a_seed_stopped_by_ctrl_c_is_not_retried_and_a_resume_continues_it(tmp_path, monkeypatch, capsys):
     """A stand-in trainer: seed 1's process exits 130 (train.py's exit on Ctrl-C) the first time, then trains."""
-    fake = tmp_path / "fake_train.py"
-    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
-    fake.write_text("import pathlib, sys\n"
-                    "run = pathlib.Path(sys.argv[sys.argv.index('--run-dir') + 1])\n"
-                    f"marker = pathlib.Path({str(tmp_path / 'stopped_once')!r})\n"
-                    "if run.name == 'seed1' and not marker.exists():\n"
-                    "    marker.write_text('')\n"
-                    "    sys.exit(130)\n"
-                    "(run / 'stage2_final_actor.pt').write_bytes(b'')\n")
-    sweep = tmp_path / "s"
-    create_sweep(sweep, C.load(C.ExperimentConfig, TINY), [0, 1])
+    sweep = _stand_in_sweep(tmp_path, monkeypatch, f"marker = pathlib.Path({str(tmp_path / 'stopped_once')!r})\n"
+                                                   "if run.name == 'seed1' and not marker.exists():\n"
+                                                   "    marker.write_text('')\n"
+                                                   "    sys.exit(130)\n")
     status = run_sweep(sweep, backend="local", workers=2, max_retries=2, progress=False, entry_point="fake_train",
                        poll_s=0.05)
     by_seed = {s["seed"]: s for s in status["seeds"]}
