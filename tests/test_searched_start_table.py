@@ -114,10 +114,12 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     for name, rows in ((sst.PROTOTYPE_SOURCE, walks), (sst.COMPARE_SOURCE, compared), (sst.GAINS_SOURCE, gains),
                        (sst.OWN_START_SOURCE, walks)):  # the own start: here the same reference as the prototype's
         (tmp_path / name).write_text(json.dumps(rows))
-    assert sst.fresh_seeds_named(tmp_path) == "seeds 20–24"
     tables = make_tables(tmp_path)
     full, head = _rows(tables["searched_start"]), _rows(tables["searched_start_headline"])
-    assert list(head) == list(sst.headline_rows("seeds 20–24")) and all(head[k] == full[k] for k in head)
+    named = [row.format(seeds="seeds 20–24 (never tuned on)") for row in (sst.SAVING_ROW, sst.VS_SEARCHED_ROW,
+                                                                         sst.OWN_START_ROW, sst.EQ7_ROW)]
+    named += [sst.GAINS_ROW.format(gains=f"{g}, as commanded", seeds="seeds 20–24") for g in sst.HEADLINE_GAINS]
+    assert list(head) == named and all(head[k] == full[k] for k in head)
     assert "**the saving at kd 2×, re-commanded, seeds 20–24**" in full
     fresh = "seeds 20–24 (never tuned on)"
     vs_searched = [c.strip("*") for c in full[sst.VS_SEARCHED_ROW.format(seeds=fresh)]]
@@ -132,7 +134,7 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     # the Eq. 7 and gains inputs are optional: without them the headline holds the prototype's rows alone
     for name in (sst.COMPARE_SOURCE, sst.GAINS_SOURCE, sst.OWN_START_SOURCE):
         (tmp_path / name).unlink()
-    assert list(_rows(make_tables(tmp_path)["searched_start_headline"])) == list(sst.headline_rows("seeds 20–24"))[:2]
+    assert list(_rows(make_tables(tmp_path)["searched_start_headline"])) == named[:2]
 
 
 def test_the_gains_rows_are_named_by_the_prototype_seeds_whatever_seeds_the_gains_runs_hold():
@@ -143,3 +145,35 @@ def test_the_gains_rows_are_named_by_the_prototype_seeds_whatever_seeds_the_gain
     rows = _rows(sst.searched_start_markdown(walks, gains_walks=_gains([w for w in fresh if w["seed"] != "seed4"],
                                                                         "kd", 2.0)))
     assert "the saving at kd 2×, as commanded, seeds 1–4" in rows
+
+
+def test_a_second_fresh_set_has_its_own_rows_and_the_pooled_rows_join_both(tmp_path):
+    """Seeds 20-24 and 25-29 (the shipped battery walks relabelled twice): each set is summarised from its own
+    walks, the pooled rows from all ten seeds', and the headline holds the first set's rows and the pooled ones;
+    the gains rows are named by the sets their walks fall in."""
+    walks = _walks()
+    first = [{**w, "seed": f"seed{int(w['seed'][4:]) + 20}"} for w in walks]
+    second = [{**w, "seed": f"seed{int(w['seed'][4:]) + 25}",
+               **({"battery_used_pct": 0.9 * w["battery_used_pct"]} if w["trajectory"] == "learned" else {})}
+              for w in walks]
+    rows = _rows(sst.searched_start_markdown(first + second, gains_walks=_gains(first, "kd", 2.0)))
+
+    def learned(group: list[dict]) -> dict:
+        return {r["speed_mps"]: r for r in ps.summary_rows(group)
+                if r["robot"] == "hardware" and r["trajectory"] == "learned"}
+
+    for name, group in (("seeds 20–24 (never tuned on)", first), ("seeds 25–29 (never tuned on)", second),
+                        ("seeds 20–29 (never tuned on, pooled)", first + second)):
+        expected = learned(group)
+        assert rows[sst.SAVING_ROW.format(seeds=name)] == [
+            f"**{mean_ci(expected[v], 'battery_saving_pct', '.1f', ' %')}**" for v in sorted(expected)]
+    assert rows[sst.SAVING_ROW.format(seeds="seeds 20–24 (never tuned on)")] != rows[
+        sst.SAVING_ROW.format(seeds="seeds 25–29 (never tuned on)")]
+    assert "the saving at kd 2×, as commanded, seeds 20–24" in rows
+    head, optional = sst.headline_rows(first + second, _gains(first + second, "kd", 2.0))
+    pooled = "seeds 20–29 (never tuned on, pooled)"
+    assert head[:4] == (sst.SAVING_ROW.format(seeds="seeds 20–24 (never tuned on)"),
+                        sst.VS_SEARCHED_ROW.format(seeds="seeds 20–24 (never tuned on)"),
+                        sst.SAVING_ROW.format(seeds=pooled), sst.VS_SEARCHED_ROW.format(seeds=pooled))
+    assert sst.GAINS_ROW.format(gains="kd 2×, as commanded", seeds="seeds 20–29") in optional
+    assert not optional & set(head[:4])

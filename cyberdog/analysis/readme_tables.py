@@ -69,7 +69,7 @@ HEADLINES = {
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
     "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
-    "searched_start_headline": ("searched_start", searched_start_table.headline_rows(f"{FRESH_SEEDS}")),
+    "searched_start_headline": ("searched_start", ()),  # its rows name its shipped seeds: `make_tables` sets them
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
 OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW,
@@ -298,12 +298,10 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     if (searched_start := searched_start_table.make_table(results)) is not None:
         tables["searched_start"] = searched_start
     optional = set(OPTIONAL_ROWS)
-    if "searched_start" in tables:  # its rows name its fresh seeds; all but its first rows' inputs are optional
-        named = searched_start_table.fresh_seeds_named(results)
-        full, rows = headlines["searched_start_headline"]
-        rows = tuple(r.replace(FRESH_SEEDS, named) for r in rows) if named else rows
-        headlines["searched_start_headline"] = (full, rows)
-        optional |= set(rows if named is None else rows[searched_start_table.HEADLINE_REQUIRED:])
+    if "searched_start" in tables:  # its rows name its shipped seeds; its prototype rows are required, the others not
+        rows, optional_rows = searched_start_table.headline_of(results)
+        headlines["searched_start_headline"] = ("searched_start", rows)
+        optional |= optional_rows
     tables.update({name: headline(tables[full], rows, optional) for name, (full, rows) in headlines.items()
                    if full in tables})
     return tables

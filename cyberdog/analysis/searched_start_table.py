@@ -29,26 +29,45 @@ COMPARE_SOURCE = "comparison_searched_start.json"
 GAINS_SOURCE = "gains_searched_start.json"
 OWN_START_SOURCE = "prototype_searched_start_own.json"
 TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every other seed was never seen
+# the seeds never tuned on, in the sets they were trained as, each with the README's command at the recipe's frozen
+# commit: the second set repeats the first; where both are shipped, their rows are also pooled (a seed in no set
+# makes a group of its own)
+FRESH_SETS = (frozenset(f"seed{n}" for n in range(20, 25)), frozenset(f"seed{n}" for n in range(25, 30)))
 RECIPE = "configs/battery_searched.yaml"
 SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
 VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
 EQ7_ROW = "learned against the shape searched on Eq. 7, on E (ideal robot), {seeds}"  # its lift: the caption's
 OWN_START_ROW = "learned against its own start (a zero action's gait), {seeds}"
 GAINS_ROW = "the saving at {gains}, {seeds}"  # a gains row: "kp 0.5×, as commanded" (bold where re-commanded)
+FRESH, POOLED = " (never tuned on)", " (never tuned on, pooled)"  # the notes that name a group's seeds
 
 
 def _is_tuned(walk: dict) -> bool:
     return str(walk.get("seed", "")) in TUNED_SEEDS
 
 
+def _fresh_set(walk: dict) -> int:
+    """The index of the fresh set that holds the walk's seed (len(FRESH_SETS): none does)."""
+    return next((i for i, seeds in enumerate(FRESH_SETS) if str(walk["seed"]) in seeds), len(FRESH_SETS))
+
+
 def _groups(walks: list[dict]) -> dict[str, tuple[str, list[dict]]]:
-    """{"fresh" | "tuned": (name, walks)} where that group has walks; a walk of no seed (a comparison's common
-    trajectories, shared by the paths of a lift) belongs to both."""
+    """{"fresh<i>" | "pooled" | "tuned": (name, walks)} where that group has walks: each fresh set's, in
+    `FRESH_SETS`' order (then the fresh seeds in no set), all fresh seeds pooled where they span several groups,
+    and the tuning seeds'; a walk of no seed (a comparison's common trajectories, shared by the paths of a lift)
+    belongs to each."""
     shared = [w for w in walks if not w.get("seed")]
     fresh = [w for w in walks if w.get("seed") and not _is_tuned(w)]
-    tuned = [w for w in walks if _is_tuned(w)]
-    return {kind: (f"{seeds_named(w['seed'] for w in group)}{note}", group + shared)
-            for kind, group, note in (("fresh", fresh, " (never tuned on)"), ("tuned", tuned, " (tuned on)")) if group}
+    by_set: dict[int, list[dict]] = {}
+    for w in fresh:
+        by_set.setdefault(_fresh_set(w), []).append(w)
+    groups = {f"fresh{i}": (f"{seeds_named(w['seed'] for w in group)}{FRESH}", group + shared)
+              for i, group in sorted(by_set.items())}
+    if len(by_set) > 1:
+        groups["pooled"] = (f"{seeds_named(w['seed'] for w in fresh)}{POOLED}", fresh + shared)
+    if tuned := [w for w in walks if _is_tuned(w)]:
+        groups["tuned"] = (f"{seeds_named(w['seed'] for w in tuned)} (tuned on)", tuned + shared)
+    return groups
 
 
 def _prototype_lines(walks: list[dict], name: str, speeds: list[float], robot: str) -> list[str]:
@@ -110,36 +129,65 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
             lines += _own_start_lines(own[kind][1], name, speeds, robot)
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
-    fresh_gains = [w for w in gains_walks or [] if not _is_tuned(w)]
-    if fresh_gains and "fresh" in groups:  # named as the fresh group is (the headline's rows name those seeds)
-        name = seeds_named(w["seed"] for w in groups["fresh"][1] if w.get("seed"))
-        for label, cells in gains_rows(fresh_gains, groups["fresh"][1], robot):
-            bold = label.startswith("**")  # re-commanded: the row bold as a whole
-            row = GAINS_ROW.format(gains=label.strip("*"), seeds=name)
-            lines.append(line(f"**{row}**" if bold else row, cells))
+    lines += _gains_lines([w for w in gains_walks or [] if not _is_tuned(w)], groups, robot)
     return "\n".join(lines)
 
 
-HEADLINE_REQUIRED = 2  # the headline's first rows, of the prototype walks the table is made from; the others' inputs
-# (the own-start run, the Eq. 7 comparison, the gains runs) are optional
+def _gains_lines(gains_walks: list[dict], groups: dict, robot: str) -> list[str]:
+    """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks against the default gains' walks
+    of the fresh groups those seeds fall in, named as those groups' seeds are (the headline's names), not by the
+    gains walks' own seeds."""
+    if not (name := _gains_seeds(gains_walks, groups)):
+        return []
+    lines, default = [], [w for kind in _gains_groups(gains_walks, groups) for w in groups[kind][1]]
+    for label, cells in gains_rows(gains_walks, default, robot):
+        bold = label.startswith("**")  # re-commanded: the row bold as a whole
+        row = GAINS_ROW.format(gains=label.strip("*"), seeds=name)
+        lines.append(line(f"**{row}**" if bold else row, cells))
+    return lines
 
 
-def headline_rows(seeds: str) -> tuple[str, ...]:
-    """The README's rows of the table, of the fresh `seeds` ("seeds 20–24"): the saving against the cheaper common
-    trajectory, against the searched shapes and against the recipe's own start, and the two gains that cost the
-    saving most without a fall, as commanded."""
-    fresh = f"{seeds} (never tuned on)"
-    return (SAVING_ROW.format(seeds=fresh), VS_SEARCHED_ROW.format(seeds=fresh), OWN_START_ROW.format(seeds=fresh),
-            EQ7_ROW.format(seeds=fresh),
-            *(GAINS_ROW.format(gains=f"{g}, as commanded", seeds=seeds) for g in ("kp 0.5×", "kd 2×")))
+def _gains_groups(gains_walks: list[dict], groups: dict) -> list[str]:
+    """The fresh groups of `groups` that the gains walks' seeds fall in."""
+    return sorted({f"fresh{_fresh_set(w)}" for w in gains_walks if w.get("seed")} & set(groups))
 
 
-def fresh_seeds_named(results: Path) -> str | None:
-    """"seeds 20–24": the seeds of the shipped prototype walks the recipe was never tuned on (None where none)."""
-    path = Path(results) / PROTOTYPE_SOURCE
-    seeds = [w["seed"] for w in json.loads(path.read_text()) if w.get("seed") and not _is_tuned(w)] \
-        if path.is_file() else []
+def _gains_seeds(gains_walks: list[dict], groups: dict) -> str | None:
+    """"seeds 20–24": the seeds of the fresh groups the gains walks fall in (None where they fall in none)."""
+    seeds = [w["seed"] for kind in _gains_groups(gains_walks, groups) for w in groups[kind][1] if w.get("seed")]
     return seeds_named(seeds) if seeds else None
+
+
+HEADLINE_GAINS = ("kp 0.5×", "kd 2×")  # the two gains that cost the saving most without a fall, as commanded
+
+
+def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = None
+                  ) -> tuple[tuple[str, ...], frozenset[str]]:
+    """The README's rows of the table and which of them may be missing: the first fresh group's saving against
+    the cheaper common trajectory and against the searched shape, the pooled fresh seeds' (where several sets are
+    shipped), then the first group's rows against its own start and the Eq. 7 shape and the `HEADLINE_GAINS`
+    rows. The prototype's rows are required; the others' inputs (the own-start run, the Eq. 7 comparison, the
+    gains runs) are optional. No rows where no fresh seed walked."""
+    groups = _groups([w for w in prototype_walks if w["trajectory"] == "learned"])
+    fresh = [name for kind, (name, _) in groups.items() if kind.startswith("fresh")]
+    if not fresh:
+        return (), frozenset()
+    required = [row.format(seeds=name) for name in fresh[:1] + ([groups["pooled"][0]] if "pooled" in groups else [])
+                for row in (SAVING_ROW, VS_SEARCHED_ROW)]
+    optional = [OWN_START_ROW.format(seeds=fresh[0]), EQ7_ROW.format(seeds=fresh[0])]
+    if gains := _gains_seeds([w for w in gains_walks or [] if not _is_tuned(w)], groups):
+        optional += [GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS]
+    return tuple(required + optional), frozenset(optional)
+
+
+def _read(results: Path, name: str) -> list[dict] | None:
+    return json.loads((results / name).read_text()) if (results / name).is_file() else None
+
+
+def headline_of(results: Path) -> tuple[tuple[str, ...], frozenset[str]]:
+    """`headline_rows` of the shipped inputs in `results` (no rows where the prototype walks are not there)."""
+    walks = _read(Path(results), PROTOTYPE_SOURCE)
+    return headline_rows(walks, _read(Path(results), GAINS_SOURCE)) if walks else ((), frozenset())
 
 
 def make_table(results: Path) -> str | None:
@@ -147,7 +195,6 @@ def make_table(results: Path) -> str | None:
     results = Path(results)
     if not (results / PROTOTYPE_SOURCE).is_file():
         return None
-    read = {name: json.loads((results / name).read_text()) if (results / name).is_file() else None
-            for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE, OWN_START_SOURCE)}
+    read = {name: _read(results, name) for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE, OWN_START_SOURCE)}
     return searched_start_markdown(read[PROTOTYPE_SOURCE], read[COMPARE_SOURCE], read[GAINS_SOURCE],
                                    own_start_walks=read[OWN_START_SOURCE])
