@@ -13,7 +13,8 @@ def test_the_gains_table_rows_are_each_runs_walks_as_the_prototype_summary_gives
     import json
     import shutil
 
-    from cyberdog.analysis.gains_table import GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW
+    from cyberdog.analysis.gains_table import (GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW, SEARCHED_SAVING,
+                                               VS_SEARCHED)
     from cyberdog.analysis.readme_tables import make_tables
     source = ROOT / "results" / "figures_input"
     for f in source.glob("*.json"):
@@ -25,9 +26,16 @@ def test_the_gains_table_rows_are_each_runs_walks_as_the_prototype_summary_gives
     tables = make_tables(tmp_path)
     lines = tables["gains"].splitlines()[2:]
     row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in lines}
-    assert list(row) == [GAINS_DEFAULT_ROW, GAINS_DEFAULT_POLICY_ROW, "**kp 0.5×, re-commanded**", "kp 2×, as commanded",
-                         "**kp 2×, re-commanded**", "kd 2×, as commanded", "**kd 2×, re-commanded**"]
+    # the prototype walks hold the searched shape: each as-commanded run's rows against it follow its own
+    searched = [f"{{}}, as commanded: {label}" for label in (SEARCHED_SAVING, VS_SEARCHED)]
+    assert list(row) == [GAINS_DEFAULT_ROW, GAINS_DEFAULT_POLICY_ROW, "**kp 0.5×, re-commanded**",
+                         "kp 2×, as commanded", *(r.format("kp 2×") for r in searched), "**kp 2×, re-commanded**",
+                         "kd 2×, as commanded",
+                         *(r.format("kd 2×") for r in searched), "**kd 2×, re-commanded**"]
     assert row["kd 2×, as commanded"] == row[GAINS_DEFAULT_ROW]
+    prototype = {line.split("|")[1].strip(): line.split("|")[2:5] for line in tables["prototype"].splitlines()[2:]}
+    assert row[f"kd 2×, as commanded: {VS_SEARCHED}"] == [c.replace("*", "") for c in prototype[
+        "learned against the shape searched for the battery (the best alternative)"]]
     assert [c.strip("* ") for c in row["**kp 0.5×, re-commanded**"]] == [c.strip() for c in row[GAINS_DEFAULT_ROW]]
 
 
@@ -38,7 +46,8 @@ def test_a_gains_run_that_walked_the_policies_gives_their_row_beside_the_default
     import json
     import shutil
 
-    from cyberdog.analysis.gains_table import GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW
+    from cyberdog.analysis.gains_table import (GAINS_DEFAULT_POLICY_ROW, GAINS_DEFAULT_ROW, SEARCHED_SAVING,
+                                               VS_SEARCHED)
     from cyberdog.analysis.readme_tables import make_tables
     source = ROOT / "results" / "figures_input"
     for f in source.glob("*.json"):
@@ -55,8 +64,11 @@ def test_a_gains_run_that_walked_the_policies_gives_their_row_beside_the_default
     (tmp_path / "gains_walks.json").write_text(json.dumps(gains))
     lines = make_tables(tmp_path)["gains"].splitlines()[2:]
     row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in lines}
-    assert list(row) == [GAINS_DEFAULT_ROW, GAINS_DEFAULT_POLICY_ROW, "kp 2×, as commanded", "**kp 2×, re-commanded**",
-                         "kd 2×, as commanded", "**kd 2×, re-commanded**", "kd 2×, the policy, closed loop"]
+    assert list(row) == [GAINS_DEFAULT_ROW, GAINS_DEFAULT_POLICY_ROW, "kp 2×, as commanded",
+                         f"kp 2×, as commanded: {SEARCHED_SAVING}", f"kp 2×, as commanded: {VS_SEARCHED}",
+                         "**kp 2×, re-commanded**", "kd 2×, as commanded",
+                         f"kd 2×, as commanded: {SEARCHED_SAVING}", f"kd 2×, as commanded: {VS_SEARCHED}",
+                         "**kd 2×, re-commanded**", "kd 2×, the policy, closed loop"]
     assert row["kd 2×, the policy, closed loop"] == row[GAINS_DEFAULT_POLICY_ROW] != row[GAINS_DEFAULT_ROW]
     (tmp_path / "stiffness_walks.json").unlink()  # no default-gains policy walks shipped: no default policy row
     assert GAINS_DEFAULT_POLICY_ROW not in make_tables(tmp_path)["gains"]

@@ -177,3 +177,24 @@ def test_a_second_fresh_set_has_its_own_rows_and_the_pooled_rows_join_both(tmp_p
                         sst.SAVING_ROW.format(seeds=pooled), sst.VS_SEARCHED_ROW.format(seeds=pooled))
     assert sst.GAINS_ROW.format(gains="kd 2×, as commanded", seeds="seeds 20–29") in optional
     assert not optional & set(head[:4])
+
+
+def test_a_gains_run_that_walked_the_searched_shape_gives_its_saving_and_the_lead_over_it(tmp_path):
+    """The gains rows against the searched shape come from the walks under those gains (the reference walked
+    too), never from the default gains' walks."""
+    walks = _walks()
+    fresh = [w for w in walks if w["seed"] != "seed0"]
+    at_kd2 = _gains(fresh, "kd", 2.0)
+    rows = _rows(sst.searched_start_markdown(walks, gains_walks=at_kd2))
+    vs = rows["kd 2×, as commanded: learned against the searched shape, seeds 1–4"]
+    expected = {r["speed_mps"]: r for r in ps.summary_rows(fresh)
+                if r["robot"] == "hardware" and r["trajectory"] == "learned"}
+    assert vs == [mean_ci(expected[v], "battery_vs_searched_pct", ".1f", " %", sign=True) for v in sorted(expected)]
+    searched = {r["speed_mps"]: r for r in ps.summary_rows(fresh)
+                if r["robot"] == "hardware" and r["trajectory"] == ps.REFERENCE}
+    assert [c.split(" (")[0] for c in rows["kd 2×, as commanded: the searched shape's saving, seeds 1–4"]] == [
+        mean_ci(searched[v], "battery_saving_pct", ".1f", " %") for v in sorted(searched)]
+    # a gains run without the reference: no such rows
+    no_reference = _gains([w for w in fresh if w["trajectory"] != ps.REFERENCE], "kd", 2.0)
+    assert not [k for k in _rows(sst.searched_start_markdown(walks, gains_walks=no_reference)) if "searched shape" in k
+                and k.startswith("kd")]

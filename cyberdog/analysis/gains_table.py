@@ -1,5 +1,6 @@
 """The gains table: the battery saving against the cheaper common trajectory with the drivers' kp or kd alone
-scaled, as commanded and re-commanded, beside the default gains' (`tools/merge_walks.py gains`'s walks)."""
+scaled, as commanded and re-commanded, beside the default gains' (`tools/merge_walks.py gains`'s walks); where a
+run walked the searched shape under its gains too, that shape's saving and the learned paths' lead over it."""
 from __future__ import annotations
 
 from cyberdog.analysis import prototype_summary as ps
@@ -10,6 +11,9 @@ from cyberdog.analysis.markdown_cells import mean_ci, missed_walks
 GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
 POLICY_ROW = "the policy, closed loop"  # the gains table's rows of the policies walking the protocol themselves
 GAINS_DEFAULT_POLICY_ROW = f"default gains, {POLICY_ROW}"
+# rows after a gain's as-commanded row where its run walked the searched shape (the prototype's reference) too
+SEARCHED_SAVING = "the searched shape's saving"
+VS_SEARCHED = "learned against the searched shape"
 
 
 def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) -> list[str] | None:
@@ -20,6 +24,18 @@ def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) 
         return None
     return ["–" if v not in by else mean_ci(by[v], "battery_saving_pct", ".1f", " %") + missed_walks(by[v])
             for v in speeds]
+
+
+def _searched_rows(walks: list[dict], robot: str, speeds: list[float]) -> list[tuple[str, list[str]]]:
+    """The searched shape's own saving (`SEARCHED_SAVING`) and the learned paths' against it (`VS_SEARCHED`),
+    where the walks hold the prototype run's reference (`ps.REFERENCE`, walked under the same gains)."""
+    rows = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
+    if not any(t == ps.REFERENCE for t, _ in rows):
+        return []
+    searched = _cells(walks, ps.REFERENCE, robot, speeds) or []
+    vs = ["–" if ("learned", v) not in rows else mean_ci(rows["learned", v], "battery_vs_searched_pct", ".1f", " %",
+                                                         sign=True) for v in speeds]
+    return [(SEARCHED_SAVING, searched), (VS_SEARCHED, vs)]
 
 
 def _speeds(default_walks: list[dict], robot: str) -> list[float]:
@@ -39,7 +55,11 @@ def gains_rows(walks: list[dict], default_walks: list[dict], robot: str = "hardw
             if cells is not None:
                 label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
                 rows.append((f"**{label}**", [f"**{c}**" for c in cells]) if matched else (label, cells))
-        policy = _cells([w for w in at if not w["pd_matched"]], "policy", robot, speeds)  # against the commons as commanded
+            if not matched:  # where the run walked the searched shape under the same gains: both against it
+                rows += [(f"{gain} {scale:g}×, as commanded: {label}", cells)
+                         for label, cells in _searched_rows([w for w in at if not w["pd_matched"]], robot, speeds)]
+        # the policies against the common trajectories as commanded
+        policy = _cells([w for w in at if not w["pd_matched"]], "policy", robot, speeds)
         if policy:
             rows.append((f"{gain} {scale:g}×, {POLICY_ROW}", policy))
     return rows

@@ -142,7 +142,8 @@ def _gains_lines(gains_walks: list[dict], groups: dict, robot: str) -> list[str]
     lines, default = [], [w for kind in _gains_groups(gains_walks, groups) for w in groups[kind][1]]
     for label, cells in gains_rows(gains_walks, default, robot):
         bold = label.startswith("**")  # re-commanded: the row bold as a whole
-        row = GAINS_ROW.format(gains=label.strip("*"), seeds=name)
+        gains, _, searched = label.strip("*").partition(": ")  # "kd 2×, as commanded: the searched shape's saving"
+        row = f"{gains}: {searched}, {name}" if searched else GAINS_ROW.format(gains=gains, seeds=name)
         lines.append(line(f"**{row}**" if bold else row, cells))
     return lines
 
