@@ -1,6 +1,6 @@
 """The table of the battery recipe that starts from the searched shape (`configs/battery_searched.yaml`): the
-learned paths against the best gait the direct search finds, on the seeds the recipe was never tuned on and on
-its tuning seeds, each group's rows apart.
+learned paths against the best gait the direct search finds, on the seeds the recipe was never tuned on (in the
+sets they were trained as, and pooled) and on its tuning seeds, each group's rows apart.
 
 From `results/figures_input/` (each optional: the table is made where its prototype walks are shipped):
 - `prototype_searched_start.json`: `evaluate.py prototype --learned <the recipe's paths>` (the prototype run: two
@@ -9,7 +9,8 @@ From `results/figures_input/` (each optional: the table is made where its protot
 - `comparison_searched_start.json`: `evaluate.py compare --learned <the same paths> --reference <a shape searched
   on Eq. 7 at the paths' lift>` (Table 5's 10 s walk on the ideal robot): the paths against that shape on Eq. 7;
 - `gains_searched_start.json`: `tools/merge_walks.py gains` over four prototype runs with kp or kd alone at 0.5×
-  or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's;
+  or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's, and
+  where a run walked the searched shape under its gains too, that shape's saving and the paths' lead over it;
 - `prototype_searched_start_own.json`: the same prototype run with the recipe's own start as the reference
   (`--prototype-reference` the shape its trot walks, which a zero action walks): what the policy adds to it.
 """
