@@ -132,3 +132,23 @@ def test_the_electrical_objective_on_the_hardware_like_robot_counts_what_the_bat
         search.ShapeObjective(objective="mechanical")
     with pytest.raises(TypeError, match="hardware"):
         search.ShapeObjective(hardware="hardware")
+
+
+def test_a_search_over_the_gains_walks_each_shape_under_each_and_costs_their_mean():
+    """`gains`: every speed walked under each (kp, kd) factor pair of the default PID, the objective their mean;
+    doubling kd changes the walk (the drivers' damping reaches it); bad pairs are refused by name."""
+    kw = dict(lift_height=0.10, speeds=(1.0,), duration=1.0, measure_from=0.5, log=None)
+    both = search.ShapeObjective(**kw, gains=((1.0, 1.0), (1.0, 2.0)))
+    u = so.to_unit(so.CYCLOID_PARAMS)
+    mean = both(u)
+    walks = both.history[0].walks
+    assert [(w["kp_factor"], w["kd_factor"]) for w in walks] == [(1.0, 1.0), (1.0, 2.0)]
+    assert mean == pytest.approx((walks[0]["cost_J"] + walks[1]["cost_J"]) / 2)
+    assert walks[0]["energy_window_J"] != pytest.approx(walks[1]["energy_window_J"], rel=1e-6)
+    alone = search.ShapeObjective(**kw)(u)
+    assert alone == pytest.approx(walks[0]["cost_J"])  # the default pair is the default search's walk
+    row = both.history[0].row()
+    assert "E_window_J@1.00" in row and "E_window_J@1.00 kp1 kd2" in row
+    for bad in ((), ((1.0, 0.1),), ((1.0,),), ((1.0, 1.0), (1.0, 1.0))):
+        with pytest.raises(ValueError, match="gains"):
+            search.ShapeObjective(**kw, gains=bad)

@@ -3,6 +3,7 @@
 
     python tools/optimize_trajectory.py --lift-height 0.10 --max-evals 100 --workers 2
     python tools/optimize_trajectory.py --lift-height 0.085 --objective electrical --robot hardware   # battery
+    python tools/optimize_trajectory.py --lift-height 0.085 --objective electrical --robot hardware --gains 1:1 0.5:1 1:2
 
 Beyond the paper (`cyberdog.core.path_shape`, the search in `cyberdog.analysis.shape_search`): a
 5-parameter periodic foot path (swing x timing law and skew, apex timing and fullness with the apex exactly at
@@ -21,6 +22,10 @@ Writes the optimised path to --result (default results/searched_shapes/optimized
 JSON with provenance: parameters, objective, H, speeds, evaluations, git commit) and into --out (default
 runs/optimize-<time>/): optimized_trajectory.json, history.csv (every evaluation), table.{md,csv},
 summary.json. `--replay-only FILE` skips the optimisation and replays a saved path.
+
+`--gains KP:KD ...` walks each shape at each speed under each of these (kp, kd) factors of the joint PD (the gains a
+user may set; the drivers step at the physics rate each needs), and the objective is the mean over them all: the
+shape cheapest over those gains, not at the default alone (the file's name ends in `_gains`).
 
 `--set SECTION.FIELD=VALUE` changes the walk config of every walk, search and replay alike (e.g. the trot with
 sagittal foot placement, `--set controller.sagittal_placement_gain=0.1`, so that the shape is searched under the
@@ -80,6 +85,10 @@ def parse_args(argv=None) -> argparse.Namespace:
                    help="the robot of the optimisation walks: ideal, or hardware, the prototype run's "
                         "hardware-like robot (HARDWARE_LIKE: friction, latency, sensor noise, Kalman speed, its "
                         "seeded mass draw); the replay table stays on the ideal robot (default ideal)")
+    p.add_argument("--gains", type=gain_pair, nargs="+", default=None, metavar="KP:KD",
+                   help="the joint PD's kp and kd factors each shape walks under, at each speed: the objective is "
+                        "the mean over speeds and gains (e.g. 1:1 0.5:1 1:2, the default gains and the two that cost "
+                        "the searched shape most; default 1:1 alone)")
     p.add_argument("--workers", type=int, default=2, help="parallel walk processes (default 2)")
     p.add_argument("--initial-step", type=float, default=0.2,
                    help="initial Nelder–Mead simplex size, share of each parameter's range (default 0.2)")
@@ -94,8 +103,11 @@ def parse_args(argv=None) -> argparse.Namespace:
                         "; every walk, search and replay, under it; recorded in the path's provenance")
     args = p.parse_args(argv)
     # every check before any long work starts
+    if args.gains is not None and args.replay_only is not None:
+        p.error("--gains sets the search's walks; --replay-only runs no search (the replay walks the default gains)")
     try:
-        shape_search.check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from)
+        shape_search.check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from,
+                                          gains=args.gains or shape_search.DEFAULT_GAINS)
     except ValueError as err:
         p.error(str(err))
     if args.max_evals < 2:
@@ -117,8 +129,20 @@ def parse_args(argv=None) -> argparse.Namespace:
         args.result = args.out / "optimized_trajectory.json"
     name = (f"optimized_trajectory_H{args.lift_height:.2f}" if (args.objective, args.robot) == ("eq7", "ideal")
             else f"optimized_trajectory_H{args.lift_height:.3f}_{args.objective}_{args.robot}")
+    name += "_gains" if args.gains else ""
     args.result = args.result or REPO / "results" / "searched_shapes" / f"{name}.json"
     return args
+
+
+def gain_pair(text: str) -> tuple[float, float]:
+    """"0.5:1" → (0.5, 1.0): the joint PD's kp and kd factors (`--gains`)."""
+    kp, sep, kd = text.partition(":")
+    try:
+        if not sep:
+            raise ValueError
+        return float(kp), float(kd)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected KP:KD factors such as 0.5:1, got {text!r}") from None
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
@@ -208,7 +232,8 @@ def main(argv=None) -> int:
               f"{args.workers} worker(s) → {args.out}")
         res = shape_search.optimize_shape(args.lift_height, args.speeds, args.duration, args.measure_from, args.max_evals,
                                 args.workers, initial_step=args.initial_step, objective=args.objective,
-                                hardware=HARDWARE_LIKE if args.robot == "hardware" else None, base=args.base)
+                                hardware=HARDWARE_LIKE if args.robot == "hardware" else None, base=args.base,
+                                gains=args.gains or shape_search.DEFAULT_GAINS)
         write_csv(args.out / "history.csv", [e.row() for e in res.history])
         cpu_s = sum(w["cpu_s"] for e in res.history for w in e.walks)
         print(f"done: {len(res.history)} evaluations in {res.wall_s:.0f} s wall ({cpu_s:.0f} s CPU in walks); "
@@ -216,15 +241,16 @@ def main(argv=None) -> int:
               f"({res.saving_pct:+.2f} % saved); {res.message}")
         print("best parameters: " + ", ".join(f"{k}={v:+.4f}" for k, v in res.best.params.as_dict().items()))
         summary.update({
-            "objective": (f"mean over speeds of {'Eq. (7)' if args.objective == 'eq7' else 'electrical'} energy, J, "
+            "objective": (f"mean over speeds{' and the joint PD gains' if args.gains else ''} of "
+                          f"{'Eq. (7)' if args.objective == 'eq7' else 'electrical'} energy, J, "
                           f"of a {args.duration} s walk from {args.measure_from} s on, {args.robot} robot; falls and "
                           ">5 % speed misses penalised"),
             "energy_objective": args.objective, "robot": args.robot,
+            "pd_gain_factors": [list(g) for g in args.gains or shape_search.DEFAULT_GAINS],  # (kp, kd) ×
             "optimizer": "scipy Nelder-Mead, bounded, unit coordinates, started from the composite cycloid",
             "shape_params": res.best.params.as_dict(), "objective_J": res.best.objective_J,
             "start_objective_J": res.start.objective_J, "objective_saving_pct": res.saving_pct,
-            "per_speed_window_energy_J": {f"{w['speed_command_mps']:.2f}": w["energy_window_J"]
-                                          for w in res.best.walks},
+            "per_speed_window_energy_J": {shape_search.walk_key(w): w["energy_window_J"] for w in res.best.walks},
             "evaluations": len(res.history), "best_eval": res.best.index, "optimize_wall_s": res.wall_s,
             "optimize_walk_cpu_s": cpu_s, "duration_s": args.duration, "measure_from_s": args.measure_from,
             "optimizer_message": res.message})

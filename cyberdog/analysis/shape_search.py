@@ -1,7 +1,8 @@
 """The direct search for the energy-optimal foot-path shape over `cyberdog.core.path_shape`'s
 five parameters.
 
-Objective (`ShapeObjective`): the mean over the speeds of the energy (Eq. 7, or the electrical energy with
+Objective (`ShapeObjective`): the mean over the speeds (and over the joint PD's gains, `gains`: (kp, kd) factors
+of the default PID, each shape walked under each) of the energy (Eq. 7, or the electrical energy with
 `objective="electrical"`), J, of a `duration`-s walk
 (`cyberdog.analysis.walk.walk` with WalkConfig(gait=GaitConfig(speed=v, lift_height=H)), the default trot
 controller and simulator), integrated from `measure_from` s on so that the 1 s start-up ramp is left out.
@@ -34,6 +35,8 @@ SPEED_MISS_PENALTY_J = 100.0  # J per % of speed miss beyond the 5 % band (a val
 # what a walk's window energy counts: Eq. (7)'s Σ∫|τ·ω|dt, or the electrical energy the battery pays (copper
 # loss, friction, driver; cyberdog.core.energy.electrical_power), the prototype run's measure
 OBJECTIVES = ("eq7", "electrical")
+DEFAULT_GAINS = ((1.0, 1.0),)  # (kp, kd) factors of the joint PD a shape walks under: the default gains alone
+GAIN_FACTOR_RANGE = (0.25, 4.0)  # each factor within: the drivers' physics step halves up to MAX_HALVINGS times
 
 
 @dataclass(frozen=True)
@@ -48,12 +51,19 @@ class ShapeWalk:
     base: WalkConfig = field(default_factory=WalkConfig)
     objective: str = "eq7"  # one of OBJECTIVES
     hardware: HardwareConfig | None = None  # the robot walked: None = ideal, else the hardware-like effects
+    pd_factors: tuple[float, float] = (1.0, 1.0)  # the joint PD's kp and kd, times the walk config's
 
 
 def check_objective_args(lift_height: float, speeds: Sequence[float], duration: float,
                           measure_from: float, objective: str = "eq7",
-                          hardware: HardwareConfig | None = None) -> None:
+                          hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS) -> None:
     """ValueError (TypeError for `hardware`) naming the argument that is out of its range."""
+    lo, hi = GAIN_FACTOR_RANGE
+    if len(gains) == 0 or not all(len(g) == 2 and all(math.isfinite(f) and lo <= f <= hi for f in g) for g in gains):
+        raise ValueError(f"gains must be a non-empty list of (kp, kd) factor pairs, each in [{lo:g}, {hi:g}], "
+                         f"got {list(gains)!r}")
+    if len(set(map(tuple, gains))) < len(gains):
+        raise ValueError(f"gains lists a (kp, kd) pair twice: {list(gains)!r}")
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {OBJECTIVES}, got {objective!r}")
     if hardware is not None and not isinstance(hardware, HardwareConfig):
@@ -75,7 +85,10 @@ def walk_cost(job: ShapeWalk) -> dict:
     from cyberdog.sim.hardware_model import hardware_walk_config
 
     gait = dataclasses.replace(job.base.gait, speed=float(job.speed), lift_height=float(job.lift_height))
-    cfg = dataclasses.replace(job.base, gait=gait)
+    kp, kd = job.pd_factors  # the drivers step at the physics rate these gains need (the walker sees to it)
+    pid = dataclasses.replace(job.base.pid, kp=tuple(g * kp for g in job.base.pid.kp),
+                              kd=tuple(g * kd for g in job.base.pid.kd))
+    cfg = dataclasses.replace(job.base, gait=gait, pid=pid)
     traj = shape_trajectory(job.params, gait)
     t0 = time.process_time()
     r = walk(cfg, job.duration, trajectory=traj, record=True, hardware=job.hardware)
@@ -95,7 +108,8 @@ def walk_cost(job: ShapeWalk) -> dict:
         status = f"speed miss ({r.mean_speed:.3f} m/s)"
     else:
         cost, status = energy_J, "ok"
-    return {"speed_command_mps": job.speed, "mean_speed_mps": r.mean_speed, "fell": r.fell,
+    return {"speed_command_mps": job.speed, "kp_factor": kp, "kd_factor": kd, "mean_speed_mps": r.mean_speed,
+            "fell": r.fell,
             "energy_window_J": energy_J, "energy_total_J": r.energy, "cost_J": cost, "status": status,
             "cpu_s": time.process_time() - t0}
 
@@ -118,11 +132,19 @@ class Evaluation:
         out = {"eval": self.index, **self.params.as_dict(), "objective_J": self.objective_J, "valid": self.valid,
                "wall_s": self.wall_s}
         for w in self.walks:
-            v = f"{w['speed_command_mps']:.2f}"
+            v = walk_key(w)
             out[f"E_window_J@{v}"] = w["energy_window_J"]
             out[f"mean_speed_mps@{v}"] = w["mean_speed_mps"]
             out[f"status@{v}"] = w["status"]
         return out
+
+
+def walk_key(w: dict) -> str:
+    """"1.20" for a walk at 1.2 m/s under the default gains, "1.20 kp0.5 kd1" under others: a history column's
+    and a per-walk summary's key."""
+    v = f"{w['speed_command_mps']:.2f}"
+    factors = (w.get("kp_factor", 1.0), w.get("kd_factor", 1.0))
+    return v if factors == (1.0, 1.0) else f"{v} kp{factors[0]:g} kd{factors[1]:g}"
 
 
 class ShapeObjective:
@@ -133,9 +155,10 @@ class ShapeObjective:
     def __init__(self, lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SPEEDS, duration: float = 6.0,
                  measure_from: float = 2.0, base: WalkConfig | None = None, pool: ProcessMap | None = None,
                  log: Callable[[str], None] | None = print, max_evals: int | None = None, objective: str = "eq7",
-                 hardware: HardwareConfig | None = None) -> None:
-        check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware)
+                 hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS) -> None:
+        check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware, gains)
         self.objective, self.hardware = objective, hardware
+        self.gains = tuple((float(kp), float(kd)) for kp, kd in gains)
         self.lift_height, self.speeds = float(lift_height), tuple(float(v) for v in speeds)
         self.duration, self.measure_from = float(duration), float(measure_from)
         self.base, self.log, self.max_evals = base or WalkConfig(), log, max_evals
@@ -146,9 +169,9 @@ class ShapeObjective:
 
     def evaluate(self, params: ShapeParams) -> Evaluation:
         jobs = [ShapeWalk(params, v, self.lift_height, self.duration, self.measure_from, self.base,
-                          self.objective, self.hardware) for v in self.speeds]
+                          self.objective, self.hardware, g) for g in self.gains for v in self.speeds]
         t0 = time.perf_counter()
-        walks = self.pool(walk_cost, jobs, describe=lambda j: f"{j.speed:g} m/s with {j.params}")
+        walks = self.pool(walk_cost, jobs, describe=lambda j: f"{j.speed:g} m/s, PD {j.pd_factors} with {j.params}")
         ev = Evaluation(len(self.history), params, float(np.mean([w["cost_J"] for w in walks])), walks,
                         time.perf_counter() - t0)
         self.history.append(ev)
@@ -200,17 +223,18 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
                    measure_from: float = 2.0, max_evals: int = 100, workers: int = 2,
                    start: ShapeParams = CYCLOID_PARAMS, initial_step: float = 0.2, base: WalkConfig | None = None,
                    log: Callable[[str], None] | None = print, objective: str = "eq7",
-                   hardware: HardwareConfig | None = None) -> OptimizationResult:
+                   hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS) -> OptimizationResult:
     """Bounded Nelder–Mead over the shape parameters (unit coordinates), started from `start`.
 
     initial_step: size of the initial simplex in unit coordinates (share of each parameter's range), each
     vertex stepping toward the interior from `start`. Walks of one evaluation run in `workers` spawned
     processes (1 = in this process). objective: what a walk's energy counts (OBJECTIVES); hardware: the robot
-    walked (None: ideal; a HardwareConfig: its effects and its seeded mass draw, the same robot every walk).
+    walked (None: ideal; a HardwareConfig: its effects and its seeded mass draw, the same robot every walk);
+    gains: the (kp, kd) factors of the joint PD each shape walks under at each speed (the objective their mean).
     """
     from scipy.optimize import minimize
 
-    check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware)
+    check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware, gains)
     if not (isinstance(max_evals, (int, np.integer)) and max_evals >= 2):
         raise ValueError(f"max_evals must be an integer >= 2, got {max_evals!r}")
     if not (isinstance(workers, (int, np.integer)) and workers >= 1):
@@ -226,7 +250,7 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
         simplex.append(v)
     with ProcessMap(workers) as pool:  # the workers live through every evaluation (they start once)
         cost = ShapeObjective(lift_height, speeds, duration, measure_from, base, pool, log, max_evals, objective,
-                              hardware)
+                              hardware, gains)
         try:
             res = minimize(cost, x0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * len(x0),
                            options={"maxfev": max_evals, "initial_simplex": np.array(simplex),
