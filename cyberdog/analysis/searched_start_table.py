@@ -22,7 +22,7 @@ from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
-from cyberdog.analysis.gains_table import gains_rows
+from cyberdog.analysis.gains_table import SEARCHED_SAVING, gains_rows
 from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
 PROTOTYPE_SOURCE = "prototype_searched_start.json"
@@ -40,6 +40,7 @@ VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}
 EQ7_ROW = "learned against the shape searched on Eq. 7, on E (ideal robot), {seeds}"  # its lift: the caption's
 OWN_START_ROW = "learned against its own start (a zero action's gait), {seeds}"
 GAINS_ROW = "the saving at {gains}, {seeds}"  # a gains row: "kp 0.5×, as commanded" (bold where re-commanded)
+GAINS_SEARCHED_ROW = "{gains}: {row}, {seeds}"  # its rows of the searched shape walked under those gains
 FRESH, POOLED = " (never tuned on)", " (never tuned on, pooled)"  # the notes that name a group's seeds
 
 
@@ -144,7 +145,8 @@ def _gains_lines(gains_walks: list[dict], groups: dict, robot: str) -> list[str]
     for label, cells in gains_rows(gains_walks, default, robot):
         bold = label.startswith("**")  # re-commanded: the row bold as a whole
         gains, _, searched = label.strip("*").partition(": ")  # "kd 2×, as commanded: the searched shape's saving"
-        row = f"{gains}: {searched}, {name}" if searched else GAINS_ROW.format(gains=gains, seeds=name)
+        row = (GAINS_SEARCHED_ROW.format(gains=gains, row=searched, seeds=name) if searched
+               else GAINS_ROW.format(gains=gains, seeds=name))
         lines.append(line(f"**{row}**" if bold else row, cells))
     return lines
 
@@ -161,13 +163,15 @@ def _gains_seeds(gains_walks: list[dict], groups: dict) -> str | None:
 
 
 HEADLINE_GAINS = ("kp 0.5×", "kd 2×")  # the two gains that cost the saving most without a fall, as commanded
+HEADLINE_SEARCHED_GAINS = "kd 2×"  # and the searched shape's own saving under the one that costs it most
 
 
 def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = None
                   ) -> tuple[tuple[str, ...], frozenset[str]]:
     """The README's rows of the table and which of them may be missing: the first fresh group's saving against
     the cheaper common trajectory and against the searched shape, the pooled fresh seeds' (where several sets are
-    shipped), then the first group's rows against its own start and the Eq. 7 shape and the `HEADLINE_GAINS`
+    shipped), then the first group's row against the Eq. 7 shape, the `HEADLINE_GAINS` rows and the searched
+    shape's saving at `HEADLINE_SEARCHED_GAINS` (the row against the recipe's own start stays in the full table)
     rows. The prototype's rows are required; the others' inputs (the own-start run, the Eq. 7 comparison, the
     gains runs) are optional. No rows where no fresh seed walked."""
     groups = _groups([w for w in prototype_walks if w["trajectory"] == "learned"])
@@ -176,9 +180,11 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
         return (), frozenset()
     required = [row.format(seeds=name) for name in fresh[:1] + ([groups["pooled"][0]] if "pooled" in groups else [])
                 for row in (SAVING_ROW, VS_SEARCHED_ROW)]
-    optional = [OWN_START_ROW.format(seeds=fresh[0]), EQ7_ROW.format(seeds=fresh[0])]
+    optional = [EQ7_ROW.format(seeds=fresh[0])]
     if gains := _gains_seeds([w for w in gains_walks or [] if not _is_tuned(w)], groups):
         optional += [GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS]
+        optional.append(GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
+                                                  row=SEARCHED_SAVING, seeds=gains))
     return tuple(required + optional), frozenset(optional)
 
 
