@@ -171,9 +171,9 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
     """The README's rows of the table and which of them may be missing: the first fresh group's saving against
     the cheaper common trajectory and against the searched shape, the pooled fresh seeds' (where several sets are
     shipped), then the first group's row against the Eq. 7 shape, the `HEADLINE_GAINS` rows and the searched
-    shape's saving at `HEADLINE_SEARCHED_GAINS` (the row against the recipe's own start stays in the full table)
-    rows. The prototype's rows are required; the others' inputs (the own-start run, the Eq. 7 comparison, the
-    gains runs) are optional. No rows where no fresh seed walked."""
+    shape's saving at `HEADLINE_SEARCHED_GAINS` (the row against the recipe's own start stays in the full table).
+    The prototype's rows are required; the others' inputs (the Eq. 7 comparison, the gains runs) are optional. No
+    rows where no fresh seed walked."""
     groups = _groups([w for w in prototype_walks if w["trajectory"] == "learned"])
     fresh = [name for kind, (name, _) in groups.items() if kind.startswith("fresh")]
     if not fresh:
