@@ -28,35 +28,31 @@ def test_a_bad_override_fails_before_any_walk(tmp_path, capsys):
     assert "no_such_gain" in capsys.readouterr().err
 
 
-def test_the_search_walks_under_the_overridden_config(tmp_path, monkeypatch):
-    seen = {}
+class _Stop(Exception):
+    pass
 
-    class Stop(Exception):
-        pass
+
+def _search_arguments(monkeypatch, argv: list[str]) -> dict:
+    """The keyword arguments `main(argv)` hands the search (a stand-in that stops there, before any walk)."""
+    seen = {}
 
     def fake_search(*a, **kw):
         seen.update(kw)
-        raise Stop
+        raise _Stop
 
     monkeypatch.setattr(tool.shape_search, "optimize_shape", fake_search)
-    with pytest.raises(Stop):
-        tool.main(["--set", "controller.sagittal_placement_gain=0.2", "--out", str(tmp_path), "--max-evals", "2"])
+    with pytest.raises(_Stop):
+        tool.main([*argv, "--max-evals", "2"])
+    return seen
+
+
+def test_the_search_walks_under_the_overridden_config(tmp_path, monkeypatch):
+    seen = _search_arguments(monkeypatch, ["--set", "controller.sagittal_placement_gain=0.2", "--out", str(tmp_path)])
     assert seen["base"].controller.sagittal_placement_gain == 0.2
 
 
 def test_the_gains_reach_the_search_and_a_bad_pair_fails_before_any_walk(tmp_path, monkeypatch, capsys):
-    seen = {}
-
-    class Stop(Exception):
-        pass
-
-    def fake_search(*a, **kw):
-        seen.update(kw)
-        raise Stop
-
-    monkeypatch.setattr(tool.shape_search, "optimize_shape", fake_search)
-    with pytest.raises(Stop):
-        tool.main(["--gains", "1:1", "0.5:1", "1:2", "--out", str(tmp_path), "--max-evals", "2"])
+    seen = _search_arguments(monkeypatch, ["--gains", "1:1", "0.5:1", "1:2", "--out", str(tmp_path)])
     assert seen["gains"] == [(1.0, 1.0), (0.5, 1.0), (1.0, 2.0)]
     assert tool.parse_args(["--gains", "1:2", "--out", str(tmp_path)]).result.name.endswith("_gains.json")
     for bad in (["--gains", "1"], ["--gains", "1:9"], ["--gains", "1:2", "--replay-only", __file__]):
