@@ -199,3 +199,23 @@ def test_a_gains_run_that_walked_the_searched_shape_gives_its_saving_and_the_lea
     no_reference = _gains([w for w in fresh if w["trajectory"] != ps.REFERENCE], "kd", 2.0)
     assert not [k for k in _rows(sst.searched_start_markdown(walks, gains_walks=no_reference)) if "searched shape" in k
                 and k.startswith("kd")]
+
+
+def test_the_own_start_under_the_gains_gives_its_rows_alone_from_its_own_runs():
+    """Gains runs with the recipe's own start as the reference: its saving and the paths' lead over it under each
+    gain, named as its start, after the searched shape's rows; the paths' own rows are not repeated."""
+    walks = _walks()
+    fresh = [w for w in walks if w["seed"] != "seed0"]
+    own = [{**w, "battery_used_pct": 1.1 * w["battery_used_pct"]} if w["trajectory"] == ps.REFERENCE else w
+           for w in fresh]  # a dearer reference than the searched shape
+    rows = _rows(sst.searched_start_markdown(walks, gains_walks=_gains(fresh, "kd", 2.0),
+                                             own_start_gains_walks=_gains(own, "kd", 2.0)))
+    label = "kd 2×, as commanded: {}, seeds 1–4"
+    expected = {r["speed_mps"]: r for r in ps.summary_rows(own)
+                if r["robot"] == "hardware" and r["trajectory"] == "learned"}
+    assert rows[label.format("learned against its own start")] == [
+        mean_ci(expected[v], "battery_vs_searched_pct", ".1f", " %", sign=True) for v in sorted(expected)]
+    assert rows[label.format("learned against its own start")] != rows[label.format(
+        "learned against the searched shape")]
+    assert list(rows).count("the saving at kd 2×, as commanded, seeds 1–4") == 1
+    assert list(rows)[-2:] == [label.format("its own start's saving"), label.format("learned against its own start")]

@@ -11,9 +11,16 @@ from cyberdog.analysis.markdown_cells import mean_ci, missed_walks
 GAINS_DEFAULT_ROW = "default gains (kp 60, kd 2)"  # the gains table's first row: the prototype table's saving
 POLICY_ROW = "the policy, closed loop"  # the gains table's rows of the policies walking the protocol themselves
 GAINS_DEFAULT_POLICY_ROW = f"default gains, {POLICY_ROW}"
-# rows after a gain's as-commanded row where its run walked the searched shape (the prototype's reference) too
-SEARCHED_SAVING = "the searched shape's saving"
-VS_SEARCHED = "learned against the searched shape"
+SEARCHED = "the searched shape"  # the prototype run's default reference, as the gains rows name it
+
+
+def reference_labels(reference: str) -> tuple[str, str]:
+    """The labels of the rows after a gain's as-commanded row where its run walked the prototype's reference too
+    (`reference`: what that reference is): its own saving, and the learned paths' lead over it."""
+    return f"{reference}'s saving", f"learned against {reference}"
+
+
+SEARCHED_SAVING, VS_SEARCHED = reference_labels(SEARCHED)
 
 
 def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) -> list[str] | None:
@@ -26,25 +33,28 @@ def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) 
             for v in speeds]
 
 
-def _searched_rows(walks: list[dict], robot: str, speeds: list[float]) -> list[tuple[str, list[str]]]:
-    """The searched shape's own saving (`SEARCHED_SAVING`) and the learned paths' against it (`VS_SEARCHED`),
-    where the walks hold the prototype run's reference (`ps.REFERENCE`, walked under the same gains)."""
+def _searched_rows(walks: list[dict], robot: str, speeds: list[float], reference: str = SEARCHED
+                   ) -> list[tuple[str, list[str]]]:
+    """The reference's own saving and the learned paths' against it (`reference_labels(reference)`), where the
+    walks hold the prototype run's reference row (`ps.REFERENCE`, walked under the same gains)."""
     rows = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
     if not any(t == ps.REFERENCE for t, _ in rows):
         return []
     searched = _cells(walks, ps.REFERENCE, robot, speeds) or []
     vs = ["–" if ("learned", v) not in rows else mean_ci(rows["learned", v], "battery_vs_searched_pct", ".1f", " %",
                                                          sign=True) for v in speeds]
-    return [(SEARCHED_SAVING, searched), (VS_SEARCHED, vs)]
+    return list(zip(reference_labels(reference), (searched, vs)))
 
 
 def _speeds(default_walks: list[dict], robot: str) -> list[float]:
     return sorted({w["speed_mps"] for w in default_walks if w["robot"] == robot and w["trajectory"] == "learned"})
 
 
-def gains_rows(walks: list[dict], default_walks: list[dict], robot: str = "hardware") -> list[tuple[str, list[str]]]:
-    """(label, cells) per gain and factor (kp first), as commanded then re-commanded (bold), then the policies'
-    own where the run walked them: the rows after the default gains' (`gains_markdown`)."""
+def gains_rows(walks: list[dict], default_walks: list[dict], robot: str = "hardware", reference: str = SEARCHED
+               ) -> list[tuple[str, list[str]]]:
+    """(label, cells) per gain and factor (kp first), as commanded (then, where the run walked the prototype's
+    reference, named `reference`, its rows), re-commanded (bold), then the policies' own where the run walked
+    them: the rows after the default gains' (`gains_markdown`)."""
     speeds = _speeds(default_walks, robot)
     rows = []
     factors = sorted({(w["gain"], w["gain_scale"]) for w in walks}, key=lambda f: (f[0] != "kp", f[1]))  # kp first
@@ -57,7 +67,8 @@ def gains_rows(walks: list[dict], default_walks: list[dict], robot: str = "hardw
                 rows.append((f"**{label}**", [f"**{c}**" for c in cells]) if matched else (label, cells))
             if not matched:  # where the run walked the searched shape under the same gains: both against it
                 rows += [(f"{gain} {scale:g}×, as commanded: {label}", cells)
-                         for label, cells in _searched_rows([w for w in at if not w["pd_matched"]], robot, speeds)]
+                         for label, cells in _searched_rows([w for w in at if not w["pd_matched"]], robot, speeds,
+                                                            reference)]
         # the policies against the common trajectories as commanded
         policy = _cells([w for w in at if not w["pd_matched"]], "policy", robot, speeds)
         if policy:

@@ -12,7 +12,9 @@ From `results/figures_input/` (each optional: the table is made where its protot
   or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's, and
   where a run walked the searched shape under its gains too, that shape's saving and the paths' lead over it;
 - `prototype_searched_start_own.json`: the same prototype run with the recipe's own start as the reference
-  (`--prototype-reference` the shape its trot walks, which a zero action walks): what the policy adds to it.
+  (`--prototype-reference` the shape its trot walks, which a zero action walks): what the policy adds to it;
+- `gains_searched_start_own.json`: the gains runs as commanded with that start as the reference: its saving under
+  each gain, and what the policy adds to it there.
 """
 from __future__ import annotations
 
@@ -22,13 +24,15 @@ from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
-from cyberdog.analysis.gains_table import SEARCHED_SAVING, gains_rows
+from cyberdog.analysis.gains_table import SEARCHED, SEARCHED_SAVING, gains_rows
 from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
 PROTOTYPE_SOURCE = "prototype_searched_start.json"
 COMPARE_SOURCE = "comparison_searched_start.json"
 GAINS_SOURCE = "gains_searched_start.json"
 OWN_START_SOURCE = "prototype_searched_start_own.json"
+OWN_GAINS_SOURCE = "gains_searched_start_own.json"
+OWN_START = "its own start"  # the recipe's start shape under its trot, as the gains rows name it
 TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every other seed was never seen
 # the seeds never tuned on, in the sets they were trained as, each with the README's command at the recipe's frozen
 # commit: the second set repeats the first; where both are shipped, their rows are also pooled (a seed in no set
@@ -115,10 +119,12 @@ def _own_start_lines(walks: list[dict], name: str, speeds: list[float], robot: s
 
 def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dict] | None = None,
                             gains_walks: list[dict] | None = None, robot: str = "hardware",
-                            own_start_walks: list[dict] | None = None) -> str:
+                            own_start_walks: list[dict] | None = None,
+                            own_start_gains_walks: list[dict] | None = None) -> str:
     """The table: per group of seeds (never tuned on, then tuned on) the prototype rows, the row against the
     recipe's own start (`own_start_walks`: the prototype run with that start as its reference) and the Eq. 7
-    row, then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone)."""
+    row, then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone), and
+    the own start's under the gains (`own_start_gains_walks`: the gains runs with it as the reference)."""
     speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
     if not speeds:
         raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
@@ -132,19 +138,24 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
     lines += _gains_lines([w for w in gains_walks or [] if not _is_tuned(w)], groups, robot)
+    lines += _gains_lines([w for w in own_start_gains_walks or [] if not _is_tuned(w)], groups, robot,
+                          reference=OWN_START)
     return "\n".join(lines)
 
 
-def _gains_lines(gains_walks: list[dict], groups: dict, robot: str) -> list[str]:
+def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, reference: str = SEARCHED) -> list[str]:
     """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks against the default gains' walks
     of the fresh groups those seeds fall in, named as those groups' seeds are (the headline's names), not by the
-    gains walks' own seeds."""
+    gains walks' own seeds. With another `reference` than the searched shape, only that reference's rows (the
+    paths' own rows are the searched shape's runs')."""
     if not (name := _gains_seeds(gains_walks, groups)):
         return []
     lines, default = [], [w for kind in _gains_groups(gains_walks, groups) for w in groups[kind][1]]
-    for label, cells in gains_rows(gains_walks, default, robot):
+    for label, cells in gains_rows(gains_walks, default, robot, reference):
         bold = label.startswith("**")  # re-commanded: the row bold as a whole
         gains, _, searched = label.strip("*").partition(": ")  # "kd 2×, as commanded: the searched shape's saving"
+        if reference != SEARCHED and not searched:
+            continue
         row = (GAINS_SEARCHED_ROW.format(gains=gains, row=searched, seeds=name) if searched
                else GAINS_ROW.format(gains=gains, seeds=name))
         lines.append(line(f"**{row}**" if bold else row, cells))
@@ -203,6 +214,7 @@ def make_table(results: Path) -> str | None:
     results = Path(results)
     if not (results / PROTOTYPE_SOURCE).is_file():
         return None
-    read = {name: _read(results, name) for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE, OWN_START_SOURCE)}
+    read = {name: _read(results, name)
+            for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE, OWN_START_SOURCE, OWN_GAINS_SOURCE)}
     return searched_start_markdown(read[PROTOTYPE_SOURCE], read[COMPARE_SOURCE], read[GAINS_SOURCE],
-                                   own_start_walks=read[OWN_START_SOURCE])
+                                   own_start_walks=read[OWN_START_SOURCE], own_start_gains_walks=read[OWN_GAINS_SOURCE])
