@@ -185,23 +185,25 @@ def test_a_finished_stage_trains_longer_under_a_raised_budget_and_keeps_its_earl
         assert (run_dir / "config.yaml").read_text() == config_before  # nothing touched
         assert {p.name: p.read_bytes() for p in run_dir.glob("stage1_final*.pt")} == before
 
-    done = resume("train.stage1.max_env_steps=500")
+    done = resume("train.stage1.max_env_steps=1100")
     assert done.returncode == 0, done.stderr[-2000:]
     assert "raised budget" in done.stderr
     state = load_checkpoint(run_dir / "checkpoint.pt")
-    assert state["counters"]["finished"] and state["counters"]["stage_env_steps"] >= 500
-    assert C.load(C.ExperimentConfig, run_dir / "config.yaml").train.stage1.max_env_steps == 500
+    assert state["counters"]["finished"] and state["counters"]["stage_env_steps"] >= 1100
+    assert C.load(C.ExperimentConfig, run_dir / "config.yaml").train.stage1.max_env_steps == 1100
     for name, data in before.items():  # the 300-step result, kept under its step count
         assert (run_dir / name.replace(".pt", "_300steps.pt")).read_bytes() == data
     actor = torch.load(run_dir / "stage1_final_actor.pt", weights_only=True)
-    assert actor["env_steps"] >= 500 and state["agent"]["updates"] > reference_run[1]["updates"]
+    assert actor["env_steps"] >= 1100 and state["agent"]["updates"] > reference_run[1]["updates"]
     assert len(metrics_rows(run_dir)) == state["counters"]["episodes"]  # the log continues, no episode twice
     with open(run_dir / "metrics.csv") as f:
         log = list(csv.DictReader(f))
-    before_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) <= 300]
     after_rates = [float(r["env_steps_per_s"]) for r in log if int(r["env_steps"]) > 300]
-    # the resumed process's rate counts its own steps, not the 300 the earlier process made
-    assert after_rates and max(after_rates) < 3 * max(before_rates), (before_rates, after_rates)
+    # the resumed process's rate counts its own steps, not the 300 the earlier process made: counted with them, its
+    # first row (~40 own steps) would read ~8x its rate and its last (800 own steps) ~1.4x, the first several times
+    # the last; compared within the one process, a change of the machine's load between the two processes cannot
+    # fail it, and the first batch's start-up only lowers the first
+    assert len(after_rates) > 1 and after_rates[0] < 3 * after_rates[-1], after_rates
 
 
 def test_a_resume_may_end_an_unfinished_stage_sooner_but_not_before_where_it_is(tmp_path):
