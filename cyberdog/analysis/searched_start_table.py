@@ -173,18 +173,22 @@ def _gains_seeds(gains_walks: list[dict], groups: dict) -> str | None:
     return seeds_named(seeds) if seeds else None
 
 
-HEADLINE_GAINS = ("kp 0.5×", "kd 2×")  # the two gains that cost the saving most without a fall, as commanded
-HEADLINE_SEARCHED_GAINS = "kd 2×"  # and the searched shape's own saving under the one that costs it most
+HEADLINE_MAX_ROWS = 6  # the README's headline: the prototype's rows, then the optional rows in this order
+# the gains rows after the Eq. 7 row, as room is left: the saving at the gain that costs it most without a fall, the
+# searched shape's own saving there, then the next gain's
+HEADLINE_GAINS = ("kd 2×", "kp 0.5×")
+HEADLINE_SEARCHED_GAINS = "kd 2×"
 
 
 def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = None
                   ) -> tuple[tuple[str, ...], frozenset[str]]:
     """The README's rows of the table and which of them may be missing: the first fresh group's saving against
     the cheaper common trajectory and against the searched shape, the pooled fresh seeds' (where several sets are
-    shipped), then the first group's row against the Eq. 7 shape, the `HEADLINE_GAINS` rows and the searched
-    shape's saving at `HEADLINE_SEARCHED_GAINS` (the row against the recipe's own start stays in the full table).
-    The prototype's rows are required; the others' inputs (the Eq. 7 comparison, the gains runs) are optional. No
-    rows where no fresh seed walked."""
+    shipped), then, up to `HEADLINE_MAX_ROWS`, the first group's row against the Eq. 7 shape, the saving at the
+    first of `HEADLINE_GAINS`, the searched shape's saving at `HEADLINE_SEARCHED_GAINS` and the saving at the
+    next gain (the row against the recipe's own start stays in the full table). The prototype's rows are
+    required; the others' inputs (the Eq. 7 comparison, the gains runs) are optional. No rows where no fresh seed
+    walked."""
     groups = _groups([w for w in prototype_walks if w["trajectory"] == "learned"])
     fresh = [name for kind, (name, _) in groups.items() if kind.startswith("fresh")]
     if not fresh:
@@ -193,9 +197,10 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
                 for row in (SAVING_ROW, VS_SEARCHED_ROW)]
     optional = [EQ7_ROW.format(seeds=fresh[0])]
     if gains := _gains_seeds([w for w in gains_walks or [] if not _is_tuned(w)], groups):
-        optional += [GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS]
-        optional.append(GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
-                                                  row=SEARCHED_SAVING, seeds=gains))
+        first, *others = (GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS)
+        optional += [first, GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
+                                                      row=SEARCHED_SAVING, seeds=gains), *others]
+    optional = optional[:max(0, HEADLINE_MAX_ROWS - len(required))]
     return tuple(required + optional), frozenset(optional)
 
 
