@@ -58,8 +58,8 @@ def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resol
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():
     assert set(p.name for p in (ROOT / "configs").glob("*.yaml")) == {"table5.yaml", "battery.yaml", "torque.yaml",
                                                                        "battery_searched.yaml", "paper.yaml",
-                                                                       "tiny.yaml"}
-    for battery in ("battery.yaml", "battery_searched.yaml"):
+                                                                       "battery_searched_wide.yaml", "tiny.yaml"}
+    for battery in ("battery.yaml", "battery_searched.yaml", "battery_searched_wide.yaml"):
         assert [(p.name, p.start) for p in _phases(battery).values()] == [
             ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
@@ -68,6 +68,18 @@ def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_w
         ("energy3", "energy2/stage2_final.pt"), ("energy4", "energy3/stage2_final.pt")]
     assert C.load_preset(ROOT / "configs/battery.yaml").extract == {"replay_attempts": 16, "candidates": 2}
     assert not C.load_preset(ROOT / "configs/tiny.yaml").phased  # a plain two-stage run, as before phases
+
+
+def test_the_wide_command_recipe_is_the_searched_recipe_but_for_the_commanded_speeds():
+    """battery_searched_wide changes one thing in every phase: the command is drawn over 0.9-1.5 m/s, so that the
+    speeds the paths are taken at lie inside the range; its extraction is the searched recipe's."""
+    narrow, wide = _phases("battery_searched.yaml"), _phases("battery_searched_wide.yaml")
+    assert list(narrow) == list(wide)
+    for name in narrow:
+        assert C.changed_settings(narrow[name].config, wide[name].config) == {
+            "env.target_speed_range": ([1.0, 1.4], [0.9, 1.5])}, name
+    assert C.load_preset(ROOT / "configs/battery_searched_wide.yaml").extract == C.load_preset(
+        ROOT / "configs/battery_searched.yaml").extract
 
 
 def _write(path: Path, data: dict) -> Path:
