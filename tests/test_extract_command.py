@@ -269,6 +269,23 @@ def test_replay_status_is_ok_for_the_plain_trot_and_names_a_path_that_stumbles()
     assert status.startswith(("speed miss", "fell at")), status
 
 
+def test_a_speed_miss_says_when_the_trots_speed_loop_sat_at_its_bound():
+    """A walk off the band whose speed loop ran at its bound for LOOP_NOTE_PCT % of it or more says how long (the
+    path needs more of the loop than the bound gives); a shorter stay, or a walk without the record, does not."""
+    from cyberdog.analysis.replay_check import walk_status
+    from cyberdog.loop.result import LOOP_NOTE_PCT
+
+    def result(speed, at_limit, fell=False):
+        return SimpleNamespace(fell=fell, duration=4.0, speed_ok=abs(speed - 1.0) <= 0.05, mean_speed=speed,
+                               speed_loop_at_limit=at_limit)
+
+    assert walk_status(result(1.077, 0.74)) == "speed miss (1.077 m/s; speed loop at its bound 74 % of the walk)"
+    assert walk_status(result(1.077, (LOOP_NOTE_PCT - 1) / 100)) == "speed miss (1.077 m/s)"
+    assert walk_status(result(1.077, float("nan"))) == "speed miss (1.077 m/s)"
+    assert walk_status(result(1.02, 0.9)) == "ok"  # in the band, however hard the loop worked
+    assert walk_status(result(0.5, 0.9, fell=True)) == "fell at 4.00 s"
+
+
 def test_replay_verdict_walks_both_robots_over_the_papers_distance_and_names_the_walk_that_fails(monkeypatch):
     """The check walks the ideal robot (Table 5's 10 s), many hardware-like robots over the prototype's walk at
     both ends of the PD's stiffness, the ideal robot over the paper's 100 m, then hardware-like robots over 100 m,

@@ -35,6 +35,7 @@ All these robots are validation robots: the prototype run, which reports the sav
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass
 
@@ -43,6 +44,7 @@ from cyberdog.analysis.walk import walk
 from cyberdog.config import HARDWARE_LIKE, HardwareConfig, WalkConfig
 from cyberdog.config.paper import PAPER_DISTANCE_M, PAPER_WALK_DURATION, PROTOTYPE_DISTANCE_M, PROTOTYPE_RUN_UP_S
 from cyberdog.core.learned_set import LearnedPath
+from cyberdog.loop.result import LOOP_NOTE_PCT
 
 REPLAY_CHECK_S = PAPER_WALK_DURATION  # s: the comparison's walk (Table 5)
 HARDWARE_CHECK_SEEDS = tuple(range(1000, 1006))  # HardwareConfig.seed of the check's robots: far from the prototype's
@@ -92,10 +94,16 @@ def heartbeat(log, name: str, distance: float | None, every_s: float = HEARTBEAT
 
 
 def walk_status(r) -> str:
-    """"ok" for a walk that neither fell nor left the ±5 % speed band; else "fell at T s" or "speed miss (V m/s)"."""
+    """"ok" for a walk that neither fell nor left the ±5 % speed band; else "fell at T s" or "speed miss (V m/s)",
+    the miss adding how long the trot's speed loop sat at its bound where that is `LOOP_NOTE_PCT` % of the walk or
+    more: the path asks more of the loop than its bound gives (a stride too long or too short for the command)."""
     if r.fell:
         return f"fell at {r.duration:.2f} s"
-    return "ok" if r.speed_ok else f"speed miss ({r.mean_speed:.3f} m/s)"
+    if r.speed_ok:
+        return "ok"
+    at_bound = 100.0 * getattr(r, "speed_loop_at_limit", math.nan)
+    loop = f"; speed loop at its bound {at_bound:.0f} % of the walk" if at_bound >= LOOP_NOTE_PCT else ""
+    return f"speed miss ({r.mean_speed:.3f} m/s{loop})"
 
 
 def replay_status(path: LearnedPath, speed: float, cfg: WalkConfig | None = None,

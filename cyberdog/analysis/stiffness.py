@@ -21,9 +21,9 @@ from pathlib import Path
 from cyberdog.analysis.prototype import run_prototype
 from cyberdog.analysis.prototype_summary import COMMON, REFERENCE, battery_savings_by_seed, summary_rows, walk_counts
 from cyberdog.analysis.report import json_safe, markdown_table, write_rows
+from cyberdog.loop.result import LOOP_NOTE_PCT
 
 DEFAULT_SCALES = (0.7, 1.0, 1.4)  # × the joint PD's stiffness: 30 % softer, as configured, 40 % stiffer
-LOOP_NOTE_PCT = 10.0  # % of a walk with the trot's speed loop at its bound from which a cell says so
 
 
 def check_scales(scales) -> tuple[float, ...]:

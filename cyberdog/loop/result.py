@@ -9,6 +9,8 @@ from cyberdog.config import HardwareConfig
 from cyberdog.config.paper import speed_within_band
 from cyberdog.core import energy as en
 
+LOOP_NOTE_PCT = 10.0  # % of a walk with the trot's speed loop at its bound from which a report says so
+
 
 @dataclass
 class WalkResult:
