@@ -58,8 +58,8 @@ def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resol
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():
     assert set(p.name for p in (ROOT / "configs").glob("*.yaml")) == {"table5.yaml", "battery.yaml", "torque.yaml",
                                                                        "battery_searched.yaml", "paper.yaml",
-                                                                       "battery_searched_wide.yaml", "tiny.yaml"}
-    for battery in ("battery.yaml", "battery_searched.yaml", "battery_searched_wide.yaml"):
+                                                                       "tiny.yaml"}
+    for battery in ("battery.yaml", "battery_searched.yaml", "candidates/battery_searched_wide.yaml"):
         assert [(p.name, p.start) for p in _phases(battery).values()] == [
             ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
@@ -71,15 +71,18 @@ def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_w
 
 
 def test_the_wide_command_recipe_is_the_searched_recipe_but_for_the_commanded_speeds():
-    """battery_searched_wide changes one thing in every phase: the command is drawn over 0.9-1.5 m/s, so that the
-    speeds the paths are taken at lie inside the range; its extraction is the searched recipe's."""
-    narrow, wide = _phases("battery_searched.yaml"), _phases("battery_searched_wide.yaml")
+    """configs/candidates/battery_searched_wide (a recipe with no shipped result yet) changes one thing in every
+    phase: the command is drawn over 0.9-1.5 m/s, so that the speeds the paths are taken at lie inside the range;
+    its extraction is the searched recipe's, and it is a valid config."""
+    narrow, wide = _phases("battery_searched.yaml"), _phases("candidates/battery_searched_wide.yaml")
     assert list(narrow) == list(wide)
     for name in narrow:
         assert C.changed_settings(narrow[name].config, wide[name].config) == {
             "env.target_speed_range": ([1.0, 1.4], [0.9, 1.5])}, name
-    assert C.load_preset(ROOT / "configs/battery_searched_wide.yaml").extract == C.load_preset(
+    assert C.load_preset(ROOT / "configs/candidates/battery_searched_wide.yaml").extract == C.load_preset(
         ROOT / "configs/battery_searched.yaml").extract
+    for phase in wide.values():
+        C.check_planned_updates(phase.config, (int(phase.stage),))
 
 
 def _write(path: Path, data: dict) -> Path:
