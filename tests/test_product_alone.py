@@ -24,12 +24,14 @@ def product_files() -> list[Path]:
 
 def offences(text: str, file: Path) -> list[str]:
     """What `text` (the content of `file`) names outside the product. A Markdown page's relative path is resolved
-    from the page's folder, as its links are; elsewhere a path is relative to the repository root (or the working
-    folder), so any path that climbs leaves the repository."""
+    from the page's folder, as its links are, and so is a preset's (its `base:`, a path beside the file); elsewhere
+    a path is relative to the repository root (or the working folder), so any path that climbs leaves the
+    repository."""
     found = [f"names the log: {m.group(0)}..." for m in LOG.finditer(text)]
     found += [f"names a folder outside the repository: {m.group(0)}" for m in OUTSIDE.finditer(text)]
     for m in CLIMB.finditer(text):
-        inside = file.suffix == ".md" and (file.parent / m.group(0)).resolve().is_relative_to(ROOT)
+        from_folder = file.suffix == ".md" or (file.suffix == ".yaml" and file.is_relative_to(ROOT / "configs"))
+        inside = from_folder and (file.parent / m.group(0)).resolve().is_relative_to(ROOT)
         if not inside:
             found.append(f"a path out of the repository: {m.group(0)}")
     return found
@@ -45,6 +47,9 @@ def test_the_rule_finds_the_log_and_paths_out_and_keeps_links_inside():
     assert offences("[x](../../elsewhere.md)", page) == ["a path out of the repository: ../../elsewhere.md"]
     assert offences("open('../docs/robot.md')", code) == ["a path out of the repository: ../docs/robot.md"]
     assert offences(".../<recipe>/seed<N>", code) == []  # an ellipsis, not a path
+    preset = ROOT / "configs" / "candidates" / "x.yaml"
+    assert offences("base: ../battery.yaml", preset) == []  # beside the preset's folder, inside configs/
+    assert offences("base: ../../../x.yaml", preset) == ["a path out of the repository: ../../../x.yaml"]
 
 
 def test_there_is_a_product_to_check():
