@@ -64,8 +64,8 @@ def test_no_learned_walk_is_refused_in_one_line():
 
 def test_the_table_is_made_only_where_its_walks_are_shipped(tmp_path):
     assert sst.make_table(tmp_path) is None
-    (tmp_path / sst.PROTOTYPE_SOURCE).write_text(SHIPPED.read_text())
-    assert sst.make_table(tmp_path).startswith(f"| `{sst.RECIPE}`")
+    (tmp_path / sst.SEARCHED_START.prototype_source).write_text(SHIPPED.read_text())
+    assert sst.make_table(tmp_path).startswith(f"| `{sst.SEARCHED_START.config}`")
 
 
 def _gains(walks: list[dict], gain: str, scale: float) -> list[dict]:
@@ -111,8 +111,10 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     compared = relabel(json.loads((SHIPPED.parent / "comparison.json").read_text()))
     gains = [w for g, k in (("kp", 0.5), ("kp", 2.0), ("kd", 2.0)) for w in _gains(walks, g, k)]
     gains += [{**w, "pd_matched": True} for w in _gains(walks, "kd", 2.0)]
-    for name, rows in ((sst.PROTOTYPE_SOURCE, walks), (sst.COMPARE_SOURCE, compared), (sst.GAINS_SOURCE, gains),
-                       (sst.OWN_START_SOURCE, walks)):  # the own start: here the same reference as the prototype's
+    recipe = sst.SEARCHED_START
+    for name, rows in ((recipe.prototype_source, walks), (recipe.compare_source, compared),
+                       (recipe.gains_source, gains),
+                       (recipe.own_start_source, walks)):  # the own start: here the same reference as the prototype's
         (tmp_path / name).write_text(json.dumps(rows))
     tables = make_tables(tmp_path)
     full, head = _rows(tables["searched_start"]), _rows(tables["searched_start_headline"])
@@ -128,12 +130,12 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     saving = sst.SAVING_ROW.format(seeds="seeds 20–24 (never tuned on)")
     assert not any("seeds)" in c for c in full[saving])
     # a seed whose extraction found no path at 1 m/s: that cell says over how many seeds it is
-    (tmp_path / sst.PROTOTYPE_SOURCE).write_text(json.dumps(
+    (tmp_path / recipe.prototype_source).write_text(json.dumps(
         [w for w in walks if not (w["seed"] == "seed23" and w["speed_mps"] == 1.0)]))
     cells = _rows(make_tables(tmp_path)["searched_start"])[saving]
     assert cells[0].endswith("(4 of 5 seeds)") and not cells[1].endswith("seeds)")
     # the Eq. 7 and gains inputs are optional: without them the headline holds the prototype's rows alone
-    for name in (sst.COMPARE_SOURCE, sst.GAINS_SOURCE, sst.OWN_START_SOURCE):
+    for name in (recipe.compare_source, recipe.gains_source, recipe.own_start_source):
         (tmp_path / name).unlink()
     assert list(_rows(make_tables(tmp_path)["searched_start_headline"])) == named[:2]
 
@@ -221,3 +223,31 @@ def test_the_own_start_under_the_gains_gives_its_rows_alone_from_its_own_runs():
         "learned against the searched shape")]
     assert list(rows).count("the saving at kd 2×, as commanded, seeds 1–4") == 1
     assert list(rows)[-2:] == [label.format("its own start's saving"), label.format("learned against its own start")]
+
+
+def test_each_recipe_has_its_own_table_from_its_own_inputs_and_tuning_seeds(tmp_path):
+    """The wide-command recipe's walks (the shipped battery walks as seeds 30-34, its tuning seeds 0-4 beside them)
+    make its own table and headline, named by its preset; the searched recipe's table is not made from them, and
+    its seed 1-4 walks are that recipe's tuning seeds, never a fresh row."""
+    import shutil
+
+    from cyberdog.analysis.engine_table import TWIN_SUFFIX
+    from cyberdog.analysis.readme_tables import make_tables
+    for f in SHIPPED.parent.glob("*.json"):
+        if not f.name.endswith(TWIN_SUFFIX) and "searched_start" not in f.name:
+            shutil.copy(f, tmp_path / f.name)
+    walks = _walks()
+    fresh = [{**w, "seed": f"seed{int(w['seed'][4:]) + 30}"} for w in walks]
+    wide = sst.SEARCHED_WIDE
+    (tmp_path / wide.prototype_source).write_text(json.dumps(walks + fresh))
+    tables = make_tables(tmp_path)
+    assert sst.SEARCHED_START.name not in tables and sst.SEARCHED_START.headline not in tables
+    rows = _rows(tables[wide.name])
+    assert tables[wide.name].startswith(f"| `{wide.config}`")
+    assert list(_rows(tables[wide.headline])) == [row.format(seeds="seeds 30–34 (never tuned on)")
+                                                  for row in (sst.SAVING_ROW, sst.VS_SEARCHED_ROW)]
+    assert sst.SAVING_ROW.format(seeds="seeds 0–4 (tuned on)") in rows
+    expected = {r["speed_mps"]: r for r in ps.summary_rows(fresh)
+                if r["robot"] == "hardware" and r["trajectory"] == "learned"}
+    assert rows[sst.SAVING_ROW.format(seeds="seeds 30–34 (never tuned on)")] == [
+        f"**{mean_ci(expected[v], 'battery_saving_pct', '.1f', ' %')}**" for v in sorted(expected)]

@@ -14,8 +14,9 @@ its PyBullet file is refused. The rows, per commanded speed, means over the seed
 - The battery policies closed loop on the same robots: PyBullet's are the stiffness run's walks at PD 1×
   (`stiffness_walks.json`, whose paths' walks are the prototype run's), MuJoCo's the policy walks of
   `prototype_mujoco.json` (`prototype --closed-loop`).
-- The battery recipe from the searched shape (`prototype_searched_start.json`, the same run on its paths): the
-  battery saving against the cheaper common trajectory and against the searched shape.
+- The battery recipes from the searched shape (`prototype_<name>.json` of each of
+  `searched_start_table.RECIPES`, the same run on its paths): the battery saving against the cheaper common
+  trajectory and against the searched shape.
 - The torque agent's stage-2 actors alone on the ideal robot (`torque_check.json`, `torque_check_fresh.json`):
   the walks in the band.
 
@@ -31,6 +32,7 @@ from pathlib import Path
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis.compare import _same
 from cyberdog.analysis.markdown_cells import header, line, number
+from cyberdog.analysis.searched_start_table import RECIPES, Recipe
 from cyberdog.analysis.stats import mean_ci
 
 ENGINES = ("PyBullet", "MuJoCo")
@@ -39,14 +41,13 @@ TABLE5 = ("comparison.json", "comparison_fresh.json")
 PROTOTYPE = ("prototype.json", "prototype_fresh.json")
 POLICY_PYBULLET = "stiffness_walks.json"  # the PD 1× walks: the policies beside the prototype's robots and paths
 TORQUE = ("torque_check.json", "torque_check_fresh.json")
-SEARCHED_START = ("prototype_searched_start.json",)
 HARDWARE = "hardware"  # the prototype's robot
 TABLE5_SAVING_ROW = "Table 5: D_t on E (%)"
 PROTOTYPE_SAVING_ROW = "prototype: battery saving (%)"
 POLICY_SAVING_ROW = "policies, closed loop: battery saving (%)"
 TORQUE_WALKS_ROW = "torque agent, stage 2: walks in the band"
-SEARCHED_START_SAVING_ROW = "from the searched shape: battery saving (%)"
-SEARCHED_START_VS_ROW = "from the searched shape: against the searched shape (%)"
+SEARCHED_START_SAVING_ROW = "{recipe}: battery saving (%)"  # a recipe from the searched shape, by its label
+SEARCHED_START_VS_ROW = "{recipe}: against the searched shape (%)"
 # the README's rows of the full table, by first cell
 HEADLINE_ROWS = (f"**{TABLE5_SAVING_ROW}**", f"**{PROTOTYPE_SAVING_ROW}**", POLICY_SAVING_ROW,
                  TORQUE_WALKS_ROW)  # the saving rows in bold, as the table has them
@@ -207,12 +208,12 @@ def _policy_lines(engines: tuple[list, list], speeds: list[float]) -> list[str]:
                                                    for v in speeds]))]
 
 
-def _searched_start_lines(engines: tuple[list, list], speeds: list[float]) -> list[str]:
+def _searched_start_lines(engines: tuple[list, list], speeds: list[float], recipe: Recipe) -> list[str]:
     counts = [tuple(_walk_count(e, v, "learned") for e in engines) for v in speeds]
     vs_searched = [tuple(_saving(e, v, "learned", against=(ps.REFERENCE,)) for e in engines) for v in speeds]
-    return [_row(SEARCHED_START_SAVING_ROW, _saving_cells([tuple(_saving(e, v, "learned") for e in engines)
-                                                          for v in speeds], counts)),
-            _row(SEARCHED_START_VS_ROW, _saving_cells(vs_searched, counts))]
+    return [_row(SEARCHED_START_SAVING_ROW.format(recipe=recipe.label),
+                 _saving_cells([tuple(_saving(e, v, "learned") for e in engines) for v in speeds], counts)),
+            _row(SEARCHED_START_VS_ROW.format(recipe=recipe.label), _saving_cells(vs_searched, counts))]
 
 
 # ---- the torque agent -----------------------------------------------------------------------------------------
@@ -245,9 +246,9 @@ def engine_markdown(results: Path) -> str | None:
         policy = ([w for w in policy[0] if w.get("pd_scale", 1.0) == 1.0], policy[1])
         if all(any(w["trajectory"] == "policy" for w in e) for e in policy):
             lines += _policy_lines(policy, speeds)
-    searched_start = _twins(results, SEARCHED_START)
-    if searched_start is not None:
-        lines += _searched_start_lines(searched_start, speeds)
+    for recipe in RECIPES:
+        if (searched_start := _twins(results, (recipe.prototype_source,))) is not None:
+            lines += _searched_start_lines(searched_start, speeds, recipe)
     torque = _twins(results, TORQUE)
     if torque is not None:
         lines += _torque_lines(torque, speeds)

@@ -25,8 +25,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
 - `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
   (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where
   `torque_check_fresh.json` is shipped.
-- `searched_start` (where `prototype_searched_start.json` is shipped): the recipe that starts from the searched
-  shape against it, on seeds never tuned on (`cyberdog.analysis.searched_start_table`).
+- `searched_start`, `searched_wide` (where `prototype_<name>.json` is shipped): the recipes that start from the
+  searched shape against it, on seeds never tuned on (`cyberdog.analysis.searched_start_table.RECIPES`).
 - `engines` (where the `*_mujoco.json` twins are shipped): PyBullet and MuJoCo side by side on the same seeds
   (`cyberdog.analysis.engine_table`).
 """
@@ -69,13 +69,15 @@ HEADLINES = {
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
     "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
-    "searched_start_headline": ("searched_start", ()),  # its rows name its shipped seeds: `make_tables` sets them
+    # the searched-start recipes' rows name their shipped seeds: `make_tables` sets them
+    **{recipe.headline: (recipe.name, ()) for recipe in searched_start_table.RECIPES},
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
 OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW,
                  TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                  *ENGINE_HEADLINE_ROWS[1:]}  # and the engines' rows of the parts whose twins are not all there
-NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines", "searched_start", *HEADLINES)
+NAMES = ("table5", "prototype", "stiffness", "gains", "torque", "engines",
+         *(recipe.name for recipe in searched_start_table.RECIPES), *HEADLINES)
 SOURCES = {"table5": "comparison.json", "prototype": "prototype.json"}
 TORQUE_SOURCE = "comparison_torque.json"  # optional: the paper's torque agent's paths, compared as the others
 TORQUE_FRESH_SOURCE = "comparison_torque_fresh.json"  # optional: the same of the seeds it was never tuned on
@@ -295,13 +297,14 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
                                          default_policy_walks=[w for w in stiffness if w["pd_scale"] == 1.0])
     if (engines := engine_markdown(results)) is not None:  # where the MuJoCo twins are shipped
         tables["engines"] = engines
-    if (searched_start := searched_start_table.make_table(results)) is not None:
-        tables["searched_start"] = searched_start
     optional = set(OPTIONAL_ROWS)
-    if "searched_start" in tables:  # its rows name its shipped seeds; its prototype rows are required, the others not
-        rows, optional_rows = searched_start_table.headline_of(results)
-        headlines["searched_start_headline"] = ("searched_start", rows)
-        optional |= optional_rows
+    for recipe in searched_start_table.RECIPES:
+        if (table := searched_start_table.make_table(results, recipe)) is not None:
+            tables[recipe.name] = table
+            # its rows name its shipped seeds; its prototype rows are required, the others not
+            rows, optional_rows = searched_start_table.headline_of(results, recipe)
+            headlines[recipe.headline] = (recipe.name, rows)
+            optional |= optional_rows
     tables.update({name: headline(tables[full], rows, optional) for name, (full, rows) in headlines.items()
                    if full in tables})
     return tables

@@ -1,25 +1,28 @@
-"""The table of the battery recipe that starts from the searched shape (`configs/battery_searched.yaml`): the
-learned paths against the best gait the direct search finds, on the seeds the recipe was never tuned on (in the
-sets they were trained as, and pooled) and on its tuning seeds, each group's rows apart.
+"""The tables of the battery recipes that start from the searched shape (`RECIPES`: `configs/battery_searched.yaml`
+and its wide-command variant): the learned paths against the best gait the direct search finds, on the seeds the
+recipe was never tuned on (in the sets they were trained as, and pooled) and on its tuning seeds, each group's rows
+apart.
 
-From `results/figures_input/` (each optional: the table is made where its prototype walks are shipped):
-- `prototype_searched_start.json`: `evaluate.py prototype --learned <the recipe's paths>` (the prototype run: two
+From `results/figures_input/`, per recipe named NAME (`Recipe.name`; each optional: the table is made where its
+prototype walks are shipped):
+- `prototype_NAME.json`: `evaluate.py prototype --learned <the recipe's paths>` (the prototype run: two
   hardware-like robots per seed, 20 m; its reference row is the shape searched for the battery): battery per 100
   m, the saving against the cheaper common trajectory and against the searched shape;
-- `comparison_searched_start.json`: `evaluate.py compare --learned <the same paths> --reference <a shape searched
+- `comparison_NAME.json`: `evaluate.py compare --learned <the same paths> --reference <a shape searched
   on Eq. 7 at the paths' lift>` (Table 5's 10 s walk on the ideal robot): the paths against that shape on Eq. 7;
-- `gains_searched_start.json`: `tools/merge_walks.py gains` over four prototype runs with kp or kd alone at 0.5×
+- `gains_NAME.json`: `tools/merge_walks.py gains` over four prototype runs with kp or kd alone at 0.5×
   or 2× as commanded (never tuning seeds: the fresh seeds' walks): the saving at each, beside the default's, and
   where a run walked the searched shape under its gains too, that shape's saving and the paths' lead over it;
-- `prototype_searched_start_own.json`: the same prototype run with the recipe's own start as the reference
+- `prototype_NAME_own.json`: the same prototype run with the recipe's own start as the reference
   (`--prototype-reference` the shape its trot walks, which a zero action walks): what the policy adds to it;
-- `gains_searched_start_own.json`: the gains runs as commanded with that start as the reference: its saving under
+- `gains_NAME_own.json`: the gains runs as commanded with that start as the reference: its saving under
   each gain, and what the policy adds to it there.
 """
 from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
@@ -27,18 +30,60 @@ from cyberdog.analysis import table5
 from cyberdog.analysis.gains_table import SEARCHED, SEARCHED_SAVING, gains_rows
 from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
-PROTOTYPE_SOURCE = "prototype_searched_start.json"
-COMPARE_SOURCE = "comparison_searched_start.json"
-GAINS_SOURCE = "gains_searched_start.json"
-OWN_START_SOURCE = "prototype_searched_start_own.json"
-OWN_GAINS_SOURCE = "gains_searched_start_own.json"
 OWN_START = "its own start"  # the recipe's start shape under its trot, as the gains rows name it
-TUNED_SEEDS = frozenset({"seed0"})  # the seeds the recipe was tuned on; every other seed was never seen
-# the seeds never tuned on, in the sets they were trained as, each with the README's command at the recipe's frozen
-# commit: the second set repeats the first; where both are shipped, their rows are also pooled (a seed in no set
-# makes a group of its own)
-FRESH_SETS = (frozenset(f"seed{n}" for n in range(20, 25)), frozenset(f"seed{n}" for n in range(25, 30)))
-RECIPE = "configs/battery_searched.yaml"
+
+
+def _seeds(first: int, last: int) -> frozenset[str]:
+    return frozenset(f"seed{n}" for n in range(first, last + 1))
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """A recipe from the searched shape as its table shows it: `name` names its table and its inputs
+    (`prototype_<name>.json`, ...), `config` its preset, `label` the recipe in the engines' rows; `fresh_sets`: the seeds never tuned on, in the sets they
+    were trained as, each with the README's command at the recipe's frozen commit (where several are shipped,
+    their rows are also pooled; a seed in no set makes a group of its own); `tuned_seeds`: the seeds it was tuned
+    on (their rows apart, never in a fresh or gains row)."""
+
+    name: str
+    config: str
+    label: str  # the recipe in a row of another table (the engines')
+    fresh_sets: tuple[frozenset[str], ...]
+    tuned_seeds: frozenset[str]
+
+    @property
+    def prototype_source(self) -> str:  # the prototype run, its reference the shape searched for the battery
+        return f"prototype_{self.name}.json"
+
+    @property
+    def compare_source(self) -> str:  # Table 5's walk against the shape searched on Eq. 7
+        return f"comparison_{self.name}.json"
+
+    @property
+    def gains_source(self) -> str:  # the gains runs (tools/merge_walks.py gains)
+        return f"gains_{self.name}.json"
+
+    @property
+    def own_start_source(self) -> str:  # the prototype run against the recipe's own start
+        return f"prototype_{self.name}_own.json"
+
+    @property
+    def own_gains_source(self) -> str:  # the gains runs against that start
+        return f"gains_{self.name}_own.json"
+
+    @property
+    def headline(self) -> str:  # the README's table of it
+        return f"{self.name}_headline"
+
+
+# configs/battery_searched.yaml: tuned on seed 0; seeds 20-24, then 25-29, trained at its frozen commit
+SEARCHED_START = Recipe("searched_start", "configs/battery_searched.yaml", "from the searched shape",
+                        (_seeds(20, 24), _seeds(25, 29)), frozenset({"seed0"}))
+# configs/battery_searched_wide.yaml: its command range chosen on seeds 1-4 (beside the searched recipe's seed 0);
+# seeds 30-34 trained at its frozen commit
+SEARCHED_WIDE = Recipe("searched_wide", "configs/battery_searched_wide.yaml",
+                       "from the searched shape, commands over 0.9–1.5 m/s", (_seeds(30, 34),), _seeds(0, 4))
+RECIPES = (SEARCHED_START, SEARCHED_WIDE)
 SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
 VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
 EQ7_ROW = "learned against the shape searched on Eq. 7, on E (ideal robot), {seeds}"  # its lift: the caption's
@@ -48,30 +93,31 @@ GAINS_SEARCHED_ROW = "{gains}: {row}, {seeds}"  # its rows of the searched shape
 FRESH, POOLED = " (never tuned on)", " (never tuned on, pooled)"  # the notes that name a group's seeds
 
 
-def _is_tuned(walk: dict) -> bool:
-    return str(walk.get("seed", "")) in TUNED_SEEDS
+def _is_tuned(walk: dict, recipe: Recipe) -> bool:
+    return str(walk.get("seed", "")) in recipe.tuned_seeds
 
 
-def _fresh_set(walk: dict) -> int:
-    """The index of the fresh set that holds the walk's seed (len(FRESH_SETS): none does)."""
-    return next((i for i, seeds in enumerate(FRESH_SETS) if str(walk["seed"]) in seeds), len(FRESH_SETS))
+def _fresh_set(walk: dict, recipe: Recipe) -> int:
+    """The index of the recipe's fresh set that holds the walk's seed (len(fresh_sets): none does)."""
+    sets = recipe.fresh_sets
+    return next((i for i, seeds in enumerate(sets) if str(walk["seed"]) in seeds), len(sets))
 
 
-def _groups(walks: list[dict]) -> dict[str, tuple[str, list[dict]]]:
+def _groups(walks: list[dict], recipe: Recipe) -> dict[str, tuple[str, list[dict]]]:
     """{"fresh<i>" | "pooled" | "tuned": (name, walks)} where that group has walks: each fresh set's, in
-    `FRESH_SETS`' order (then the fresh seeds in no set), all fresh seeds pooled where they span several groups,
+    `recipe.fresh_sets`' order (then the fresh seeds in no set), all fresh seeds pooled where they span several groups,
     and the tuning seeds'; a walk of no seed (a comparison's common trajectories, shared by the paths of a lift)
     belongs to each."""
     shared = [w for w in walks if not w.get("seed")]
-    fresh = [w for w in walks if w.get("seed") and not _is_tuned(w)]
+    fresh = [w for w in walks if w.get("seed") and not _is_tuned(w, recipe)]
     by_set: dict[int, list[dict]] = {}
     for w in fresh:
-        by_set.setdefault(_fresh_set(w), []).append(w)
+        by_set.setdefault(_fresh_set(w, recipe), []).append(w)
     groups = {f"fresh{i}": (f"{seeds_named(w['seed'] for w in group)}{FRESH}", group + shared)
               for i, group in sorted(by_set.items())}
     if len(by_set) > 1:
         groups["pooled"] = (f"{seeds_named(w['seed'] for w in fresh)}{POOLED}", fresh + shared)
-    if tuned := [w for w in walks if _is_tuned(w)]:
+    if tuned := [w for w in walks if _is_tuned(w, recipe)]:
         groups["tuned"] = (f"{seeds_named(w['seed'] for w in tuned)} (tuned on)", tuned + shared)
     return groups
 
@@ -120,7 +166,8 @@ def _own_start_lines(walks: list[dict], name: str, speeds: list[float], robot: s
 def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dict] | None = None,
                             gains_walks: list[dict] | None = None, robot: str = "hardware",
                             own_start_walks: list[dict] | None = None,
-                            own_start_gains_walks: list[dict] | None = None) -> str:
+                            own_start_gains_walks: list[dict] | None = None,
+                            recipe: Recipe = SEARCHED_START) -> str:
     """The table: per group of seeds (never tuned on, then tuned on) the prototype rows, the row against the
     recipe's own start (`own_start_walks`: the prototype run with that start as its reference) and the Eq. 7
     row, then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone), and
@@ -128,29 +175,30 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
     speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
     if not speeds:
         raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
-    lines = header(f"`{RECIPE}`, hardware-like robot", speeds)
-    compared, own = _groups(compare_walks or []), _groups(own_start_walks or [])
-    groups = _groups(prototype_walks)
+    lines = header(f"`{recipe.config}`, hardware-like robot", speeds)
+    compared, own = _groups(compare_walks or [], recipe), _groups(own_start_walks or [], recipe)
+    groups = _groups(prototype_walks, recipe)
     for kind, (name, walks) in groups.items():
         lines += _prototype_lines(walks, name, speeds, robot)
         if kind in own:
             lines += _own_start_lines(own[kind][1], name, speeds, robot)
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
-    lines += _gains_lines([w for w in gains_walks or [] if not _is_tuned(w)], groups, robot)
-    lines += _gains_lines([w for w in own_start_gains_walks or [] if not _is_tuned(w)], groups, robot,
-                          reference=OWN_START)
+    lines += _gains_lines([w for w in gains_walks or [] if not _is_tuned(w, recipe)], groups, robot, recipe)
+    lines += _gains_lines([w for w in own_start_gains_walks or [] if not _is_tuned(w, recipe)], groups, robot,
+                          recipe, reference=OWN_START)
     return "\n".join(lines)
 
 
-def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, reference: str = SEARCHED) -> list[str]:
+def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, recipe: Recipe,
+                 reference: str = SEARCHED) -> list[str]:
     """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks against the default gains' walks
     of the fresh groups those seeds fall in, named as those groups' seeds are (the headline's names), not by the
     gains walks' own seeds. With another `reference` than the searched shape, only that reference's rows (the
     paths' own rows are the searched shape's runs')."""
-    if not (name := _gains_seeds(gains_walks, groups)):
+    if not (name := _gains_seeds(gains_walks, groups, recipe)):
         return []
-    lines, default = [], [w for kind in _gains_groups(gains_walks, groups) for w in groups[kind][1]]
+    lines, default = [], [w for kind in _gains_groups(gains_walks, groups, recipe) for w in groups[kind][1]]
     for label, cells in gains_rows(gains_walks, default, robot, reference):
         bold = label.startswith("**")  # re-commanded: the row bold as a whole
         gains, _, searched = label.strip("*").partition(": ")  # "kd 2×, as commanded: the searched shape's saving"
@@ -162,14 +210,15 @@ def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, reference: s
     return lines
 
 
-def _gains_groups(gains_walks: list[dict], groups: dict) -> list[str]:
+def _gains_groups(gains_walks: list[dict], groups: dict, recipe: Recipe) -> list[str]:
     """The fresh groups of `groups` that the gains walks' seeds fall in."""
-    return sorted({f"fresh{_fresh_set(w)}" for w in gains_walks if w.get("seed")} & set(groups))
+    return sorted({f"fresh{_fresh_set(w, recipe)}" for w in gains_walks if w.get("seed")} & set(groups))
 
 
-def _gains_seeds(gains_walks: list[dict], groups: dict) -> str | None:
+def _gains_seeds(gains_walks: list[dict], groups: dict, recipe: Recipe) -> str | None:
     """"seeds 20–24": the seeds of the fresh groups the gains walks fall in (None where they fall in none)."""
-    seeds = [w["seed"] for kind in _gains_groups(gains_walks, groups) for w in groups[kind][1] if w.get("seed")]
+    seeds = [w["seed"] for kind in _gains_groups(gains_walks, groups, recipe) for w in groups[kind][1]
+             if w.get("seed")]
     return seeds_named(seeds) if seeds else None
 
 
@@ -180,8 +229,8 @@ HEADLINE_GAINS = ("kd 2×", "kp 0.5×")
 HEADLINE_SEARCHED_GAINS = "kd 2×"
 
 
-def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = None
-                  ) -> tuple[tuple[str, ...], frozenset[str]]:
+def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = None,
+                  recipe: Recipe = SEARCHED_START) -> tuple[tuple[str, ...], frozenset[str]]:
     """The README's rows of the table and which of them may be missing: the first fresh group's saving against
     the cheaper common trajectory and against the searched shape, the pooled fresh seeds' (where several sets are
     shipped), then, up to `HEADLINE_MAX_ROWS`, the first group's row against the Eq. 7 shape, the saving at the
@@ -189,14 +238,14 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
     next gain (the row against the recipe's own start stays in the full table). The prototype's rows are
     required; the others' inputs (the Eq. 7 comparison, the gains runs) are optional. No rows where no fresh seed
     walked."""
-    groups = _groups([w for w in prototype_walks if w["trajectory"] == "learned"])
+    groups = _groups([w for w in prototype_walks if w["trajectory"] == "learned"], recipe)
     fresh = [name for kind, (name, _) in groups.items() if kind.startswith("fresh")]
     if not fresh:
         return (), frozenset()
     required = [row.format(seeds=name) for name in fresh[:1] + ([groups["pooled"][0]] if "pooled" in groups else [])
                 for row in (SAVING_ROW, VS_SEARCHED_ROW)]
     optional = [EQ7_ROW.format(seeds=fresh[0])]
-    if gains := _gains_seeds([w for w in gains_walks or [] if not _is_tuned(w)], groups):
+    if gains := _gains_seeds([w for w in gains_walks or [] if not _is_tuned(w, recipe)], groups, recipe):
         first, *others = (GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS)
         optional += [first, GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
                                                       row=SEARCHED_SAVING, seeds=gains), *others]
@@ -208,18 +257,20 @@ def _read(results: Path, name: str) -> list[dict] | None:
     return json.loads((results / name).read_text()) if (results / name).is_file() else None
 
 
-def headline_of(results: Path) -> tuple[tuple[str, ...], frozenset[str]]:
-    """`headline_rows` of the shipped inputs in `results` (no rows where the prototype walks are not there)."""
-    walks = _read(Path(results), PROTOTYPE_SOURCE)
-    return headline_rows(walks, _read(Path(results), GAINS_SOURCE)) if walks else ((), frozenset())
+def headline_of(results: Path, recipe: Recipe = SEARCHED_START) -> tuple[tuple[str, ...], frozenset[str]]:
+    """`headline_rows` of the recipe's shipped inputs in `results` (no rows where its prototype walks are not
+    there)."""
+    walks = _read(Path(results), recipe.prototype_source)
+    return (headline_rows(walks, _read(Path(results), recipe.gains_source), recipe) if walks
+            else ((), frozenset()))
 
 
-def make_table(results: Path) -> str | None:
-    """The table from a folder of shipped inputs, None where its prototype walks are not there."""
+def make_table(results: Path, recipe: Recipe = SEARCHED_START) -> str | None:
+    """The recipe's table from a folder of shipped inputs, None where its prototype walks are not there."""
     results = Path(results)
-    if not (results / PROTOTYPE_SOURCE).is_file():
+    if not (results / recipe.prototype_source).is_file():
         return None
-    read = {name: _read(results, name)
-            for name in (PROTOTYPE_SOURCE, COMPARE_SOURCE, GAINS_SOURCE, OWN_START_SOURCE, OWN_GAINS_SOURCE)}
-    return searched_start_markdown(read[PROTOTYPE_SOURCE], read[COMPARE_SOURCE], read[GAINS_SOURCE],
-                                   own_start_walks=read[OWN_START_SOURCE], own_start_gains_walks=read[OWN_GAINS_SOURCE])
+    return searched_start_markdown(
+        _read(results, recipe.prototype_source), _read(results, recipe.compare_source),
+        _read(results, recipe.gains_source), own_start_walks=_read(results, recipe.own_start_source),
+        own_start_gains_walks=_read(results, recipe.own_gains_source), recipe=recipe)
