@@ -69,8 +69,8 @@ HEADLINES = {
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
     "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
-    # the searched-start recipes' rows name their shipped seeds: `make_tables` sets them
-    **{recipe.headline: (recipe.name, ()) for recipe in searched_start_table.RECIPES},
+    # the searched-start recipe the README leads with: its rows name its shipped seeds (`make_tables` sets them)
+    **{recipe.headline: (recipe.name, ()) for recipe in searched_start_table.RECIPES if recipe.in_readme},
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
 OPTIONAL_ROWS = {FRESH_ROW, FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW,
@@ -301,10 +301,10 @@ def make_tables(results: Path, straight_shape: str = "rectangle") -> dict[str, s
     for recipe in searched_start_table.RECIPES:
         if (table := searched_start_table.make_table(results, recipe)) is not None:
             tables[recipe.name] = table
-            # its rows name its shipped seeds; its prototype rows are required, the others not
-            rows, optional_rows = searched_start_table.headline_of(results, recipe)
-            headlines[recipe.headline] = (recipe.name, rows)
-            optional |= optional_rows
+            if recipe.in_readme:  # its rows name its shipped seeds; its prototype rows are required, the others not
+                rows, optional_rows = searched_start_table.headline_of(results, recipe)
+                headlines[recipe.headline] = (recipe.name, rows)
+                optional |= optional_rows
     tables.update({name: headline(tables[full], rows, optional) for name, (full, rows) in headlines.items()
                    if full in tables})
     return tables
