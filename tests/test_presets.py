@@ -24,9 +24,9 @@ def _phases(name: str) -> dict[str, C.Phase]:
 
 def test_a_shipped_phase_resolves_to_the_settings_its_shipped_actors_trained_with():
     """results/<recipe>/policy/seed<N>/config.yaml records the settings its actors trained with: the battery
-    recipe's `band` phase is them but for the seed (seeds 0-4 and 5-9 alike; the searched start's 20-24); Table 5's
-    phase is seed 0's but for the seed's own field."""
-    for recipe in ("battery", "battery_searched"):  # the searched start: seeds 20-24, by the README's command
+    recipe's `band` phase is them but for the seed (seeds 0-4 and 5-9 alike; the searched start's 20-29, its
+    wide-command variant's 30-34); Table 5's phase is seed 0's but for the seed's own field."""
+    for recipe in ("battery", "battery_searched", "battery_searched_wide"):
         band = _phases(f"{recipe}.yaml")["band"]
         shipped = sorted((ROOT / "results" / recipe / "policy").glob("seed*"))
         assert len(shipped) >= 5
@@ -58,8 +58,8 @@ def test_the_torque_recipes_shipped_actors_were_made_by_its_phases_as_they_resol
 def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_where_they_did():
     assert set(p.name for p in (ROOT / "configs").glob("*.yaml")) == {"table5.yaml", "battery.yaml", "torque.yaml",
                                                                        "battery_searched.yaml", "paper.yaml",
-                                                                       "tiny.yaml"}
-    for battery in ("battery.yaml", "battery_searched.yaml", "candidates/battery_searched_wide.yaml"):
+                                                                       "battery_searched_wide.yaml", "tiny.yaml"}
+    for battery in ("battery.yaml", "battery_searched.yaml", "battery_searched_wide.yaml"):
         assert [(p.name, p.start) for p in _phases(battery).values()] == [
             ("stage1", None), ("stage2", "stage1/stage1_final.pt"), ("band", "stage2/stage2_final.pt")]
     assert [(p.name, p.start) for p in _phases("torque.yaml").values()] == [
@@ -71,15 +71,15 @@ def test_every_phase_of_every_shipped_preset_is_checked_and_the_lineages_start_w
 
 
 def test_the_wide_command_recipe_is_the_searched_recipe_but_for_the_commanded_speeds():
-    """configs/candidates/battery_searched_wide (a recipe with no shipped result yet) changes one thing in every
-    phase: the command is drawn over 0.9-1.5 m/s, so that the speeds the paths are taken at lie inside the range;
-    its extraction is the searched recipe's, and it is a valid config."""
-    narrow, wide = _phases("battery_searched.yaml"), _phases("candidates/battery_searched_wide.yaml")
+    """configs/battery_searched_wide changes one thing in every phase of the searched recipe: the command is drawn
+    over 0.9-1.5 m/s, so that the speeds the paths are taken at lie inside the range; its extraction is the searched
+    recipe's, and it is a valid config."""
+    narrow, wide = _phases("battery_searched.yaml"), _phases("battery_searched_wide.yaml")
     assert list(narrow) == list(wide)
     for name in narrow:
         assert C.changed_settings(narrow[name].config, wide[name].config) == {
             "env.target_speed_range": ([1.0, 1.4], [0.9, 1.5])}, name
-    assert C.load_preset(ROOT / "configs/candidates/battery_searched_wide.yaml").extract == C.load_preset(
+    assert C.load_preset(ROOT / "configs/battery_searched_wide.yaml").extract == C.load_preset(
         ROOT / "configs/battery_searched.yaml").extract
     for phase in wide.values():
         C.check_planned_updates(phase.config, (int(phase.stage),))
