@@ -216,12 +216,14 @@ class LearnedSet:
     @classmethod
     def load(cls, paths: Iterable[str | Path]) -> "LearnedSet":
         """The one loader of learned paths: files as given, folders as their JSON files (extraction's
-        `*_cycles` tables left out). Labels: `seed<N>` from a file's provenance, else the file name."""
+        `*_cycles` tables left out). Labels: the provenance's `label` where it names one (`evaluate.py pick`),
+        else `seed<N>` from its training seed, else the file name."""
         learned = cls()
         for f in learned_files(paths):
             path = read_path(f)
             seed = path.provenance.get("seed")
-            label = f"seed{seed}" if seed is not None else f.stem
+            # a label the file names (a picked path saved under its reported seed), else its training seed's
+            label = path.provenance.get("label") or (f"seed{seed}" if seed is not None else f.stem)
             if not isinstance(path, CommandedPath) and label in learned._by_label:
                 label = f.stem  # two sampled paths of one seed: by file
             try:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cyberdog.evaluation import check, export, pd_match
+from cyberdog.evaluation import check, export, pd_match, pick
 from cyberdog.evaluation.options import (BASELINE_CHOICES, add_duration_option, add_extract_workers_option,
                                          add_extraction_options, add_learned_option, add_metrics_option,
                                          add_output_options, add_prototype_options, add_speed_options,
@@ -64,6 +64,7 @@ HELP = {  # name: (one line for the list of sub-commands, the paragraph of its o
     "check": (check.LINE, check.PARAGRAPH),
     "pd-match": (pd_match.LINE, pd_match.PARAGRAPH),
     "export": (export.LINE, export.PARAGRAPH),
+    "pick": (pick.LINE, pick.PARAGRAPH),
 }
 
 
@@ -175,8 +176,14 @@ def export_options(p) -> None:
     export.add_options(p)
 
 
+def pick_options(p) -> None:
+    add_output_options(p)
+    pick.add_options(p)
+
+
 ADD_OPTIONS = {"all": all_options, "baselines": baselines_options, "extract": extract_options,
                "compare": compare_options, "prototype": prototype_options, "stiffness": stiffness_options,
                "figures": figures_options, "video": video_options, "check": check_options,
-               "pd-match": pd_match_options, "export": export_options}
+               "pd-match": pd_match_options, "export": export_options,
+               "pick": pick_options}
 COMMANDS = {name: (line, paragraph, ADD_OPTIONS[name]) for name, (line, paragraph) in HELP.items()}

@@ -1,0 +1,161 @@
+"""`evaluate.py pick`: one seed's learned path per speed, chosen among several extractions' paths by the
+extraction's own check robots.
+
+A commanded path's extraction keeps, among its candidates, the one with the least electrical energy per metre on
+the replay check's hardware-like robots (`cyberdog.analysis.replay_check`: six validation robots at PD 0.7 / 1.0 /
+1.4x, 100 m each, never the prototype run's test robots), and records that cost in the path's provenance
+(`replay_check.candidates[].electrical_J_per_m`). `pick` applies the same rule one level up: given the learned
+paths of several extractions (the lineages a seed was trained as, say seed 40 and seed 140 of one recipe), it
+keeps at each speed the path cheapest on those robots, and saves it under one label. A speed where only one input
+has a path takes that one. Costs are compared only where every candidate was checked by the same walks.
+
+The picked file keeps its path's provenance and adds `label` (which `LearnedSet.load` labels it by) and `picked`:
+every candidate's file, label, training seed and cost, and the rule. Writes learned/<label>_<v>mps.json and
+pick.{csv,json,md}. It walks nothing, so --set, --config and --no-recorded-trot are refused.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from cyberdog.evaluation.options import UsageError
+
+LINE = "per speed, the learned path cheapest on the extraction's check robots among several extractions'"
+PARAGRAPH = ("per speed, keep the learned path (commanded, extracted with the replay check) that is cheapest on "
+             "the extraction's hardware-like check robots (the electrical energy per metre its provenance records; "
+             "never the prototype's test robots) among those of every --learned folder or file, and save it under "
+             "one label (--label, default the first input's): several lineages of one seed become that seed's "
+             "paths. A speed only one input has takes that input's path. Writes learned/<label>_<v>mps.json "
+             "(provenance: every candidate and its cost) and pick.{csv,json,md}.")
+SELECTED_BY = "least electrical energy per metre on the extraction's hardware-like check robots"
+# what the check walked: costs are comparable only where these agree (cyberdog.analysis.replay_check.check_settings)
+CHECK_KEYS = ("distance_m", "hardware_like_seeds", "hardware_like_pd_scales", "controller")
+
+
+def add_options(p) -> None:
+    """The options of `pick` (besides the output folder)."""
+    p.add_argument("--learned", type=Path, nargs="+", required=True, metavar="PATH",
+                   help="the candidates: learned path folders (an extraction's <out>/learned/) or files, two or more "
+                        "paths in all")
+    p.add_argument("--label", default=None,
+                   help="the label the picked paths are saved under (default: the first input's first label, "
+                        "e.g. seed40)")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One commanded learned path offered to the pick, with its cost on the check robots."""
+
+    file: Path
+    label: str
+    speed: float  # m/s it was recorded at
+    seed: int | None  # the training seed of the policy it came from
+    electrical_J_per_m: float
+    check: dict  # what the check walked (CHECK_KEYS)
+
+
+def check_cost(provenance: dict, where: str) -> tuple[float, dict]:
+    """(electrical J/m of the kept candidate on the check's hardware-like robots, what the check walked) of a
+    commanded path's provenance; UsageError where the path was not replay-checked."""
+    check = provenance.get("replay_check") or {}
+    if check.get("status") != "ok" or not check.get("candidates"):
+        raise UsageError(f"{where}: its extraction did not run the replay check (no cost on the check robots to "
+                         "pick by); extract it without --no-replay-check")
+    kept = [c for c in check["candidates"] if c.get("rollout_seed") == provenance.get("rollout_seed")
+            and c.get("cycle") == provenance.get("cycle")]
+    costs = [c.get("electrical_J_per_m") for c in (kept or check["candidates"])]
+    if any(c is None for c in costs):
+        raise UsageError(f"{where}: its replay check recorded no electrical energy per metre")
+    return float(min(costs)), {k: check.get(k) for k in CHECK_KEYS}
+
+
+def load_candidates(inputs: list[Path]) -> list[Candidate]:
+    """Every path of every input, in the order given; UsageError for a sampled path or one without a check."""
+    from cyberdog.core.learned_set import LearnedSet, learned_files
+
+    out = []
+    for f in learned_files(inputs):  # LearnedSetError: a missing or empty input, named
+        for p in LearnedSet.load([f]).paths():
+            if not p.commanded:
+                raise UsageError(f"--learned {f}: a sampled (measured) path serves every speed and has no cost on "
+                                 "the check robots; pick takes commanded paths")
+            cost, check = check_cost(p.provenance, f"--learned {f}")
+            out.append(Candidate(f, p.label, float(p.speed), p.provenance.get("seed"), cost, check))
+    return out
+
+
+def pick(candidates: list[Candidate]) -> dict[float, tuple[Candidate, list[Candidate]]]:
+    """{speed: (the kept candidate, every candidate at that speed)}: the cheapest on the check robots, the first
+    given where two tie. Candidates recorded at speeds within 1e-6 m/s are one group. UsageError where a group's
+    candidates were checked by different walks."""
+    groups: dict[float, list[Candidate]] = {}
+    for c in candidates:
+        key = next((v for v in groups if abs(v - c.speed) < 1e-6), c.speed)
+        groups.setdefault(key, []).append(c)
+    picks = {}
+    for speed in sorted(groups):
+        group = groups[speed]
+        differ = [c.file for c in group if c.check != group[0].check]
+        if differ:
+            raise UsageError(f"at {speed:g} m/s, {group[0].file} and {differ[0]} were checked by different walks "
+                             f"({', '.join(CHECK_KEYS)}): their costs do not compare")
+        picks[speed] = (min(group, key=lambda c: c.electrical_J_per_m), group)
+    return picks
+
+
+def _check_inputs(args, candidates: list[Candidate]) -> str:
+    """The label to save under; UsageError for settings that change nothing, too few candidates, or an output
+    that would land on an input."""
+    if getattr(args, "overrides", None) or getattr(args, "config", None) or getattr(args, "no_recorded_trot", False):
+        raise UsageError("evaluate.py pick reads saved paths and walks nothing, so --set, --config and "
+                         "--no-recorded-trot change nothing; leave them out")
+    if len(candidates) < 2:
+        raise UsageError(f"pick needs two or more learned paths to choose between, got {len(candidates)}")
+    label = args.label or candidates[0].label
+    if not label or "/" in label or label.startswith("."):
+        raise UsageError(f"--label {label!r}: a label is a file-name part, e.g. seed40")
+    return label
+
+
+def cmd_pick(args, cfg) -> int:
+    """The `pick` sub-command: candidates read and checked, the picks made, then the files written."""
+    import dataclasses
+
+    from cyberdog.analysis.report import markdown_table, write_rows
+    from cyberdog.core.learned_set import LearnedPath, read_path
+    from cyberdog.evaluation.output import Run, new_out
+    from cyberdog.provenance import portable_path
+
+    candidates = load_candidates(args.learned)
+    label = _check_inputs(args, candidates)
+    picks = pick(candidates)
+    out = args.out or new_out()
+    inputs = {c.file.resolve() for c in candidates}
+    chosen = {speed: LearnedPath(label, read_path(kept.file)) for speed, (kept, _) in picks.items()}
+    clash = [out / "learned" / p.file_name() for p in chosen.values()
+             if (out / "learned" / p.file_name()).resolve() in inputs]
+    if clash:
+        raise UsageError(f"--out {out}: {clash[0]} is an input of this pick; choose another --out")
+    run = Run(args, out)
+    rows = []
+    for speed, (kept, group) in picks.items():
+        record = [{"file": portable_path(c.file), "label": c.label, "seed": c.seed,
+                   "electrical_J_per_m": c.electrical_J_per_m} for c in group]
+        path = chosen[speed].path
+        provenance = {**path.provenance, "label": label,
+                      "picked": {"selected_by": SELECTED_BY, "kept": group.index(kept), "candidates": record}}
+        saved = LearnedPath(label, dataclasses.replace(path, provenance=provenance)).save(out / "learned")
+        for c in group:
+            rows.append({"speed_mps": speed, "label": label, "candidate": c.label, "seed": c.seed,
+                         "electrical_J_per_m": round(c.electrical_J_per_m, 3), "kept": c is kept,
+                         "file": portable_path(c.file)})
+        print(f"{speed:g} m/s: kept {kept.label}'s path ({kept.electrical_J_per_m:.2f} J/m on the check robots) "
+              f"of {len(group)}" + "".join(f"; {c.label} {c.electrical_J_per_m:.2f}" for c in group if c is not kept)
+              + f" -> {saved}")
+    write_rows(rows, out, "pick")
+    print(markdown_table(rows, list(rows[0])))
+    return run.finish()
+
+
+__all__ = ["CHECK_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options", "check_cost", "cmd_pick",
+           "load_candidates", "pick"]

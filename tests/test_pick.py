@@ -1,0 +1,106 @@
+"""`evaluate.py pick`: per speed, the learned path cheapest on the extraction's check robots among several
+extractions' paths, saved under one label that the loader then reads back."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import evaluate
+from conftest import commanded
+from cyberdog.analysis.replay_check import check_settings
+from cyberdog.core.learned_set import LearnedSet
+from cyberdog.evaluation.options import UsageError
+from cyberdog.evaluation.pick import check_cost, load_candidates, pick
+
+CONTROLLER = {"sagittal_placement_gain": 0.2}
+
+
+def checked(speed: float, seed: int, kept_cost: float, other_cost: float = 999.0, dz: float = -0.01, **check):
+    """A commanded path as extraction keeps it: two candidates on the check robots, the kept one (rollout seed 1)
+    at `kept_cost` J/m; `check` overrides what the check walked."""
+    path = commanded(speed, dz, seed)
+    path.provenance.update({"rollout_seed": 1, "cycle": "mean", "replay_check": {
+        "status": "ok", "candidates": [{"rollout_seed": 0, "cycle": "mean", "electrical_J_per_m": other_cost},
+                                       {"rollout_seed": 1, "cycle": "mean", "electrical_J_per_m": kept_cost}],
+        **check_settings(), "controller": CONTROLLER, **check}})
+    return path
+
+
+def save(folder, label, *paths):
+    from cyberdog.core.learned_set import LearnedPath
+
+    return [LearnedPath(label, p).save(folder) for p in paths]
+
+
+@pytest.fixture
+def two_lineages(tmp_path):
+    """Seed 40 cheaper at 1.0 m/s, seed 140 cheaper at 1.2, and only seed 140 with a path at 1.4."""
+    a, b = tmp_path / "a" / "learned", tmp_path / "b" / "learned"
+    save(a, "seed40", checked(1.0, 40, 200.0, dz=-0.01), checked(1.2, 40, 260.0, dz=-0.02))
+    save(b, "seed140", checked(1.0, 140, 230.0, dz=-0.03), checked(1.2, 140, 240.0, dz=-0.04),
+         checked(1.4, 140, 300.0, dz=-0.05))
+    return a, b
+
+
+def test_the_cost_is_the_kept_candidates_not_the_cheapest_rejected_one():
+    p = checked(1.0, 3, kept_cost=250.0, other_cost=240.0)  # kept by rollout seed and cycle
+    assert check_cost(p.provenance, "x")[0] == 250.0
+    del p.provenance["replay_check"]
+    with pytest.raises(UsageError, match="did not run the replay check"):
+        check_cost(p.provenance, "x")
+
+
+def test_each_speed_keeps_the_path_cheaper_on_the_check_robots(two_lineages):
+    picks = pick(load_candidates(list(two_lineages)))
+    kept = {v: (c.label, c.electrical_J_per_m, len(group)) for v, (c, group) in picks.items()}
+    assert kept == {1.0: ("seed40", 200.0, 2), 1.2: ("seed140", 240.0, 2), 1.4: ("seed140", 300.0, 1)}
+
+
+def test_costs_checked_by_different_walks_are_refused(tmp_path, two_lineages):
+    other = tmp_path / "c"
+    save(other, "seed7", checked(1.0, 7, 100.0, hardware_like_pd_scales=[1.0]))
+    with pytest.raises(UsageError, match="checked by different walks"):
+        pick(load_candidates([*two_lineages, other]))
+
+
+def test_the_command_saves_the_picks_under_one_label_that_loads_back(tmp_path, two_lineages, capsys):
+    out = tmp_path / "picked"
+    assert evaluate.main(["pick", "--learned", *map(str, two_lineages), "--out", str(out)]) == 0
+    learned = LearnedSet.load([out / "learned"])
+    assert learned.labels == ["seed40"] and learned.speeds() == [1.0, 1.2, 1.4]
+    # the kept path itself: seed 140's 1.2 m/s path has its own lift (0.10 - 0.04 m at mid-swing)
+    p = learned.path("seed40", 1.2)
+    assert p.provenance["seed"] == 140 and p.lift_height == pytest.approx(
+        LearnedSet.load([two_lineages[1] / "seed140_1.2mps.json"]).path("seed140", 1.2).lift_height)
+    record = p.provenance["picked"]
+    assert [c["electrical_J_per_m"] for c in record["candidates"]] == [260.0, 240.0] and record["kept"] == 1
+    rows = json.loads((out / "pick.json").read_text())
+    assert sum(r["kept"] for r in rows) == 3 and len(rows) == 5
+    assert "kept seed140's path (240.00 J/m" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--set", "gait.lift_height=0.1"], "walks nothing"),
+    (["--label", "a/b"], "a label is a file-name part"),
+])
+def test_settings_that_change_nothing_and_bad_labels_are_refused(tmp_path, two_lineages, extra, words, capsys):
+    rc = evaluate.main(["pick", "--learned", *map(str, two_lineages), "--out", str(tmp_path / "o"), *extra])
+    assert rc == 2 and words in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+def test_unchecked_or_single_paths_are_refused(tmp_path, capsys):
+    bare = tmp_path / "bare"
+    save(bare, "seed1", commanded(1.0, -0.01, 1))
+    assert evaluate.main(["pick", "--learned", str(bare), "--out", str(tmp_path / "o")]) == 2
+    assert "did not run the replay check" in capsys.readouterr().err
+    one = tmp_path / "one"
+    save(one, "seed1", checked(1.0, 1, 200.0))
+    assert evaluate.main(["pick", "--learned", str(one), "--out", str(tmp_path / "o")]) == 2
+    assert "two or more learned paths" in capsys.readouterr().err
+
+
+def test_an_output_that_would_overwrite_an_input_is_refused(tmp_path, two_lineages, capsys):
+    a, b = two_lineages
+    rc = evaluate.main(["pick", "--learned", str(a), str(b), "--out", str(a.parent), "--force"])
+    assert rc == 2 and "is an input of this pick" in capsys.readouterr().err
