@@ -94,13 +94,29 @@ def test_unchecked_or_single_paths_are_refused(tmp_path, capsys):
     save(bare, "seed1", commanded(1.0, -0.01, 1))
     assert evaluate.main(["pick", "--learned", str(bare), "--out", str(tmp_path / "o")]) == 2
     assert "did not run the replay check" in capsys.readouterr().err
-    one = tmp_path / "one"
-    save(one, "seed1", checked(1.0, 1, 200.0))
+    one = tmp_path / "one"  # one lineage: a path at each speed, nothing to choose between
+    save(one, "seed1", checked(1.0, 1, 200.0), checked(1.2, 1, 210.0))
     assert evaluate.main(["pick", "--learned", str(one), "--out", str(tmp_path / "o")]) == 2
-    assert "two or more learned paths" in capsys.readouterr().err
+    assert "nothing to choose between" in capsys.readouterr().err
 
 
 def test_an_output_that_would_overwrite_an_input_is_refused(tmp_path, two_lineages, capsys):
     a, b = two_lineages
     rc = evaluate.main(["pick", "--learned", str(a), str(b), "--out", str(a.parent), "--force"])
     assert rc == 2 and "is an input of this pick" in capsys.readouterr().err
+
+
+def test_a_sweeps_lineages_are_picked_seed_by_seed_with_a_lineage_offset(tmp_path, two_lineages, capsys):
+    a, b = two_lineages
+    save(a, "seed41", checked(1.0, 41, 210.0))  # seed 41's lineages: 41 and 141
+    save(b, "seed141", checked(1.0, 141, 205.0))
+    out = tmp_path / "picked"
+    assert evaluate.main(["pick", "--learned", str(a), str(b), "--lineage-offset", "100", "--out", str(out)]) == 0
+    learned = LearnedSet.load([out / "learned"])
+    assert learned.labels == ["seed40", "seed41"]
+    assert learned.path("seed41", 1.0).provenance["seed"] == 141 and learned.path("seed40", 1.0).provenance["seed"] == 40
+    assert not learned.has("seed41", 1.2)  # neither of its lineages has a path there
+    save(tmp_path / "c", "seed2", checked(1.0, 2, 200.0))  # seed 2 has one lineage: nothing to choose
+    assert evaluate.main(["pick", "--learned", str(a), str(b), str(tmp_path / "c"), "--lineage-offset", "100",
+                          "--out", str(tmp_path / "o2")]) == 2
+    assert "seed2: one learned path at each speed" in capsys.readouterr().err

@@ -6,8 +6,9 @@ the replay check's hardware-like robots (`cyberdog.analysis.replay_check`: six v
 1.4x, 100 m each, never the prototype run's test robots), and records that cost in the path's provenance
 (`replay_check.candidates[].electrical_J_per_m`). `pick` applies the same rule one level up: given the learned
 paths of several extractions (the lineages a seed was trained as, say seed 40 and seed 140 of one recipe), it
-keeps at each speed the path cheapest on those robots, and saves it under one label. A speed where only one input
-has a path takes that one. Costs are compared only where every candidate was checked by the same walks.
+keeps at each speed the path cheapest on those robots, and saves it under one label (`--label`; with
+`--lineage-offset K`, seeds N, N + K, ... are seed N's lineages, each seed picked apart). A speed where only one
+lineage has a path takes that one. Costs are compared only where every candidate was checked by the same walks.
 
 The picked file keeps its path's provenance and adds `label` (which `LearnedSet.load` labels it by) and `picked`:
 every candidate's file, label, training seed and cost, and the rule. Writes learned/<label>_<v>mps.json and
@@ -18,14 +19,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from cyberdog.evaluation.options import UsageError
+from cyberdog.evaluation.options import UsageError, at_least_one
 
 LINE = "per speed, the learned path cheapest on the extraction's check robots among several extractions'"
 PARAGRAPH = ("per speed, keep the learned path (commanded, extracted with the replay check) that is cheapest on "
              "the extraction's hardware-like check robots (the electrical energy per metre its provenance records; "
              "never the prototype's test robots) among those of every --learned folder or file, and save it under "
              "one label (--label, default the first input's): several lineages of one seed become that seed's "
-             "paths. A speed only one input has takes that input's path. Writes learned/<label>_<v>mps.json "
+             "paths; with --lineage-offset K, each seed N's lineages (seeds N, N + K, ...) become seed N's. A speed "
+             "only one lineage has takes that lineage's path. Writes learned/<label>_<v>mps.json "
              "(provenance: every candidate and its cost) and pick.{csv,json,md}.")
 SELECTED_BY = "least electrical energy per metre on the extraction's hardware-like check robots"
 # what the check walked: costs are comparable only where these agree (cyberdog.analysis.replay_check.check_settings)
@@ -37,9 +39,13 @@ def add_options(p) -> None:
     p.add_argument("--learned", type=Path, nargs="+", required=True, metavar="PATH",
                    help="the candidates: learned path folders (an extraction's <out>/learned/) or files, two or more "
                         "paths in all")
-    p.add_argument("--label", default=None,
-                   help="the label the picked paths are saved under (default: the first input's first label, "
-                        "e.g. seed40)")
+    who = p.add_mutually_exclusive_group()
+    who.add_argument("--label", default=None,
+                     help="the one label the picked paths are saved under (default: the first input's first label, "
+                          "e.g. seed40)")
+    who.add_argument("--lineage-offset", type=at_least_one, default=None, metavar="K",
+                     help="the inputs are several seeds' lineages, seeds N, N + K, ... of seed N (K = 100: seed 140 "
+                          "is seed 40's second): a pick for each, saved as seed<N>")
 
 
 @dataclass(frozen=True)
@@ -103,18 +109,32 @@ def pick(candidates: list[Candidate]) -> dict[float, tuple[Candidate, list[Candi
     return picks
 
 
-def _check_inputs(args, candidates: list[Candidate]) -> str:
-    """The label to save under; UsageError for settings that change nothing, too few candidates, or an output
-    that would land on an input."""
+def labelled(args, candidates: list[Candidate]) -> dict[str, list[Candidate]]:
+    """The candidates of each label to save: all under --label (default the first input's label), or with
+    --lineage-offset K the lineages of each seed, seeds N, N + K, N + 2K, ..., under `seed<N mod K>`. UsageError for
+    settings that change nothing, a bad label, or a label with nothing to choose between."""
     if getattr(args, "overrides", None) or getattr(args, "config", None) or getattr(args, "no_recorded_trot", False):
         raise UsageError("evaluate.py pick reads saved paths and walks nothing, so --set, --config and "
                          "--no-recorded-trot change nothing; leave them out")
-    if len(candidates) < 2:
-        raise UsageError(f"pick needs two or more learned paths to choose between, got {len(candidates)}")
-    label = args.label or candidates[0].label
-    if not label or "/" in label or label.startswith("."):
-        raise UsageError(f"--label {label!r}: a label is a file-name part, e.g. seed40")
-    return label
+    offset = getattr(args, "lineage_offset", None)
+    if offset is None:
+        label = args.label or candidates[0].label
+        if not label or "/" in label or label.startswith("."):
+            raise UsageError(f"--label {label!r}: a label is a file-name part, e.g. seed40")
+        groups = {label: candidates}
+    else:
+        unseeded = [c.file for c in candidates if not isinstance(c.seed, int)]
+        if unseeded:
+            raise UsageError(f"--lineage-offset groups paths by their training seed; {unseeded[0]} records none")
+        groups = {}
+        for c in candidates:
+            groups.setdefault(f"seed{c.seed % offset}", []).append(c)
+    for label, group in groups.items():  # a label whose every speed has one path would be a relabelling
+        speeds = [c.speed for c in group]
+        if not any(sum(abs(v - w) < 1e-6 for w in speeds) > 1 for v in speeds):
+            raise UsageError(f"{label}: one learned path at each speed ({', '.join(str(c.file) for c in group)}), "
+                             "nothing to choose between: pick needs two or more lineages' paths a label")
+    return groups
 
 
 def cmd_pick(args, cfg) -> int:
@@ -127,35 +147,35 @@ def cmd_pick(args, cfg) -> int:
     from cyberdog.provenance import portable_path
 
     candidates = load_candidates(args.learned)
-    label = _check_inputs(args, candidates)
-    picks = pick(candidates)
+    picks = {label: pick(group) for label, group in labelled(args, candidates).items()}  # UsageError before writing
     out = args.out or new_out()
     inputs = {c.file.resolve() for c in candidates}
-    chosen = {speed: LearnedPath(label, read_path(kept.file)) for speed, (kept, _) in picks.items()}
+    chosen = {(label, speed): LearnedPath(label, read_path(kept.file))
+              for label, by_speed in picks.items() for speed, (kept, _) in by_speed.items()}
     clash = [out / "learned" / p.file_name() for p in chosen.values()
              if (out / "learned" / p.file_name()).resolve() in inputs]
     if clash:
         raise UsageError(f"--out {out}: {clash[0]} is an input of this pick; choose another --out")
     run = Run(args, out)
     rows = []
-    for speed, (kept, group) in picks.items():
-        record = [{"file": portable_path(c.file), "label": c.label, "seed": c.seed,
-                   "electrical_J_per_m": c.electrical_J_per_m} for c in group]
-        path = chosen[speed].path
-        provenance = {**path.provenance, "label": label,
-                      "picked": {"selected_by": SELECTED_BY, "kept": group.index(kept), "candidates": record}}
-        saved = LearnedPath(label, dataclasses.replace(path, provenance=provenance)).save(out / "learned")
-        for c in group:
-            rows.append({"speed_mps": speed, "label": label, "candidate": c.label, "seed": c.seed,
-                         "electrical_J_per_m": round(c.electrical_J_per_m, 3), "kept": c is kept,
-                         "file": portable_path(c.file)})
-        print(f"{speed:g} m/s: kept {kept.label}'s path ({kept.electrical_J_per_m:.2f} J/m on the check robots) "
-              f"of {len(group)}" + "".join(f"; {c.label} {c.electrical_J_per_m:.2f}" for c in group if c is not kept)
-              + f" -> {saved}")
+    for label, by_speed in picks.items():
+        for speed, (kept, group) in by_speed.items():
+            record = [{"file": portable_path(c.file), "label": c.label, "seed": c.seed,
+                       "electrical_J_per_m": c.electrical_J_per_m} for c in group]
+            path = chosen[label, speed].path
+            provenance = {**path.provenance, "label": label,
+                          "picked": {"selected_by": SELECTED_BY, "kept": group.index(kept), "candidates": record}}
+            saved = LearnedPath(label, dataclasses.replace(path, provenance=provenance)).save(out / "learned")
+            rows += [{"label": label, "speed_mps": speed, "candidate": c.label, "seed": c.seed,
+                      "electrical_J_per_m": round(c.electrical_J_per_m, 3), "kept": c is kept,
+                      "file": portable_path(c.file)} for c in group]
+            others = "".join(f"; {c.label} {c.electrical_J_per_m:.2f}" for c in group if c is not kept)
+            print(f"{label} at {speed:g} m/s: kept {kept.label}'s path ({kept.electrical_J_per_m:.2f} J/m on the "
+                  f"check robots) of {len(group)}{others} -> {saved}")
     write_rows(rows, out, "pick")
     print(markdown_table(rows, list(rows[0])))
     return run.finish()
 
 
 __all__ = ["CHECK_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options", "check_cost", "cmd_pick",
-           "load_candidates", "pick"]
+           "labelled", "load_candidates", "pick"]
