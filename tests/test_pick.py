@@ -46,6 +46,9 @@ def two_lineages(tmp_path):
 def test_the_cost_is_the_kept_candidates_not_the_cheapest_rejected_one():
     p = checked(1.0, 3, kept_cost=250.0, other_cost=240.0)  # kept by rollout seed and cycle
     assert check_cost(p.provenance, "x")[0] == 250.0
+    p.provenance["rollout_seed"] = 5  # a kept path its check did not record
+    with pytest.raises(UsageError, match="no electrical energy per metre for the kept path"):
+        check_cost(p.provenance, "x")
     del p.provenance["replay_check"]
     with pytest.raises(UsageError, match="did not run the replay check"):
         check_cost(p.provenance, "x")

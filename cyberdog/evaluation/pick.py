@@ -37,8 +37,8 @@ CHECK_KEYS = ("distance_m", "hardware_like_seeds", "hardware_like_pd_scales", "c
 def add_options(p) -> None:
     """The options of `pick` (besides the output folder)."""
     p.add_argument("--learned", type=Path, nargs="+", required=True, metavar="PATH",
-                   help="the candidates: learned path folders (an extraction's <out>/learned/) or files, two or more "
-                        "paths in all")
+                   help="the candidates: learned path folders (an extraction's <out>/learned/) or files, the paths "
+                        "of two or more lineages a label")
     who = p.add_mutually_exclusive_group()
     who.add_argument("--label", default=None,
                      help="the one label the picked paths are saved under (default: the first input's first label, "
@@ -69,10 +69,10 @@ def check_cost(provenance: dict, where: str) -> tuple[float, dict]:
                          "pick by); extract it without --no-replay-check")
     kept = [c for c in check["candidates"] if c.get("rollout_seed") == provenance.get("rollout_seed")
             and c.get("cycle") == provenance.get("cycle")]
-    costs = [c.get("electrical_J_per_m") for c in (kept or check["candidates"])]
-    if any(c is None for c in costs):
-        raise UsageError(f"{where}: its replay check recorded no electrical energy per metre")
-    return float(min(costs)), {k: check.get(k) for k in CHECK_KEYS}
+    if not kept or kept[0].get("electrical_J_per_m") is None:
+        raise UsageError(f"{where}: its replay check recorded no electrical energy per metre for the kept path "
+                         f"(rollout seed {provenance.get('rollout_seed')}, cycle {provenance.get('cycle')!r})")
+    return float(kept[0]["electrical_J_per_m"]), {k: check.get(k) for k in CHECK_KEYS}
 
 
 def load_candidates(inputs: list[Path]) -> list[Candidate]:
