@@ -30,6 +30,7 @@ IDEAL_ONLY = {
     "pd-match": "(the paths are re-commanded from walks on the ideal robot)",
     "export": "(the joint table is made and replayed on the ideal robot)",
     "figures": "(it draws saved results)",
+    "pick": "(it reads the costs saved in the paths)",
 }
 
 
