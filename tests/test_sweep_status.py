@@ -1,6 +1,8 @@
 """A sweep seed's live status (cyberdog.sweeps.status): what it reads from a run's metrics.csv."""
 import yaml
 
+from cyberdog import config
+from cyberdog.config import preset
 from cyberdog.sweeps.status import SeedStatus
 
 
@@ -27,3 +29,30 @@ def test_a_lineage_seed_counts_the_env_steps_of_its_finished_phases(tmp_path):
     fresh = SeedStatus(seed=0, run_dir=str(run))  # a resumed sweep reads it back the same
     fresh.read_metrics()
     assert fresh.env_steps == 1600
+
+
+def test_a_lineage_s_phases_file_is_parsed_once_however_often_the_driver_polls(tmp_path, monkeypatch):
+    """The driver reads every running seed's metrics twice a second; phases.yaml holds every phase's whole
+    settings (tens of ms to parse), so it is read once per seed, and the phase folders still move on."""
+    run = tmp_path / "seed0"
+    run.mkdir()
+    (run / "phases.yaml").write_text(yaml.safe_dump({"seed": 0, "phases": [
+        {"name": "main", "stage": 1, "config": {}}, {"name": "energy", "stage": 2, "from": "main", "config": {}}]}))
+    header = "episode,stage,env_steps,score,window_mean_score\n"
+    (run / "main").mkdir()
+    (run / "main" / "metrics.csv").write_text(header + "1,1,400,1.0,1.0\n")
+    parsed = []
+    read_phases = preset.read_phases
+    counted = lambda folder: parsed.append(folder) or read_phases(folder)  # noqa: E731
+    monkeypatch.setattr(preset, "read_phases", counted)
+    monkeypatch.setattr(config, "read_phases", counted)
+    st = SeedStatus(seed=0, run_dir=str(run))
+    for _ in range(5):
+        st.read_metrics()
+    assert (len(parsed), st.env_steps) == (1, 400)
+    (run / "energy").mkdir()
+    (run / "energy" / "metrics.csv").write_text(header + "1,2,400,-3.0,-3.0\n")
+    for _ in range(5):
+        st.read_metrics()
+    assert (st.env_steps, st.stage) == (800, 2)
+    assert len(parsed) == 1

@@ -24,4 +24,4 @@ from cyberdog.config.hardware import *  # noqa: F401,F403
 from cyberdog.config.schedule import *  # noqa: F401,F403
 from cyberdog.config.walked import *  # noqa: F401,F403
 from cyberdog.config.preset import (Phase, Preset, changed_settings, current_run, describe, final_run,  # noqa: F401
-                                    is_lineage, load, load_preset, read_phases, write_phases)
+                                    is_lineage, load, load_preset, phase_names, read_phases, write_phases)

@@ -337,12 +337,18 @@ def final_run(folder: str | Path) -> Path:
     return folder / read_phases(folder)[0][-1].name
 
 
-def current_run(folder: str | Path) -> Path:
+def phase_names(folder: str | Path) -> tuple[str, ...]:
+    """A lineage folder's phase names in order; () for a folder that is not a lineage."""
+    return tuple(p.name for p in read_phases(folder)[0]) if is_lineage(folder) else ()
+
+
+def current_run(folder: str | Path, names: tuple[str, ...] | None = None) -> Path:
     """The run folder a lineage folder is training now (its last phase folder with a metrics.csv; the first
-    phase's before any), or `folder` itself."""
+    phase's before any), or `folder` itself. `names`: the lineage's `phase_names`, where the caller keeps them
+    (parsing phases.yaml, every phase's whole settings, takes tens of ms)."""
     folder = Path(folder)
-    if not is_lineage(folder):
+    names = phase_names(folder) if names is None else names
+    if not names:
         return folder
-    names = [p.name for p in read_phases(folder)[0]]
     started = [n for n in names if (folder / n / "metrics.csv").is_file()]
     return folder / (started[-1] if started else names[0])

@@ -39,6 +39,7 @@ class SeedStatus:
     _started_wall: float = 0.0  # wall clock, to recognise this attempt's sweep_attempt.json
     _tries: int = 0  # attempts in this run of the sweep (the retry budget is per run)
     _csv: dict = field(default_factory=dict)  # incremental reader state of metrics.csv
+    _phases: tuple = ()  # a lineage's phase names, read once: the driver reads metrics every poll
 
     def public(self) -> dict:
         return {k: v for k, v in asdict(self).items() if not k.startswith("_")}
@@ -51,7 +52,9 @@ class SeedStatus:
         """Steps, episodes and scores from the run's metrics.csv (read incrementally; a resumed run may have
         truncated it, in which case it is read again from the start). In a lineage, the phase training now is
         read, and the env steps of the phases before it are added (each phase's metrics.csv counts from 0)."""
-        run = C.current_run(self.run_dir)
+        if not self._phases:
+            self._phases = C.phase_names(self.run_dir)
+        run = C.current_run(self.run_dir, self._phases)
         path = run / "metrics.csv"
         try:
             size = path.stat().st_size
@@ -59,10 +62,10 @@ class SeedStatus:
             size = -1
         st = self._csv
         if st and st["run"] != run:  # the lineage moved on to its next phase: its scores stay, its steps add up
-            st.update(offset=0, header=None, run=run, before=_steps_before(Path(self.run_dir), run))
+            st.update(offset=0, header=None, run=run, before=_steps_before(Path(self.run_dir), run, self._phases))
         elif size < st.get("offset", 0) or not st:
             self.reset_metrics()
-            st.update(offset=0, header=None, run=run, before=_steps_before(Path(self.run_dir), run))
+            st.update(offset=0, header=None, run=run, before=_steps_before(Path(self.run_dir), run, self._phases))
         if size <= st["offset"]:
             return
         with open(path, "rb") as f:
@@ -87,16 +90,14 @@ class SeedStatus:
             self.best_score[key] = max(self.best_score.get(key, -float("inf")), score)
 
 
-def _steps_before(run_dir: Path, run: Path) -> int:
-    """Env steps of a lineage's phases before `run` (the last logged episode of each phase's metrics.csv); 0
-    for a run that is not a lineage's phase."""
-    if run == run_dir:
-        return 0
+def _steps_before(run_dir: Path, run: Path, phases: tuple[str, ...]) -> int:
+    """Env steps of a lineage's phases (their names in order) before `run` (the last logged episode of each
+    phase's metrics.csv); 0 for a run that is not a lineage's phase."""
     total = 0
-    for phase in C.read_phases(run_dir)[0]:
-        if run_dir / phase.name == run:
+    for name in phases:
+        if run_dir / name == run:
             break
-        total += _last_env_steps(run_dir / phase.name / "metrics.csv")
+        total += _last_env_steps(run_dir / name / "metrics.csv")
     return total
 
 
