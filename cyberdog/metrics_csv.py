@@ -62,6 +62,28 @@ def read_stages(path: str | Path) -> dict[int, dict[str, np.ndarray]]:
     return out
 
 
+def stage_summary(rows: list[dict], stage: int) -> dict:
+    """Env steps, episodes, wall time (from the logged episode end times) and final scores of one stage, from
+    `read_rows`' rows ({} for a stage the rows lack): what a shipped policy's metadata.json says of its training."""
+    rs = [r for r in rows if int(r["stage"]) == stage]
+    if not rs:
+        return {}
+    t = [float(r["wall_time_s"]) for r in rs]  # the clock time at each episode's end
+    first_rate = float(rs[0]["env_steps_per_s"]) or float("nan")
+    first_episode_s = float(rs[0]["length"]) / first_rate  # the first episode ran before the first log line
+    gaps = sorted(b - a for a, b in zip(t, t[1:]))
+    typical = gaps[len(gaps) // 2] if gaps else 0.0
+    # a run resumed later (killed, or continued under a raised budget) has one long gap: counted as a typical
+    # episode, so that the wall time is the training's, not the calendar's
+    pauses = [g for g in gaps if g > max(20 * typical, 60.0)]
+    return {"episodes": len(rs), "env_steps": int(sum(int(r["length"]) for r in rs)),
+            "wall_time_s": round(t[-1] - t[0] - sum(pauses) + typical * len(pauses) + first_episode_s, 1),
+            "pauses_excluded": len(pauses),
+            "final_window_mean_score": float(rs[-1]["window_mean_score"]),
+            "last_episode_score": float(rs[-1]["score"]),
+            "last_episode_energy_J": float(rs[-1]["energy_J"])}
+
+
 def run_name(path: str | Path) -> str:
     """The name a figure gives the run that wrote `path`, by recipe and seed where its folders say them:
     results/table5/policy/seed0/metrics.csv and runs/table5/seed0/metrics.csv → "table5, seed 0",
@@ -80,4 +102,4 @@ def run_name(path: str | Path) -> str:
     return (f"{recipe}, seed {int(m['seed'])}" if recipe else f"seed {int(m['seed'])}") + phase
 
 
-__all__ = ["read_rows", "read_stages", "run_name"]
+__all__ = ["read_rows", "read_stages", "run_name", "stage_summary"]

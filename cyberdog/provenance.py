@@ -1,4 +1,5 @@
-"""Paths in what the project writes down (provenance, commands): names that mean the same on another machine.
+"""What the project writes down about where a result came from: the code's commit (`code_state`), and paths and
+commands (`portable_path`, `portable_command`) as names that mean the same on another machine.
 
 A result file travels (it is shipped in `results/`, copied, cited), so it never names a path of the machine
 that made it: a path inside the current folder (the repository, when the CLIs run from its root) is written
@@ -8,7 +9,24 @@ which together with the recorded commit says what produced it.
 from __future__ import annotations
 
 import os
+import subprocess
 from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]  # the checkout the package runs from (an editable install)
+
+
+def code_state(root: str | os.PathLike = REPO) -> dict:
+    """The code's commit: {"git_commit": the sha of HEAD, "git_dirty": whether tracked or untracked files
+    differ from it}; {"git_commit": "unknown", "git_dirty": None} where `root` is not the top of a git checkout
+    (an installed copy of the package, git missing): never the commit of some other repository around it."""
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True).stdout
+    try:
+        if Path(git("rev-parse", "--show-toplevel").strip()).resolve() != Path(root).resolve():
+            raise ValueError("inside another repository")
+        return {"git_commit": git("rev-parse", "HEAD").strip(), "git_dirty": bool(git("status", "--porcelain").strip())}
+    except (OSError, ValueError, subprocess.CalledProcessError):
+        return {"git_commit": "unknown", "git_dirty": None}
 
 
 def portable_path(path: str | os.PathLike, root: str | os.PathLike | None = None) -> str:
@@ -32,4 +50,4 @@ def portable_command(words: list[str], root: str | os.PathLike | None = None) ->
     return " ".join(out)
 
 
-__all__ = ["portable_command", "portable_path"]
+__all__ = ["REPO", "code_state", "portable_command", "portable_path"]

@@ -38,7 +38,6 @@ import argparse
 import csv
 import json
 import math
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -52,22 +51,12 @@ from cyberdog.analysis.compare import WalkJob, reduction, run_jobs, walk_config 
 from cyberdog.analysis.report import json_safe  # noqa: E402
 from cyberdog.config import HARDWARE_LIKE, GaitConfig, WalkConfig, add_override_option, override  # noqa: E402
 from cyberdog.core.trajectories import SampledTrajectory  # noqa: E402
-from cyberdog.provenance import portable_command, portable_path  # noqa: E402
+from cyberdog.provenance import code_state, portable_command, portable_path  # noqa: E402
 
 TABLE_COLUMNS = ["speed_command_mps", "trajectory", "energy_J", "energy_per_100m_kJ", "mean_speed_mps", "fell",
                  "status", "D_t_pct", "E_min_trajectory", "D_t_vs_cycloid_pct", "electrical_energy_J",
                  "D_el_vs_cycloid_pct", "peak_torque_Nm"]
 BASELINE_LABELS = ("cycloid", "straight")  # Eq. (12)'s E_s: the cheaper valid one of these at each speed
-
-
-def git_state() -> dict:
-    """The code's commit and whether the working tree had changes (read-only git calls)."""
-    def run(*args: str) -> str:
-        return subprocess.run(["git", *args], cwd=REPO, capture_output=True, text=True, check=True).stdout
-    try:
-        return {"git_commit": run("rev-parse", "HEAD").strip(), "git_dirty": bool(run("status", "--porcelain").strip())}
-    except (OSError, subprocess.CalledProcessError):
-        return {"git_commit": "unknown", "git_dirty": None}
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -218,7 +207,7 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     gait = GaitConfig(speed=args.speeds[0], lift_height=args.lift_height)
     command = "python tools/optimize_trajectory.py " + portable_command(sys.argv[1:] if argv is None else argv)
-    summary: dict = {"command": command, "lift_height_m": args.lift_height, "speeds_mps": args.speeds, **git_state(),
+    summary: dict = {"command": command, "lift_height_m": args.lift_height, "speeds_mps": args.speeds, **code_state(),
                      "walk_overrides": list(args.overrides)}
     if args.replay_only is not None:
         optimized = SampledTrajectory.load(args.replay_only)

@@ -11,8 +11,10 @@ policy: copy a finished training run into a small shipped folder (results/<recip
 a train.py run folder, or a seed folder of a preset's phases. Writes (never over an existing folder unless
 --force): stage1_actor.pt and stage2_actor.pt (the final actors of the two stages; no stage1_actor.pt for a
 stage-2 run started from another's agent), config.yaml (the resolved experiment), metrics.csv (the training log,
-for Figure 6) and metadata.json (seed, env steps, episodes and wall time per stage, final window scores, the git
-commit of the code, the source run). Checkpoints with replay buffers are not copied (tens of MB). A seed folder
+for Figure 6) and metadata.json (seed, env steps, episodes and wall time per stage, final window scores, the source
+run, `shipped_at`: the commit of the checkout that shipped it, and `trained_at`: per shipped actor, the commit of
+every process that trained it, as the actor file records it; --trained-at COMMIT states it for actor files written
+before that record, and is refused for those that have it). Checkpoints with replay buffers are not copied (tens of MB). A seed folder
 ships its last phase's run, or with --all-phases the recipe's two actors: stage<N>_actor.pt from the last phase
 that ends with stage N, config.yaml and metrics.csv of the last phase, recipe_phases.yaml (every phase's resolved
 settings), metrics_<phase>.csv of each phase and, in metadata.json, each phase's summary. A phase whose final
@@ -43,7 +45,6 @@ for three fresh ones (2-core AMD EPYC). `--quick` runs every step at 1.0 m/s alo
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import re
@@ -56,7 +57,9 @@ from pathlib import Path
 import yaml
 
 from cyberdog.config.preset import final_run, is_lineage, read_phases
-from cyberdog.provenance import portable_path
+from cyberdog.metrics_csv import read_rows, stage_summary
+from cyberdog.provenance import code_state, portable_path
+from cyberdog.rl.checkpoint import CheckpointError, recorded_code
 
 REPO = Path(__file__).resolve().parents[1]
 FILES = {"stage1_final_actor.pt": "stage1_actor.pt", "stage2_final_actor.pt": "stage2_actor.pt",
@@ -71,33 +74,28 @@ QUICK = {"check": ["--speeds", "1.0", "--duration", "2"], "extract": ["--speeds"
          "prototype": ["--speeds", "1.0", "--prototype-distance", "2", "--prototype-draws", "1"]}
 
 
-def stage_summary(rows: list[dict], stage: int) -> dict:
-    """Env steps, episodes, wall time (from the logged episode end times) and final scores of one stage."""
-    rs = [r for r in rows if int(r["stage"]) == stage]
-    if not rs:
-        return {}
-    t = [float(r["wall_time_s"]) for r in rs]  # the clock time at each episode's end
-    first_rate = float(rs[0]["env_steps_per_s"]) or float("nan")
-    first_episode_s = float(rs[0]["length"]) / first_rate  # the first episode ran before the first log line
-    gaps = sorted(b - a for a, b in zip(t, t[1:]))
-    typical = gaps[len(gaps) // 2] if gaps else 0.0
-    # a run resumed later (killed, or continued under a raised budget) has one long gap: counted as a typical
-    # episode, so that the wall time is the training's, not the calendar's
-    pauses = [g for g in gaps if g > max(20 * typical, 60.0)]
-    return {"episodes": len(rs), "env_steps": int(sum(int(r["length"]) for r in rs)),
-            "wall_time_s": round(t[-1] - t[0] - sum(pauses) + typical * len(pauses) + first_episode_s, 1),
-            "pauses_excluded": len(pauses),
-            "final_window_mean_score": float(rs[-1]["window_mean_score"]),
-            "last_episode_score": float(rs[-1]["score"]),
-            "last_episode_energy_J": float(rs[-1]["energy_J"])}
-
-
-def git_commit() -> str:
+def trained_at(actors: dict[str, Path], stated: str | None) -> dict:
+    """metadata.json's `trained_at`: for each actor to ship (shipped name: source file), the commits its file
+    records (`cyberdog.rl.run_state`), or the one --trained-at states for files from before that record."""
     try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True)
-        return out.stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+        recorded = {name: recorded_code(path) for name, path in actors.items()}
+    except CheckpointError as e:
+        sys.exit(str(e))
+    if stated is not None:
+        if any(recorded.values()):
+            sys.exit(f"--trained-at: {', '.join(n for n, r in recorded.items() if r)} record the commit that "
+                     f"trained them; leave --trained-at out")
+        try:
+            sha = subprocess.run(["git", "rev-parse", "--verify", f"{stated}^{{commit}}"], cwd=REPO,
+                                 capture_output=True, text=True, check=True).stdout.strip()
+        except (OSError, subprocess.CalledProcessError):
+            sys.exit(f"--trained-at {stated}: not a commit of this repository")
+        return {name: [{"git_commit": sha, "git_dirty": None, "stated": "--trained-at"}] for name in recorded}
+    missing = [name for name, r in recorded.items() if not r]
+    if missing:
+        print(f"note: {', '.join(missing)} do not record the commit that trained them (written before the record); "
+              f"--trained-at COMMIT states it", file=sys.stderr)
+    return {name: r or "not recorded" for name, r in recorded.items()}
 
 
 # ---- policy: one run or seed folder ----------------------------------------------------------------------------
@@ -115,14 +113,16 @@ def ship_policy(args) -> int:
         sys.exit(f"{args.out} exists; pass --force to replace it")
     if args.init_from is not None and not args.init_from.is_file():
         sys.exit(f"--init-from {args.init_from}: no such file (the run's start, where it is shipped)")
+    code = trained_at({dst: args.run_dir / src for src, dst in FILES.items()
+                       if src.endswith("_actor.pt") and (args.run_dir / src).is_file()}, args.trained_at)
     args.out.mkdir(parents=True, exist_ok=True)
     for src, dst in FILES.items():
         if (args.run_dir / src).is_file():
             shutil.copy2(args.run_dir / src, args.out / dst)
-    rows = _rows(args.run_dir)
+    rows = read_rows(args.run_dir / "metrics.csv")
     cfg = yaml.safe_load((args.run_dir / "config.yaml").read_text())
-    meta = {"seed": cfg["train"]["seed"], "source_run": portable_path(args.run_dir), "git_commit": git_commit(),
-            "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
+    meta = {"seed": cfg["train"]["seed"], "source_run": portable_path(args.run_dir), "shipped_at": code_state(),
+            "trained_at": code, "stage1": stage_summary(rows, 1), "stage2": stage_summary(rows, 2), "note": args.note,
             **({"init_from": portable_path(args.init_from)} if args.init_from is not None else {}),
             "actors": "stage<N>_actor.pt = stage<N>_final_actor.pt of the run (the agent at the end of the stage)"}
     return write_metadata(args.out, meta)
@@ -136,11 +136,6 @@ def write_metadata(out: Path, meta: dict) -> int:
     if size > MAX_BYTES:
         print(f"warning: {size / 1e6:.2f} MB is over the 2 MB the shipped folder should stay under", file=sys.stderr)
     return 0
-
-
-def _rows(run: Path) -> list[dict]:
-    with open(run / "metrics.csv") as f:
-        return list(csv.DictReader(f))
 
 
 def ship_lineage(args) -> int:
@@ -161,6 +156,8 @@ def ship_lineage(args) -> int:
         sys.exit(f"{args.run_dir}: its last phase {phases[-1].name} has no metrics.csv (it was not trained here)")
     if args.out.exists() and not args.force:
         sys.exit(f"{args.out} exists; pass --force to replace it")
+    code = trained_at({f"stage{stage}_actor.pt": runs[p.name] / f"stage{stage}_final_actor.pt"
+                       for stage, p in shipped.items() if p is not None}, args.trained_at)
     args.out.mkdir(parents=True, exist_ok=True)
     actors = {}
     for stage, last in shipped.items():
@@ -178,13 +175,13 @@ def ship_lineage(args) -> int:
             summaries[p.name] = {"stage": p.stage, "from": p.start, "placed": True}
             continue
         shutil.copy2(runs[p.name] / "metrics.csv", args.out / f"metrics_{p.name}.csv")
-        rows = _rows(runs[p.name])
+        rows = read_rows(runs[p.name] / "metrics.csv")
         summary = {s: stage_summary(rows, s) for s in (1, 2)}
         summaries[p.name] = {"stage": p.stage, "from": p.start, **{f"stage{s}": v for s, v in summary.items() if v},
                              "falls": sum(r.get("fell") in ("1", "True", "true") for r in rows)}
     wall = sum(ph[k]["wall_time_s"] for ph in summaries.values() for k in ("stage1", "stage2") if k in ph)
     meta = {"seed": yaml.safe_load((final / "config.yaml").read_text())["train"]["seed"],
-            "source_run": portable_path(args.run_dir), "git_commit": git_commit(), "actors": actors,
+            "source_run": portable_path(args.run_dir), "shipped_at": code_state(), "trained_at": code, "actors": actors,
             "phases": summaries, "wall_time_s": round(wall, 1), "placed_phases": placed, "note": args.note}
     return write_metadata(args.out, meta)
 
@@ -351,6 +348,9 @@ def main(argv: list[str] | None = None) -> int:
     q.add_argument("--init-from", type=Path, default=None, metavar="ACTOR",
                    help="the file the run started from (train.py --init-from), where it is shipped: recorded in "
                         "metadata.json as init_from, relative to the repository")
+    q.add_argument("--trained-at", default=None, metavar="COMMIT",
+                   help="the commit whose code trained the run, for actor files written before they recorded it "
+                        "(refused for those that record it)")
     q.add_argument("--all-phases", action="store_true",
                    help="a preset's seed folder: ship the last stage-1 and the last stage-2 phase's actors and "
                         "every phase's log (default: its last phase's run)")

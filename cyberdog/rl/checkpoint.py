@@ -97,6 +97,13 @@ def load_torch_file(path: str | Path, what: str):
                               f"(torch.load failed: {type(e).__name__})") from e
 
 
+def recorded_code(path: str | Path) -> list | None:
+    """The `trained_at` a training file records (checkpoint, stage-final or actor file): the code's commit of
+    every process that trained the run; None for a file written before that record."""
+    state = load_torch_file(path, "training file")
+    return (state.get("trained_at") if isinstance(state, dict) else None) or None
+
+
 def saved_config(config: dict | None) -> C.ExperimentConfig:
     """The experiment config that a checkpoint or actor file recorded (its plain dict, read as the config layer
     reads a saved config)."""

@@ -39,15 +39,24 @@ class Progress:
         return cls(**{k: v for k, v in counters.items() if k in names})
 
 
+def resumed_code(recorded: list | None, now: dict) -> list:
+    """A resumed run's `trained_at`: the commits its checkpoint records (one entry saying "not recorded" for a
+    checkpoint written before they were), then this process's commit where it differs from the last one."""
+    recorded = list(recorded) if recorded else [{"git_commit": "not recorded", "git_dirty": None}]
+    return recorded + ([now] if now != recorded[-1] else [])
+
+
 class RunState:
     """The save and restore half of the trainer, on its attributes (cfg, run_dir, stages, progress, agent, rb,
-    scores, best_score, logger, prior_weight). Every file records the trot prior's weight when it was written
-    (torque mode; 0 without one): an actor saved while it was above 0 walked with its help."""
+    scores, best_score, logger, prior_weight, trained_at). Every file records the trot prior's weight when it was
+    written (torque mode; 0 without one): an actor saved while it was above 0 walked with its help; and
+    `trained_at`, the code's commit (`cyberdog.provenance.code_state`) of every process that trained the run."""
 
     def _state(self) -> dict:
         return {"config": C.to_dict(self.cfg), "stages": self.stages, "counters": self.progress.as_dict(),
                 "agent": self.agent.state_dict(), "replay": buffer_state(self.rb), "rng": rng_state(),
-                "scores": list(self.scores), "best_score": self.best_score, "prior_weight": self.prior_weight}
+                "scores": list(self.scores), "best_score": self.best_score, "prior_weight": self.prior_weight,
+                "trained_at": self.trained_at}
 
     def save(self, name: str = "checkpoint.pt") -> Path:
         self.logger.flush()
@@ -96,7 +105,7 @@ class RunState:
                 "actor": self.agent.actor.state_dict(), "stage": stage, "score": score,
                 "episode": self.progress.episodes, "env_steps": self.progress.env_steps,
                 "stage_updates": self.progress.stage_updates, "scores": list(self.scores),
-                "best_score": self.best_score, "prior_weight": self.prior_weight}
+                "best_score": self.best_score, "prior_weight": self.prior_weight, "trained_at": self.trained_at}
 
     def _restore(self, state: dict, path) -> None:
         try:  # through the dataclasses, so that fields added to the code since (with defaults) still match
@@ -117,6 +126,7 @@ class RunState:
         self.scores.extend(state["scores"])
         self.best_score = float(state["best_score"])
         set_rng_state(state["rng"])
+        self.trained_at = resumed_code(state.get("trained_at"), self.trained_at[-1])
         if changes:
             self._change_budget(changes)
         prior = f", trot prior's weight {self.prior_weight:.4f}" if self.cfg.env.prior_weight > 0 else ""
@@ -151,8 +161,8 @@ class RunState:
         save_atomic({"actor": self.agent.actor.state_dict(), "score": score, "config": C.to_dict(self.cfg),
                      "stage": self.progress.stage, "episode": self.progress.episodes,
                      "env_steps": self.progress.env_steps, "stage_updates": self.progress.stage_updates,
-                     "prior_weight": self.prior_weight},
+                     "prior_weight": self.prior_weight, "trained_at": self.trained_at},
                     self.run_dir / name)
 
 
-__all__ = ["Progress", "RunState"]
+__all__ = ["Progress", "RunState", "resumed_code"]

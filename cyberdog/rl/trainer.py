@@ -50,6 +50,7 @@ from cyberdog import config as C
 from cyberdog.config import REWARD_TERM_NAMES
 from cyberdog.core import rewards
 from cyberdog.envs.observation import actor_observation_scale, observation_typical_magnitude
+from cyberdog.provenance import code_state
 from cyberdog.rl.checkpoint import load_checkpoint, remove_stale_temporaries, save_checkpoint
 from cyberdog.rl.collect import ProcessCollector, make_collector, make_env_for_collection
 from cyberdog.rl.logger import EpisodeLogger
@@ -121,6 +122,7 @@ class Trainer(RunState):
         self.recent: deque = deque(maxlen=100)  # (length, fell) of the latest episodes, for the progress line
         self.best_score = -math.inf
         self.logger = None
+        self.trained_at = [code_state()]  # the commit of each process that trains the run (a resume adds its own)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         remove_stale_temporaries(self.run_dir)  # half-written files of a process killed while saving
         if resume:
