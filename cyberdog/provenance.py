@@ -16,15 +16,17 @@ REPO = Path(__file__).resolve().parents[1]  # the checkout the package runs from
 
 
 def code_state(root: str | os.PathLike = REPO) -> dict:
-    """The code's commit: {"git_commit": the sha of HEAD, "git_dirty": whether tracked or untracked files
-    differ from it}; {"git_commit": "unknown", "git_dirty": None} where `root` is not the top of a git checkout
-    (an installed copy of the package, git missing): never the commit of some other repository around it."""
+    """The code's commit: {"git_commit": the sha of HEAD, "git_dirty": whether files outside results/ (where
+    shipped outputs are written, not code) differ from it, tracked or not}; {"git_commit": "unknown",
+    "git_dirty": None} where `root` is not the top of a git checkout (an installed copy of the package, git
+    missing): never the commit of some other repository around it."""
     def git(*args: str) -> str:
         return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True).stdout
     try:
         if Path(git("rev-parse", "--show-toplevel").strip()).resolve() != Path(root).resolve():
             raise ValueError("inside another repository")
-        return {"git_commit": git("rev-parse", "HEAD").strip(), "git_dirty": bool(git("status", "--porcelain").strip())}
+        changed = git("status", "--porcelain", "--", ".", ":(exclude)results").strip()
+        return {"git_commit": git("rev-parse", "HEAD").strip(), "git_dirty": bool(changed)}
     except (OSError, ValueError, subprocess.CalledProcessError):
         return {"git_commit": "unknown", "git_dirty": None}
 

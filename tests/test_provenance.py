@@ -58,6 +58,9 @@ def test_the_commit_is_read_at_the_top_of_a_checkout_only(tmp_path):
     git(repo, "add", ".")
     git(repo, "commit", "-qm", "one")
     assert code_state(repo) == {"git_commit": git(repo, "rev-parse", "HEAD"), "git_dirty": False}
+    (repo / "results").mkdir()
+    (repo / "results" / "shipped.json").write_text("{}")  # an output shipped into the checkout: not code
+    assert code_state(repo)["git_dirty"] is False
     (repo / "pkg" / "a.py").write_text("x = 2\n")
     assert code_state(repo)["git_dirty"] is True
     unknown = {"git_commit": "unknown", "git_dirty": None}
