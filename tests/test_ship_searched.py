@@ -1,0 +1,126 @@
+"""tools/ship_searched.py: a searched-start recipe's walks run as the documented evaluate.py steps, are joined into
+the files its table reads, and a re-make continues where one stopped."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cyberdog import config as C
+
+ROOT = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("ship_searched", ROOT / "tools/ship_searched.py")
+tool = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(tool)
+REAL_RUN = subprocess.run
+
+
+def after(cmd: list[str], flag: str) -> list[str]:
+    """The arguments that follow `flag` up to the next option."""
+    i, out = cmd.index(flag) + 1, []
+    while i < len(cmd) and not cmd[i].startswith("--"):
+        out.append(cmd[i])
+        i += 1
+    return out
+
+
+@pytest.fixture
+def fake_evaluate(monkeypatch, tmp_path):
+    """evaluate.py steps record their command and write what a prototype or compare run writes, as far as the tool
+    and tools/merge_walks.py read it (the run's gains in config.yaml); every other command runs for real."""
+    calls, fail = [], set()
+    monkeypatch.chdir(tmp_path)  # the tool moves to the repository: back here after each test
+
+    def run(cmd, *args, **kwargs):
+        cmd = [str(c) for c in cmd]
+        if "evaluate.py" not in cmd[1]:
+            return REAL_RUN(cmd, *args, **kwargs)
+        calls.append(cmd[1:])
+        out = Path(after(cmd, "--out")[0])
+        out.mkdir(parents=True, exist_ok=True)
+        if out.name in fail:
+            return subprocess.CompletedProcess(cmd, 1)
+        pid = {}
+        for setting in after(cmd, "--set") if "--set" in cmd else []:
+            key, value = setting.split("=", 1)
+            if key.startswith("pid."):
+                pid[key[4:]] = yaml.safe_load(value)
+        (out / "config.yaml").write_text(yaml.safe_dump({"pid": pid}))
+        rows = [{"trajectory": t, "seed": "seed40", "pd_matched": "--pd-matched-from-default" in cmd,
+                 "step": out.name} for t in ("learned", "cycloid")]
+        (out / ("comparison.json" if cmd[2] == "compare" else "prototype.json")).write_text(json.dumps(rows))
+        return subprocess.CompletedProcess(cmd, 0)
+
+    monkeypatch.setattr(tool.subprocess, "run", run)
+    return calls, fail
+
+
+def paths_folder(tmp_path: Path) -> Path:
+    learned = tmp_path / "learned"
+    learned.mkdir()
+    (learned / "seed40_1mps.json").write_text("{}")
+    return learned
+
+
+def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_path, fake_evaluate):
+    calls, _ = fake_evaluate
+    learned, results = paths_folder(tmp_path), tmp_path / "results"
+    argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
+    assert tool.main(argv) == 0
+    by_folder = {Path(after(c, "--out")[0]).name: c for c in calls}
+    assert list(by_folder)[:4] == ["prototype", "compare", "mujoco", "own"] and len(calls) == 16
+    own = C.load_preset(ROOT / "configs/battery_searched.yaml").phases[-1].config.env.walk.gait.sampled_file
+    assert after(by_folder["own"], "--prototype-reference") == [own]
+    assert after(by_folder["compare"], "--reference") == [str(tool.EQ7_REFERENCE.relative_to(ROOT))]
+    assert after(by_folder["mujoco"], "--set") == ["sim.engine=mujoco"]
+    default = C.PIDConfig()
+    assert after(by_folder["gains_kd2"], "--set") == [f"pid.kd=[{','.join([repr(default.kd[0] * 2)] * 3)}]"]
+    assert after(by_folder["gains_kp0.5"], "--set") == [f"pid.kp=[{','.join([repr(default.kp[0] / 2)] * 3)}]"]
+    recommanded = by_folder["gains_kp2_recommanded"]
+    assert "--pd-matched-from-default" in recommanded and "--no-prototype-reference" in recommanded
+    assert after(by_folder["gains_own_kd0.5"], "--prototype-reference") == [own]
+
+    figures = results / "figures_input"
+    assert [r["step"] for r in json.loads((figures / "prototype_searched_start.json").read_text())] == ["prototype"] * 2
+    assert json.loads((figures / "comparison_searched_start.json").read_text())[0]["step"] == "compare"
+    assert json.loads((figures / "prototype_searched_start_mujoco.json").read_text())[0]["step"] == "mujoco"
+    assert json.loads((figures / "prototype_searched_start_own.json").read_text())[0]["step"] == "own"
+    gains = json.loads((figures / "gains_searched_start.json").read_text())
+    assert sorted({(r["gain"], r["gain_scale"], r["pd_matched"]) for r in gains}) == \
+        sorted((g, s, m) for g in ("kd", "kp") for s in (0.5, 2.0) for m in (False, True))
+    own_gains = json.loads((figures / "gains_searched_start_own.json").read_text())
+    assert {r["step"] for r in own_gains} == {f"gains_own_{g}{s}" for g in ("kp", "kd") for s in ("0.5", "2")}
+
+
+def test_a_remake_keeps_the_steps_done_and_writes_nothing_when_one_fails(tmp_path, fake_evaluate):
+    calls, fail = fake_evaluate
+    learned, results = paths_folder(tmp_path), tmp_path / "results"
+    argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
+    fail.add("gains_kd2")
+    with pytest.raises(SystemExit, match="failed"):
+        tool.main(argv)
+    assert not (results / "figures_input").exists()  # nothing shipped from a re-make that did not finish
+    done = len(calls)
+    fail.clear()
+    assert tool.main(argv + ["--workers", "1"]) == 0  # --workers changes no walk: the steps done are kept
+    again = [Path(after(c, "--out")[0]).name for c in calls[done:]]
+    assert again[0] == "gains_kd2" and "prototype" not in again and len(again) == 16 - done + 1
+    n = len(calls)
+    assert tool.main(argv + ["--force"]) == 0 and len(calls) == n + 16
+
+
+def test_bad_input_is_refused_before_any_walk(tmp_path, fake_evaluate):
+    calls, _ = fake_evaluate
+    learned = paths_folder(tmp_path)
+    work = ["--work", str(tmp_path / "work")]
+    with pytest.raises(SystemExit, match="not a folder of paths"):
+        tool.main(["searched_start", "--learned", str(tmp_path), *work])
+    with pytest.raises(SystemExit, match="--quick makes no result"):
+        tool.main(["searched_start", "--learned", str(learned), *work, "--quick"])
+    with pytest.raises(SystemExit):
+        tool.main(["no_such_recipe", "--learned", str(learned), *work])
+    assert calls == []

@@ -1,0 +1,159 @@
+#!/usr/bin/env python
+"""The walks behind a searched-start recipe's table, made from its paths in one command.
+
+    python tools/ship_searched.py searched_pick --learned results/battery_searched_pick/paths \
+        --work runs/searched_pick_walks --workers 2
+    python tools/make_readme_tables.py --table searched_pick
+
+NAME is a recipe of `cyberdog.analysis.searched_start_table.RECIPES` (its table reads the files this writes);
+--learned are the folders of its paths (seed<N>_<speed>mps.json, every seed in them walked; a speed where a seed
+has no path is walked without it). Each step is an `evaluate.py` command, printed before it runs, writing its own
+folder under --work:
+
+1. prototype: the prototype run (two hardware-like robots per seed, 20 m at 1.0, 1.2 and 1.4 m/s), the shape
+   searched for the battery as its reference                                    -> prototype_NAME.json
+2. compare: Table 5's 10 s walk on the ideal robot against the shape searched on Eq. 7 (--eq7-reference)
+                                                                                -> comparison_NAME.json
+3. mujoco: step 1 in the second engine (--set sim.engine=mujoco)                 -> prototype_NAME_mujoco.json
+4. own: step 1 with the recipe's own start as the reference (the shape its preset's trot walks, which a zero
+   action walks)                                                                -> prototype_NAME_own.json
+5. gains_*: kp or kd alone at 0.5x and 2x the drivers' defaults (`PIDConfig`), on the hardware-like robots: as
+   commanded, the searched shape walked under the same gains, and re-commanded for them
+   (--pd-matched-from-default, no reference); joined by `tools/merge_walks.py gains`  -> gains_NAME.json
+6. gains_own_*: the four as commanded with the own start as the reference        -> gains_NAME_own.json
+
+The files are written into --results/figures_input/ once every step has succeeded, replacing the ones there.
+A step whose folder holds its result, made by the same command (each folder keeps its command, but for --workers,
+in `ship_searched_command.txt`), is kept: a re-make stopped half way continues where it stopped. --force walks every
+step again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results
+folder other than the repository's: a check that the chain runs, not a result.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # run as a script from anywhere
+
+from cyberdog import config as C  # noqa: E402
+from cyberdog.analysis.searched_start_table import RECIPES  # noqa: E402
+
+EQ7_REFERENCE = REPO / "results/searched_shapes/optimized_trajectory_H0.085_placed_loop.json"  # Eq. 7, H 0.085 m
+COMMAND_FILE = "ship_searched_command.txt"
+GAIN_SCALES = (0.5, 2.0)
+QUICK = {"prototype": ["--speeds", "1.0", "--prototype-distance", "2", "--prototype-draws", "1"],
+         "compare": ["--speeds", "1.0", "--duration", "2"]}
+
+
+def gain_setting(gain: str, scale: float) -> str:
+    """`--set pid.kp=[30.0,30.0,30.0]`'s value: the drivers' default `gain` times `scale` on every joint."""
+    return f"pid.{gain}=[{','.join(repr(v * scale) for v in getattr(C.PIDConfig(), gain))}]"
+
+
+def steps(learned: list[Path], own_start: Path, eq7: Path) -> list[tuple[str, list, str]]:
+    """(folder, evaluate.py arguments, its result file) of every step, in the order they run."""
+    paths = ["--learned", *learned, "--skip-missing-paths"]
+    own = ["--prototype-reference", own_start]
+    out = [("prototype", ["prototype", *paths], "prototype.json"),
+           ("compare", ["compare", *paths, "--reference", eq7], "comparison.json"),
+           ("mujoco", ["prototype", *paths, "--set", "sim.engine=mujoco"], "prototype.json"),
+           ("own", ["prototype", *paths, *own], "prototype.json")]
+    for gain in ("kp", "kd"):
+        for scale in GAIN_SCALES:
+            tag, gains = f"{gain}{scale:g}", ["--prototype-modes", "hardware", "--set", gain_setting(gain, scale)]
+            out += [(f"gains_{tag}", ["prototype", *paths, *gains], "prototype.json"),
+                    (f"gains_{tag}_recommanded", ["prototype", *paths, *gains, "--no-prototype-reference",
+                                                  "--pd-matched-from-default"], "prototype.json"),
+                    (f"gains_own_{tag}", ["prototype", *paths, *gains, *own], "prototype.json")]
+    return out
+
+
+def run_step(folder: Path, argv: list, result: str, workers: int, force: bool) -> None:
+    """One evaluate.py step into `folder`, unless it holds `result` from the same command; exits on a failure."""
+    words = ["evaluate.py", *argv, "--out", folder]
+    command = " ".join(str(w) for w in words)  # what the walks are (--workers changes none of them)
+    record = folder / COMMAND_FILE
+    if not force and (folder / result).is_file() and record.is_file() and record.read_text().strip() == command:
+        print(f"\nkept {folder} (its result, from the same command)", flush=True)
+        return
+    print(f"\n$ python {command} --workers {workers}", flush=True)
+    t0 = time.monotonic()
+    done = subprocess.run([sys.executable, *(str(w) for w in words), "--workers", str(workers), "--force"],
+                          cwd=REPO)  # --force: the folder is this tool's own
+    if done.returncode != 0:
+        sys.exit(f"failed (exit {done.returncode}): python {command}")
+    record.write_text(command + "\n")
+    print(f"  ({time.monotonic() - t0:.0f} s)", flush=True)
+
+
+def repo_relative(path: Path) -> Path:
+    """Inside the repository, a path as the steps are given it (their outputs record it); else absolute."""
+    path = path.resolve()
+    return path.relative_to(REPO) if path.is_relative_to(REPO) else path
+
+
+def main(argv: list[str] | None = None) -> int:
+    names = {r.name: r for r in RECIPES}
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("name", choices=sorted(names), help="the recipe whose table the walks are for")
+    p.add_argument("--learned", type=Path, nargs="+", required=True,
+                   help="the folders of the recipe's paths (seed<N>_<speed>mps.json)")
+    p.add_argument("--work", type=Path, required=True, help="folder for the steps' evaluate.py outputs")
+    p.add_argument("--results", type=Path, default=REPO / "results",
+                   help="the results folder whose figures_input/ gets the files (default: the repository's)")
+    p.add_argument("--eq7-reference", type=Path, default=EQ7_REFERENCE,
+                   help=f"the shape searched on Eq. 7 at the paths' lift, step 2's reference (default "
+                        f"{EQ7_REFERENCE.relative_to(REPO)})")
+    p.add_argument("--workers", type=int, default=2, help="walk processes at once in each step (default 2)")
+    p.add_argument("--force", action="store_true", help="walk every step again, even one whose result is there")
+    p.add_argument("--quick", action="store_true", help="every step at 1.0 m/s with short walks, into a --results "
+                   "folder other than the repository's: a check that the chain runs")
+    args = p.parse_args(argv)
+    recipe = names[args.name]
+    learned = [repo_relative(f) for f in args.learned]
+    work, results, eq7 = (repo_relative(f) for f in (args.work, args.results, args.eq7_reference))
+    os.chdir(REPO)  # as each step runs
+    for given, folder in zip(args.learned, learned):
+        if not folder.is_dir() or not any(folder.glob("seed*_*mps.json")):
+            sys.exit(f"--learned {given}: not a folder of paths (seed<N>_<speed>mps.json)")
+    if not eq7.is_file():
+        sys.exit(f"--eq7-reference {args.eq7_reference}: no such file")
+    if args.workers < 1:
+        sys.exit(f"--workers {args.workers}: at least 1")
+    if args.quick and results == Path("results"):
+        sys.exit("--quick makes no result to ship: give it a --results folder of its own")
+    own_start = Path(C.load_preset(recipe.config).phases[-1].config.env.walk.gait.sampled_file)
+
+    made = {}
+    for folder, step_argv, result in steps(learned, own_start, eq7):
+        small = QUICK["compare" if step_argv[0] == "compare" else "prototype"] if args.quick else []
+        run_step(work / folder, [*step_argv, *small], result, args.workers, args.force)
+        made[folder] = work / folder / result
+
+    figures = results / "figures_input"
+    figures.mkdir(parents=True, exist_ok=True)
+    for folder, target in (("prototype", recipe.prototype_source), ("compare", recipe.compare_source),
+                           ("mujoco", f"prototype_{recipe.name}_mujoco.json"), ("own", recipe.own_start_source)):
+        shutil.copyfile(made[folder], figures / target)
+    own_gains = [f for f in made if f.startswith("gains_own_")]
+    gains = [f for f in made if f.startswith("gains_") and f not in own_gains]
+    for folders, target in ((gains, recipe.gains_source), (own_gains, recipe.own_gains_source)):
+        merge = [sys.executable, "tools/merge_walks.py", "gains", *(work / f for f in folders), "--out",
+                 figures / target, "--force"]
+        print("\n$ python " + " ".join(str(w) for w in merge[1:]), flush=True)
+        if subprocess.run([str(w) for w in merge]).returncode != 0:
+            sys.exit(f"failed: joining {', '.join(folders)} into {figures / target}")
+    print(f"\nwrote {figures}/: {recipe.prototype_source}, {recipe.compare_source}, prototype_{recipe.name}_mujoco"
+          f".json, {recipe.own_start_source}, {recipe.gains_source}, {recipe.own_gains_source}; the table: python "
+          f"tools/make_readme_tables.py --table {recipe.name}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
