@@ -22,6 +22,7 @@ def test_each_process_that_trains_a_run_records_its_commit(tmp_path, monkeypatch
     checkpoint and the actor files; a checkpoint from before the record says so rather than guessing."""
     from cyberdog.rl import trainer as trainer_module
     from cyberdog.rl.checkpoint import recorded_code
+    from cyberdog.rl.rollout import load_actor
     from cyberdog.rl.run_state import resumed_code
 
     here = code_state()
@@ -37,6 +38,7 @@ def test_each_process_that_trains_a_run_records_its_commit(tmp_path, monkeypatch
     resumed.save()
     resumed.close()
     assert recorded_code(tmp_path / "run" / "actor.pt") == [here, later]
+    assert load_actor(tmp_path / "run" / "actor.pt").meta["trained_at"] == [here, later]  # into a path's provenance
     again = Trainer(tiny_config(), tmp_path / "run", resume=True, progress=False)  # the same commit: no new entry
     assert again.trained_at == [here, later]
     again.close()

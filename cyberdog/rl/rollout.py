@@ -33,7 +33,7 @@ class LoadedActor:
 
     module: TanhActor
     config: C.ExperimentConfig
-    meta: dict = field(default_factory=dict)  # stage, episode, env_steps, score of the saved actor
+    meta: dict = field(default_factory=dict)  # stage, episode, env_steps, score, trained_at of the saved actor
 
     @torch.no_grad()
     def __call__(self, observation: np.ndarray) -> np.ndarray:
@@ -56,7 +56,7 @@ def load_actor(path: str | Path) -> LoadedActor:
     check_shapes(weights, module.state_dict(), "the actor", path)
     module.load_state_dict(weights)
     module.eval()
-    meta = {k: state[k] for k in ("stage", "episode", "env_steps", "score") if k in state}
+    meta = {k: state[k] for k in ("stage", "episode", "env_steps", "score", "trained_at") if k in state}
     return LoadedActor(module, cfg, meta)
 
 
