@@ -1,9 +1,9 @@
 #!/usr/bin/env python
 """The walks behind a searched-start recipe's table, made from its paths in one command.
 
-    python tools/ship_searched.py searched_pick --learned results/battery_searched_pick/paths \
-        --work runs/searched_pick_walks --workers 2
-    python tools/make_readme_tables.py --table searched_pick
+    python tools/ship_searched.py searched_wide --learned results/battery_searched_wide/paths \
+        --work runs/searched_wide_walks --workers 2
+    python tools/make_readme_tables.py --table searched_wide
 
 NAME is a recipe of `cyberdog.analysis.searched_start_table.RECIPES` (its table reads the files this writes);
 --learned are the folders of its paths (seed<N>_<speed>mps.json, every seed in them walked; a speed where a seed
