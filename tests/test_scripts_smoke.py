@@ -21,7 +21,7 @@ NUMBER = r"([-+]?\d+(?:\.\d+)?)"
 COVERED = {"bench/driver_rate.py", "bench/env_throughput.py", "bench/readme_times.py", "bench/sb3_registered_task.py",
            "bench/train_throughput.py", "bench/walk_throughput.py", "tools/curve_table.py",
            "tools/make_readme_tables.py", "tools/make_urdf.py", "tools/merge_walks.py", "tools/optimize_trajectory.py",
-           "tools/ship.py"}
+           "tools/ship.py", "tools/ship_searched.py"}
 
 
 def script(tmp_path: Path, path: str, *args, timeout: float = 600) -> str:
@@ -205,3 +205,20 @@ def test_ship_torque_quick_on_a_shipped_seed(tmp_path):
         rows = json.loads((results / "figures_input" / name).read_text())
         rows = rows["walks"] if isinstance(rows, dict) else rows
         assert rows and {r[key] for r in rows} == {1.0}, name  # each step walked, at --quick's one speed
+
+
+@pytest.mark.slow
+def test_ship_searched_quick_on_a_shipped_path(tmp_path):
+    learned, results = tmp_path / "learned", tmp_path / "results"
+    learned.mkdir()
+    shutil.copyfile(RESULTS / "battery_searched_wide" / "paths" / "seed30_1mps.json", learned / "seed30_1mps.json")
+    script(tmp_path, "tools/ship_searched.py", "searched_wide", "--learned", learned, "--work", tmp_path / "work",
+           "--results", results, "--workers", "1", "--quick")
+    figures = results / "figures_input"
+    for name in ("prototype", "comparison", "prototype_mujoco", "prototype_own", "gains", "gains_own"):
+        kind, _, twin = name.partition("_")
+        rows = json.loads((figures / f"{kind}_searched_wide{'_' + twin if twin else ''}.json").read_text())
+        key = "speed_command_mps" if kind == "comparison" else "speed_mps"
+        assert rows and {r[key] for r in rows} == {1.0} and {r["seed"] for r in rows} >= {"seed30"}, name
+    gains = json.loads((figures / "gains_searched_wide.json").read_text())
+    assert len({(r["gain"], r["gain_scale"], r["pd_matched"]) for r in gains}) == 8  # 2 gains x 2 factors x 2 kinds
