@@ -31,6 +31,13 @@ def code_state(root: str | os.PathLike = REPO) -> dict:
         return {"git_commit": "unknown", "git_dirty": None}
 
 
+def repo_relative(path: str | os.PathLike) -> Path:
+    """`path` relative to the repository if it lies inside it (as a tool gives it to the commands it runs, whose
+    outputs record it), else absolute."""
+    p = Path(path).resolve()
+    return p.relative_to(REPO) if p.is_relative_to(REPO) else p
+
+
 def portable_path(path: str | os.PathLike, root: str | os.PathLike | None = None) -> str:
     """`path` relative to `root` (default: the current folder) if it lies inside it, else its last two parts
     (the run folder and the file; one part for a top-level path). Never an absolute path."""
@@ -52,4 +59,4 @@ def portable_command(words: list[str], root: str | os.PathLike | None = None) ->
     return " ".join(out)
 
 
-__all__ = ["REPO", "code_state", "portable_command", "portable_path"]
+__all__ = ["REPO", "code_state", "portable_command", "portable_path", "repo_relative"]

@@ -58,7 +58,7 @@ import yaml
 
 from cyberdog.config.preset import final_run, is_lineage, read_phases
 from cyberdog.metrics_csv import read_rows, stage_summary
-from cyberdog.provenance import code_state, portable_path
+from cyberdog.provenance import code_state, portable_path, repo_relative
 from cyberdog.rl.checkpoint import CheckpointError, recorded_code
 
 REPO = Path(__file__).resolve().parents[1]
@@ -219,10 +219,6 @@ def seed_folders(inputs: list[Path]) -> list[Path]:
     return sorted(folders, key=lambda p: int(SEED_FOLDER.match(p.name).group(1)))
 
 
-def repo_relative(path: Path) -> Path:
-    return path.relative_to(REPO) if path.is_relative_to(REPO) else path
-
-
 def is_shipped(folder: Path) -> bool:
     """A folder `tools/ship.py policy --all-phases` wrote (actors, logs, metadata.json), not a lineage to ship."""
     return (folder / "metadata.json").is_file() and (folder / "recipe_phases.yaml").is_file() \
@@ -296,9 +292,9 @@ def evaluate_seeds(shipped: list[Path], folder: Path, figures: Path, work: Path,
 def ship_torque(args) -> int:
     """`torque`: steps 1-5 of the module's docstring."""
     # inside the repository, paths are given to each step relative to it: the shipped files record them
-    runs = [repo_relative(a.resolve()) for a in args.runs]
-    args.fresh = [repo_relative(a.resolve()) for a in args.fresh]
-    work, results = (repo_relative(a.resolve()) for a in (args.work, args.results))
+    runs = [repo_relative(a) for a in args.runs]
+    args.fresh = [repo_relative(a) for a in args.fresh]
+    work, results = (repo_relative(a) for a in (args.work, args.results))
     os.chdir(REPO)  # as each step runs
     for given, folder in zip(args.runs + args.fresh, runs + args.fresh):
         if not folder.is_dir():

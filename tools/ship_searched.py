@@ -43,6 +43,7 @@ sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
 from cyberdog import config as C  # noqa: E402
 from cyberdog.analysis.searched_start_table import RECIPES  # noqa: E402
+from cyberdog.provenance import repo_relative  # noqa: E402
 
 EQ7_REFERENCE = REPO / "results/searched_shapes/optimized_trajectory_H0.085_placed_loop.json"  # Eq. 7, H 0.085 m
 COMMAND_FILE = "ship_searched_command.txt"
@@ -90,12 +91,6 @@ def run_step(folder: Path, argv: list, result: str, workers: int, force: bool) -
         sys.exit(f"failed (exit {done.returncode}): python {command}")
     record.write_text(command + "\n")
     print(f"  ({time.monotonic() - t0:.0f} s)", flush=True)
-
-
-def repo_relative(path: Path) -> Path:
-    """Inside the repository, a path as the steps are given it (their outputs record it); else absolute."""
-    path = path.resolve()
-    return path.relative_to(REPO) if path.is_relative_to(REPO) else path
 
 
 def main(argv: list[str] | None = None) -> int:
