@@ -57,7 +57,7 @@ def test_a_twin_of_other_paths_is_refused_and_no_twin_gives_no_table(same_twice)
     assert engine_markdown(same_twice) is None
 
 
-@pytest.mark.parametrize("recipe", ["searched_start", "searched_wide"])
+@pytest.mark.parametrize("recipe", ["searched_start", "searched_wide", "searched_pick"])
 def test_the_searched_start_rows_are_each_engines_own_savings(same_twice, recipe):
     """Each recipe from the searched shape: its saving against the cheaper common trajectory and against the
     searched shape, each engine's from its own walks (a twin halving the learned battery moves both rows), in
