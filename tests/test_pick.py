@@ -123,3 +123,33 @@ def test_a_sweeps_lineages_are_picked_seed_by_seed_with_a_lineage_offset(tmp_pat
     assert evaluate.main(["pick", "--learned", str(a), str(b), str(tmp_path / "c"), "--lineage-offset", "100",
                           "--out", str(tmp_path / "o2")]) == 2
     assert "seed2: one learned path at each speed" in capsys.readouterr().err
+
+
+def test_the_shipped_picked_paths_are_the_pick_of_the_shipped_lineages():
+    """results/battery_searched_pick/paths/ holds, per seed N and speed, the path of lineage N or N + 100 (its
+    lineage_paths/) that `pick` keeps by the check robots, the same offsets and trot, with every candidate's cost
+    recorded (the lifts as a saved path works them out again, to 1 µm); every seed whose two lineages are shipped
+    has its picks, and nothing else is there."""
+    from pathlib import Path
+
+    shipped = Path(__file__).resolve().parents[1] / "results" / "battery_searched_pick"
+    lineages = load_candidates([shipped / "lineage_paths"])
+    seeds = sorted({c.seed % 100 for c in lineages if c.seed >= 100})
+    assert seeds and all(any(c.seed == s for c in lineages) for s in seeds)
+    expected = {}
+    for s in seeds:
+        for speed, (kept, group) in pick([c for c in lineages if c.seed in (s, s + 100)]).items():
+            expected[f"seed{s}_{speed:g}mps.json"] = (kept, group)
+    picked = {f.name: f for f in (shipped / "paths").glob("seed*_*mps.json")}
+    assert sorted(picked) == sorted(expected)
+    for name, (kept, group) in expected.items():
+        saved, source = json.loads(picked[name].read_text()), json.loads(kept.file.read_text())
+        record = saved["provenance"].pop("picked")
+        assert saved["provenance"].pop("label") == name.split("_")[0]
+        source["provenance"].pop("label", None)
+        lifts = [(saved.pop(k), source.pop(k)) for k in ("own_lift_height_m", "leg_lift_heights_m")]
+        assert saved == source, name  # the offsets, the trot, the provenance but for the pick's own keys
+        assert all(a == pytest.approx(b, abs=1e-6) for a, b in lifts), name  # m, as the saved path works them out
+        assert {c["seed"]: c["electrical_J_per_m"] for c in record["candidates"]} == {
+            c.seed: c.electrical_J_per_m for c in group}, name
+        assert record["candidates"][record["kept"]]["seed"] == kept.seed, name
