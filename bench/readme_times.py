@@ -3,9 +3,9 @@
 
 The README's times were measured on two idle 2-core x86-64 machines (an AMD EPYC, and a 2.1 GHz Intel Xeon at
 about half its speed); they scale with the cores (`evaluate.py` walks in one process per core, the test suite and a
-training run use one or two) and with whatever else runs (a loaded machine took 5-6x as long). This script prints the machine (CPU model, cores, load average before
-and after) and times each command as the README writes it, one after another, in wall and CPU time (user +
-system of every process it started):
+training run use one or two) and with whatever else runs (a loaded machine took 5-6x as long). This script prints
+the machine (CPU model, cores, load average before and after) and times each command as the README writes it, one
+after another, in wall and CPU time (user + system of every process it started):
 
     python bench/readme_times.py                       # evaluate.py (command 1's job) and the tiny training run
     python bench/readme_times.py --tests               # + the quick test tier and the full test run (command 2)

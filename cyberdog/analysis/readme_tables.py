@@ -25,8 +25,8 @@ it marks; `tests/test_readme.py` checks that both hold them as made.
 - `torque` (where `torque_check.json` is shipped): the paper's agent, the policy alone
   (`cyberdog.analysis.torque_table`), with the rows of the seeds it was never tuned on where
   `torque_check_fresh.json` is shipped.
-- `searched_start`, `searched_wide`, `searched_pick` (where `prototype_<name>.json` is shipped): the recipes that start from the
-  searched shape against it, on seeds never tuned on (`cyberdog.analysis.searched_start_table.RECIPES`).
+- `searched_start`, `searched_wide`, `searched_pick` (where `prototype_<name>.json` is shipped): the recipes that
+  start from the searched shape against it, on seeds never tuned on (`cyberdog.analysis.searched_start_table.RECIPES`).
 - `engines` (where the `*_mujoco.json` twins are shipped): PyBullet and MuJoCo side by side on the same seeds
   (`cyberdog.analysis.engine_table`).
 """
