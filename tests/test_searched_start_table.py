@@ -254,3 +254,16 @@ def test_each_recipe_has_its_own_table_from_its_own_inputs_and_tuning_seeds(tmp_
                 if r["robot"] == "hardware" and r["trajectory"] == "learned"}
     assert rows[sst.SAVING_ROW.format(seeds="seeds 30–34 (never tuned on)")] == [
         f"**{mean_ci(expected[v], 'battery_saving_pct', '.1f', ' %')}**" for v in sorted(expected)]
+
+
+def test_the_readme_leads_with_the_pick_only_where_its_shipped_walks_clear_the_bar():
+    """The two-lineage pick's bar for the README's lead: against the searched shape, +10 % or more with the 95 % CI
+    above zero at every speed, over its shipped walks (seeds 40-44). `in_readme` must say what those walks say."""
+    walks = json.loads((SHIPPED.parent / sst.SEARCHED_PICK.prototype_source).read_text())
+    rows = [r for r in ps.summary_rows([w for w in walks if w["robot"] == "hardware"])
+            if r["trajectory"] == "learned"]
+    assert sorted(r["speed_mps"] for r in rows) == [1.0, 1.2, 1.4]
+    assert {w["seed"] for w in walks if w["trajectory"] == "learned"} == {f"seed{n}" for n in range(40, 45)}
+    clears = all(r["battery_vs_searched_pct_mean"] >= 10.0
+                 and r["battery_vs_searched_pct_mean"] - r["battery_vs_searched_pct_ci95"] > 0 for r in rows)
+    assert sst.SEARCHED_PICK.in_readme == clears
