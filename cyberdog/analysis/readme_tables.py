@@ -69,7 +69,7 @@ HEADLINES = {
                                    TORQUE_FRESH_SAVING_ROW.format(seeds=FRESH_SEEDS),
                                    "electrical J/m, the trot controller (H = 0.10 m, ideal robot)")),
     "engines_headline": ("engines", ENGINE_HEADLINE_ROWS),
-    # the searched-start recipes the README leads with: its rows name its shipped seeds (`make_tables` sets them)
+    # the searched-start recipes the README leads with: their rows name their shipped seeds (`make_tables` sets them)
     **{recipe.headline: (recipe.name, ()) for recipe in searched_start_table.RECIPES if recipe.in_readme},
 }
 # the fresh seeds' rows: in a headline only where their walks are shipped
