@@ -3,7 +3,7 @@
 
   python evaluate.py                  # all: Table 5, the prototype experiment and the figures (the default)
   python evaluate.py SUB --help       # SUB: all, baselines, extract, compare, prototype, stiffness, figures,
-                                      #      video, check, pd-match, export
+                                      #      video, check, pd-match, export, pick
 
 The sub-commands live in `cyberdog/evaluation/`: `cli.py` parses (each sub-command has only its own options,
 `parsers.py`), `commands.py` runs one sub-command, `learned.py` and `extraction.py` load or extract the learned
