@@ -20,7 +20,7 @@ def checked(speed: float, seed: int, kept_cost: float, other_cost: float = 999.0
     """A commanded path as extraction keeps it: two candidates on the check robots, the kept one (rollout seed 1)
     at `kept_cost` J/m; `check` overrides what the check walked."""
     path = commanded(speed, dz, seed)
-    path.provenance.update({"rollout_seed": 1, "cycle": "mean", "replay_check": {
+    path.provenance.update({"rollout_seed": 1, "cycle": "mean", "policy": f"runs/s/seed{seed}/band", "replay_check": {
         "status": "ok", "candidates": [{"rollout_seed": 0, "cycle": "mean", "electrical_J_per_m": other_cost},
                                        {"rollout_seed": 1, "cycle": "mean", "electrical_J_per_m": kept_cost}],
         **check_settings(), "controller": CONTROLLER, **check}})
@@ -78,6 +78,7 @@ def test_the_command_saves_the_picks_under_one_label_that_loads_back(tmp_path, t
         LearnedSet.load([two_lineages[1] / "seed140_1.2mps.json"]).path("seed140", 1.2).lift_height)
     record = p.provenance["picked"]
     assert [c["electrical_J_per_m"] for c in record["candidates"]] == [260.0, 240.0] and record["kept"] == 1
+    assert [c["policy"] for c in record["candidates"]] == ["runs/s/seed40/band", "runs/s/seed140/band"]
     rows = json.loads((out / "pick.json").read_text())
     assert sum(r["kept"] for r in rows) == 3 and len(rows) == 5
     assert "kept seed140's path (240.00 J/m" in capsys.readouterr().out
@@ -103,10 +104,29 @@ def test_unchecked_or_single_paths_are_refused(tmp_path, capsys):
     assert "nothing to choose between" in capsys.readouterr().err
 
 
-def test_an_output_that_would_overwrite_an_input_is_refused(tmp_path, two_lineages, capsys):
+def test_an_output_folder_holding_an_input_is_refused_whatever_the_file_names(tmp_path, two_lineages, capsys):
+    a, b = two_lineages  # a re-made output folder is cleared first: an input inside it would be lost
+    rc = evaluate.main(["pick", "--learned", str(a), str(b), "--label", "best", "--out", str(b.parent), "--force"])
+    assert rc == 2 and "an input of this pick" in capsys.readouterr().err
+    assert (b / "seed140_1.4mps.json").is_file()
+
+
+def test_a_path_given_twice_is_refused_not_picked_against_itself(tmp_path, two_lineages, capsys):
     a, b = two_lineages
-    rc = evaluate.main(["pick", "--learned", str(a), str(b), "--out", str(a.parent), "--force"])
-    assert rc == 2 and "is an input of this pick" in capsys.readouterr().err
+    rc = evaluate.main(["pick", "--learned", str(a), str(b), str(b / "seed140_1mps.json"), "--out", str(tmp_path / "o")])
+    assert rc == 2 and "is given twice" in capsys.readouterr().err
+    copy = tmp_path / "copy"  # the same lineage extracted into two folders: with --lineage-offset, refused
+    save(copy, "seed140", checked(1.0, 140, 231.0))
+    rc = evaluate.main(["pick", "--learned", str(a), str(b), str(copy), "--lineage-offset", "100",
+                        "--out", str(tmp_path / "o")])
+    assert rc == 2 and "lineage seed140 has two paths at 1 m/s" in capsys.readouterr().err
+
+
+def test_one_input_holding_several_seeds_at_a_speed_needs_the_lineage_offset(tmp_path, two_lineages, capsys):
+    a, b = two_lineages
+    save(a, "seed41", checked(1.0, 41, 150.0))  # a sweep's folder: seeds 40 and 41 side by side
+    rc = evaluate.main(["pick", "--learned", str(a), str(b), "--out", str(tmp_path / "o")])
+    assert rc == 2 and "--lineage-offset" in capsys.readouterr().err and not (tmp_path / "o").exists()
 
 
 def test_a_sweeps_lineages_are_picked_seed_by_seed_with_a_lineage_offset(tmp_path, two_lineages, capsys):

@@ -58,6 +58,8 @@ class Candidate:
     seed: int | None  # the training seed of the policy it came from
     electrical_J_per_m: float
     check: dict  # what the check walked (CHECK_KEYS)
+    source: Path  # the --learned input it came from (a folder or the file itself)
+    policy: str | None = None  # the actor it was extracted from, as its provenance names it
 
 
 def check_cost(provenance: dict, where: str) -> tuple[float, dict]:
@@ -76,18 +78,29 @@ def check_cost(provenance: dict, where: str) -> tuple[float, dict]:
 
 
 def load_candidates(inputs: list[Path]) -> list[Candidate]:
-    """Every path of every input, in the order given; UsageError for a sampled path or one without a check."""
+    """Every path of every input, in the order given; UsageError for a sampled path, one without a check, or a
+    file given twice (a folder and a file in it, say: it would be a candidate against itself)."""
     from cyberdog.core.learned_set import LearnedSet, learned_files
 
-    out = []
-    for f in learned_files(inputs):  # LearnedSetError: a missing or empty input, named
-        for p in LearnedSet.load([f]).paths():
-            if not p.commanded:
-                raise UsageError(f"--learned {f}: a sampled (measured) path serves every speed and has no cost on "
-                                 "the check robots; pick takes commanded paths")
-            cost, check = check_cost(p.provenance, f"--learned {f}")
-            out.append(Candidate(f, p.label, float(p.speed), p.provenance.get("seed"), cost, check))
+    out, seen = [], {}
+    for source in map(Path, inputs):
+        for f in learned_files([source]):  # LearnedSetError: a missing or empty input, named
+            if f.resolve() in seen:
+                raise UsageError(f"--learned: {f} is given twice (in {seen[f.resolve()]} and {source}); name each "
+                                 "extraction once")
+            seen[f.resolve()] = source
+            for p in LearnedSet.load([f]).paths():
+                if not p.commanded:
+                    raise UsageError(f"--learned {f}: a sampled (measured) path serves every speed and has no cost "
+                                     "on the check robots; pick takes commanded paths")
+                cost, check = check_cost(p.provenance, f"--learned {f}")
+                out.append(Candidate(f, p.label, float(p.speed), p.provenance.get("seed"), cost, check, source,
+                                     p.provenance.get("policy")))
     return out
+
+
+def _same_speed(a: Candidate, b: Candidate) -> bool:
+    return abs(a.speed - b.speed) < 1e-6
 
 
 def pick(candidates: list[Candidate]) -> dict[float, tuple[Candidate, list[Candidate]]]:
@@ -112,7 +125,9 @@ def pick(candidates: list[Candidate]) -> dict[float, tuple[Candidate, list[Candi
 def labelled(args, candidates: list[Candidate]) -> dict[str, list[Candidate]]:
     """The candidates of each label to save: all under --label (default the first input's label), or with
     --lineage-offset K the lineages of each seed, seeds N, N + K, N + 2K, ..., under `seed<N mod K>`. UsageError for
-    settings that change nothing, a bad label, or a label with nothing to choose between."""
+    settings that change nothing, a bad label, a label with nothing to choose between, one input holding several
+    seeds' paths at a speed without --lineage-offset (a sweep's folder: its seeds would be picked as one), or one
+    lineage's path at a speed given twice with it."""
     if getattr(args, "overrides", None) or getattr(args, "config", None) or getattr(args, "no_recorded_trot", False):
         raise UsageError("evaluate.py pick reads saved paths and walks nothing, so --set, --config and "
                          "--no-recorded-trot change nothing; leave them out")
@@ -121,6 +136,12 @@ def labelled(args, candidates: list[Candidate]) -> dict[str, list[Candidate]]:
         label = args.label or candidates[0].label
         if not label or "/" in label or label.startswith("."):
             raise UsageError(f"--label {label!r}: a label is a file-name part, e.g. seed40")
+        for a in candidates:
+            b = next((b for b in candidates if b.source == a.source and b is not a and _same_speed(a, b)), None)
+            if b is not None:
+                raise UsageError(f"--learned {a.source} holds two paths at {a.speed:g} m/s ({a.file.name}, "
+                                 f"{b.file.name}): several seeds' paths would be picked as one label; give one "
+                                 "extraction's paths per input, or --lineage-offset for a sweep's seeds")
         groups = {label: candidates}
     else:
         unseeded = [c.file for c in candidates if not isinstance(c.seed, int)]
@@ -128,6 +149,11 @@ def labelled(args, candidates: list[Candidate]) -> dict[str, list[Candidate]]:
             raise UsageError(f"--lineage-offset groups paths by their training seed; {unseeded[0]} records none")
         groups = {}
         for c in candidates:
+            twin = next((b for b in groups.get(f"seed{c.seed % offset}", []) if b.seed == c.seed
+                         and _same_speed(b, c)), None)
+            if twin is not None:
+                raise UsageError(f"lineage seed{c.seed} has two paths at {c.speed:g} m/s ({twin.file}, {c.file}): "
+                                 "give each lineage's extraction once")
             groups.setdefault(f"seed{c.seed % offset}", []).append(c)
     for label, group in groups.items():  # a label whose every speed has one path would be a relabelling
         speeds = [c.speed for c in group]
@@ -149,18 +175,17 @@ def cmd_pick(args, cfg) -> int:
     candidates = load_candidates(args.learned)
     picks = {label: pick(group) for label, group in labelled(args, candidates).items()}  # UsageError before writing
     out = args.out or new_out()
-    inputs = {c.file.resolve() for c in candidates}
+    # an output folder holding an input could lose it (a re-made folder is cleared first): refused
+    inside = [c.file for c in candidates if c.file.resolve().is_relative_to(Path(out).resolve())]
+    if inside:
+        raise UsageError(f"--out {out}: it holds {inside[0]}, an input of this pick; choose another --out")
     chosen = {(label, speed): LearnedPath(label, read_path(kept.file))
               for label, by_speed in picks.items() for speed, (kept, _) in by_speed.items()}
-    clash = [out / "learned" / p.file_name() for p in chosen.values()
-             if (out / "learned" / p.file_name()).resolve() in inputs]
-    if clash:
-        raise UsageError(f"--out {out}: {clash[0]} is an input of this pick; choose another --out")
     run = Run(args, out)
     rows = []
     for label, by_speed in picks.items():
         for speed, (kept, group) in by_speed.items():
-            record = [{"file": portable_path(c.file), "label": c.label, "seed": c.seed,
+            record = [{"file": portable_path(c.file), "label": c.label, "seed": c.seed, "policy": c.policy,
                        "electrical_J_per_m": c.electrical_J_per_m} for c in group]
             path = chosen[label, speed].path
             provenance = {**path.provenance, "label": label,
