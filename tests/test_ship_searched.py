@@ -31,12 +31,15 @@ def after(cmd: list[str], flag: str) -> list[str]:
 @pytest.fixture
 def fake_evaluate(monkeypatch, tmp_path):
     """evaluate.py steps record their command and write what a prototype or compare run writes, as far as the tool
-    and tools/merge_walks.py read it (the run's gains in config.yaml); every other command runs for real."""
+    and tools/merge_walks.py read it (the run's gains in config.yaml); every other command runs for real. A step
+    whose folder is named in `fail` fails, and every join where "join" is."""
     calls, fail = [], set()
     monkeypatch.chdir(tmp_path)  # the tool moves to the repository: back here after each test
 
     def run(cmd, *args, **kwargs):
         cmd = [str(c) for c in cmd]
+        if "merge_walks.py" in cmd[1] and "join" in fail:
+            return subprocess.CompletedProcess(cmd, 1)
         if "evaluate.py" not in cmd[1]:
             return REAL_RUN(cmd, *args, **kwargs)
         calls.append(cmd[1:])
@@ -124,3 +127,22 @@ def test_bad_input_is_refused_before_any_walk(tmp_path, fake_evaluate):
     with pytest.raises(SystemExit):
         tool.main(["no_such_recipe", "--learned", str(learned), *work])
     assert calls == []
+
+
+def test_nothing_is_shipped_when_a_join_fails(tmp_path, fake_evaluate):
+    _, fail = fake_evaluate
+    learned, results = paths_folder(tmp_path), tmp_path / "results"
+    fail.add("join")
+    with pytest.raises(SystemExit, match="failed: joining"):
+        tool.main(["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results",
+                   str(results)])
+    assert not (results / "figures_input").exists()  # no prototype file shipped beside the old gains files
+
+
+def test_paths_changed_in_their_folder_are_walked_again(tmp_path, fake_evaluate):
+    calls, _ = fake_evaluate
+    learned, results = paths_folder(tmp_path), tmp_path / "results"
+    argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
+    assert tool.main(argv) == 0 and tool.main(argv) == 0 and len(calls) == 16  # the same paths: every step kept
+    (learned / "seed40_1mps.json").write_text('{"re-picked": true}')
+    assert tool.main(argv) == 0 and len(calls) == 32

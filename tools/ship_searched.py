@@ -22,15 +22,18 @@ folder under --work:
    (--pd-matched-from-default, no reference); joined by `tools/merge_walks.py gains`  -> gains_NAME.json
 6. gains_own_*: the four as commanded with the own start as the reference        -> gains_NAME_own.json
 
-The files are written into --results/figures_input/ once every step has succeeded, replacing the ones there.
-A step whose folder holds its result, made by the same command (each folder keeps its command, but for --workers,
-in `ship_searched_command.txt`), is kept: a re-make stopped half way continues where it stopped. --force walks every
-step again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results
+The six files are made in --work (the gains runs joined into --work/joined/) and copied into
+--results/figures_input/ once every step and join has succeeded, replacing the ones there. A step whose folder holds
+its result, made by the same command on the same inputs (each folder keeps its command, but for --workers, and a
+digest of the paths' and reference shapes' files, in `ship_searched_command.txt`), is kept: a re-make stopped half
+way continues where it stopped, and paths re-extracted or re-picked into the same folders are walked again. --force
+walks every step again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results
 folder other than the repository's: a check that the chain runs, not a result.
 """
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import shutil
 import subprocess
@@ -75,20 +78,30 @@ def steps(learned: list[Path], own_start: Path, eq7: Path) -> list[tuple[str, li
     return out
 
 
-def run_step(folder: Path, argv: list, result: str, workers: int, force: bool) -> None:
-    """One evaluate.py step into `folder`, unless it holds `result` from the same command; exits on a failure."""
+def inputs_digest(files: list[Path]) -> str:
+    """sha256 over the names and bytes of `files`: what the walks read besides their command."""
+    h = hashlib.sha256()
+    for f in sorted(files):
+        h.update(str(f).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def run_step(folder: Path, argv: list, result: str, workers: int, force: bool, digest: str = "") -> None:
+    """One evaluate.py step into `folder`, unless it holds `result` from the same command on inputs of the same
+    `digest`; exits on a failure."""
     words = ["evaluate.py", *argv, "--out", folder]
-    command = " ".join(str(w) for w in words)  # what the walks are (--workers changes none of them)
+    # what the walks are (--workers changes none of them), and what they read
+    command = " ".join(str(w) for w in words) + (f"\ninputs sha256 {digest}" if digest else "")
     record = folder / COMMAND_FILE
     if not force and (folder / result).is_file() and record.is_file() and record.read_text().strip() == command:
         print(f"\nkept {folder} (its result, from the same command)", flush=True)
         return
-    print(f"\n$ python {command} --workers {workers}", flush=True)
+    print(f"\n$ python {' '.join(str(w) for w in words)} --workers {workers}", flush=True)
     t0 = time.monotonic()
     done = subprocess.run([sys.executable, *(str(w) for w in words), "--workers", str(workers), "--force"],
                           cwd=REPO)  # --force: the folder is this tool's own
     if done.returncode != 0:
-        sys.exit(f"failed (exit {done.returncode}): python {command}")
+        sys.exit(f"failed (exit {done.returncode}): python {' '.join(str(w) for w in words)}")
     record.write_text(command + "\n")
     print(f"  ({time.monotonic() - t0:.0f} s)", flush=True)
 
@@ -123,27 +136,37 @@ def main(argv: list[str] | None = None) -> int:
         sys.exit(f"--workers {args.workers}: at least 1")
     if args.quick and results == Path("results"):
         sys.exit("--quick makes no result to ship: give it a --results folder of its own")
-    own_start = Path(C.load_preset(recipe.config).phases[-1].config.env.walk.gait.sampled_file)
+    sampled = C.load_preset(recipe.config).phases[-1].config.env.walk.gait.sampled_file
+    if not sampled:
+        sys.exit(f"{recipe.config}: its trot walks no searched shape (gait.sampled_file), so it has no own start to "
+                 "walk as a reference: not a searched-start recipe")
+    own_start = Path(sampled)
+    digest = inputs_digest([f for folder in learned for f in folder.glob("*.json")] + [own_start, eq7])
 
     made = {}
     for folder, step_argv, result in steps(learned, own_start, eq7):
         small = QUICK["compare" if step_argv[0] == "compare" else "prototype"] if args.quick else []
-        run_step(work / folder, [*step_argv, *small], result, args.workers, args.force)
+        run_step(work / folder, [*step_argv, *small], result, args.workers, args.force, digest)
         made[folder] = work / folder / result
 
-    figures = results / "figures_input"
-    figures.mkdir(parents=True, exist_ok=True)
-    for folder, target in (("prototype", recipe.prototype_source), ("compare", recipe.compare_source),
-                           ("mujoco", f"prototype_{recipe.name}_mujoco.json"), ("own", recipe.own_start_source)):
-        shutil.copyfile(made[folder], figures / target)
+    joined = work / "joined"  # the gains runs joined here first: nothing is shipped until all six files are made
+    joined.mkdir(parents=True, exist_ok=True)
     own_gains = [f for f in made if f.startswith("gains_own_")]
     gains = [f for f in made if f.startswith("gains_") and f not in own_gains]
     for folders, target in ((gains, recipe.gains_source), (own_gains, recipe.own_gains_source)):
         merge = [sys.executable, "tools/merge_walks.py", "gains", *(work / f for f in folders), "--out",
-                 figures / target, "--force"]
+                 joined / target, "--force"]
         print("\n$ python " + " ".join(str(w) for w in merge[1:]), flush=True)
         if subprocess.run([str(w) for w in merge]).returncode != 0:
-            sys.exit(f"failed: joining {', '.join(folders)} into {figures / target}")
+            sys.exit(f"failed: joining {', '.join(folders)} into {joined / target}")
+        made[target] = joined / target
+    figures = results / "figures_input"
+    figures.mkdir(parents=True, exist_ok=True)
+    for source, target in (("prototype", recipe.prototype_source), ("compare", recipe.compare_source),
+                           ("mujoco", f"prototype_{recipe.name}_mujoco.json"), ("own", recipe.own_start_source),
+                           (recipe.gains_source, recipe.gains_source),
+                           (recipe.own_gains_source, recipe.own_gains_source)):
+        shutil.copyfile(made[source], figures / target)
     print(f"\nwrote {figures}/: {recipe.prototype_source}, {recipe.compare_source}, prototype_{recipe.name}_mujoco"
           f".json, {recipe.own_start_source}, {recipe.gains_source}, {recipe.own_gains_source}; the table: python "
           f"tools/make_readme_tables.py --table {recipe.name}")
