@@ -140,14 +140,26 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     assert list(_rows(make_tables(tmp_path)["searched_start_headline"])) == named[:2]
 
 
-def test_the_gains_rows_are_named_by_the_prototype_seeds_whatever_seeds_the_gains_runs_hold():
-    """Gains runs of fewer seeds than the prototype's: their rows are named as the table's fresh group (the
-    headline's names), not by the gains walks' own seeds."""
+def test_the_gains_rows_are_named_by_the_seeds_the_gains_runs_walked():
+    """Gains runs of fewer seeds than the prototype's: their rows name the seeds they walked (the headline's the
+    same), and a seed of a set the table shows no prototype walks of is left out of the cells, not counted under
+    another set's name."""
     walks = _walks()
     fresh = [w for w in walks if w["seed"] != "seed0"]
-    rows = _rows(sst.searched_start_markdown(walks, gains_walks=_gains([w for w in fresh if w["seed"] != "seed4"],
-                                                                        "kd", 2.0)))
-    assert "the saving at kd 2×, as commanded, seeds 1–4" in rows
+    three = _gains([w for w in fresh if w["seed"] != "seed4"], "kd", 2.0)
+    rows = _rows(sst.searched_start_markdown(walks, gains_walks=three))
+    assert "the saving at kd 2×, as commanded, seeds 1–3" in rows and not any("seeds 1–4" in r for r in rows
+                                                                                if "kd 2×" in r)
+    head, _ = sst.headline_rows(walks, three)
+    assert "the saving at kd 2×, as commanded, seeds 1–3" in head
+    recipe = sst.Recipe("r", "configs/battery_searched.yaml", "r", (frozenset({"seed1", "seed2", "seed3", "seed4"}),
+                                                                    frozenset({"seed9"})), frozenset({"seed0"}), False)
+    other = [{**w, "seed": "seed9", **({"battery_used_pct": 0.1 * w["battery_used_pct"]}
+                                       if w["trajectory"] == "learned" else {})} for w in _gains(fresh, "kd", 2.0)
+             if w["seed"] == "seed1"]  # a second set's seed, its gains walks shipped, its prototype walks not
+    alone = _rows(sst.searched_start_markdown(walks, gains_walks=_gains(fresh, "kd", 2.0), recipe=recipe))
+    mixed = _rows(sst.searched_start_markdown(walks, gains_walks=_gains(fresh, "kd", 2.0) + other, recipe=recipe))
+    assert alone == mixed
 
 
 def test_a_second_fresh_set_has_its_own_rows_and_the_pooled_rows_join_both(tmp_path):
@@ -267,3 +279,10 @@ def test_the_readme_leads_with_the_pick_only_where_its_shipped_walks_clear_the_b
     clears = all(r["battery_vs_searched_pct_mean"] >= 10.0
                  and r["battery_vs_searched_pct_mean"] - r["battery_vs_searched_pct_ci95"] > 0 for r in rows)
     assert sst.SEARCHED_PICK.in_readme == clears
+
+
+def test_a_recipe_whose_seed_sets_overlap_is_refused():
+    with pytest.raises(ValueError, match="seed3, seed4 in two of its seed sets"):
+        sst.Recipe("r", "configs/battery_searched.yaml", "r", (sst._seeds(1, 4), sst._seeds(3, 5)), frozenset(), False)
+    with pytest.raises(ValueError, match="seed0 in two"):
+        sst.Recipe("r", "configs/battery_searched.yaml", "r", (sst._seeds(0, 4),), frozenset({"seed0"}), False)

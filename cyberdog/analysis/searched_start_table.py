@@ -53,6 +53,13 @@ class Recipe:
     tuned_seeds: frozenset[str]
     in_readme: bool
 
+    def __post_init__(self):  # a seed in two groups would be counted in both, under two names
+        groups = [*self.fresh_sets, self.tuned_seeds]
+        shared = {s for i, a in enumerate(groups) for b in groups[i + 1:] for s in a & b}
+        if shared:
+            raise ValueError(f"recipe {self.name}: {', '.join(sorted(shared))} in two of its seed sets "
+                             "(fresh sets and tuning seeds are disjoint)")
+
     @property
     def prototype_source(self) -> str:  # the prototype run, its reference the shape searched for the battery
         return f"prototype_{self.name}.json"
@@ -196,19 +203,19 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
             lines += _own_start_lines(own[kind][1], name, speeds, robot)
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
-    lines += _gains_lines([w for w in gains_walks or [] if not _is_tuned(w, recipe)], groups, robot, recipe)
-    lines += _gains_lines([w for w in own_start_gains_walks or [] if not _is_tuned(w, recipe)], groups, robot,
-                          recipe, reference=OWN_START)
+    lines += _gains_lines(_fresh_gains(gains_walks, groups, recipe), groups, robot, recipe)
+    lines += _gains_lines(_fresh_gains(own_start_gains_walks, groups, recipe), groups, robot, recipe,
+                          reference=OWN_START)
     return "\n".join(lines)
 
 
 def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, recipe: Recipe,
                  reference: str = SEARCHED) -> list[str]:
-    """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks against the default gains' walks
-    of the fresh groups those seeds fall in, named as those groups' seeds are (the headline's names), not by the
-    gains walks' own seeds. With another `reference` than the searched shape, only that reference's rows (the
-    paths' own rows are the searched shape's runs')."""
-    if not (name := _gains_seeds(gains_walks, groups, recipe)):
+    """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks (`_fresh_gains`), named by those
+    walks' own seeds; the default gains' walks of the fresh groups they fall in give the rows their speeds. With
+    another `reference` than the searched shape, only that reference's rows (the paths' own rows are the searched
+    shape's runs')."""
+    if not (name := _gains_seeds(gains_walks)):
         return []
     lines, default = [], [w for kind in _gains_groups(gains_walks, groups, recipe) for w in groups[kind][1]]
     for label, cells in gains_rows(gains_walks, default, robot, reference):
@@ -227,10 +234,16 @@ def _gains_groups(gains_walks: list[dict], groups: dict, recipe: Recipe) -> list
     return sorted({f"fresh{_fresh_set(w, recipe)}" for w in gains_walks if w.get("seed")} & set(groups))
 
 
-def _gains_seeds(gains_walks: list[dict], groups: dict, recipe: Recipe) -> str | None:
-    """"seeds 20–24": the seeds of the fresh groups the gains walks fall in (None where they fall in none)."""
-    seeds = [w["seed"] for kind in _gains_groups(gains_walks, groups, recipe) for w in groups[kind][1]
-             if w.get("seed")]
+def _fresh_gains(gains_walks: list[dict] | None, groups: dict, recipe: Recipe) -> list[dict]:
+    """The gains walks of the fresh seeds whose group the table shows (a tuning seed's, or a seed of a set with no
+    prototype walks, would be counted under names that are not its own)."""
+    return [w for w in gains_walks or [] if w.get("seed") and not _is_tuned(w, recipe)
+            and f"fresh{_fresh_set(w, recipe)}" in groups]
+
+
+def _gains_seeds(gains_walks: list[dict]) -> str | None:
+    """"seeds 20–24": the seeds the gains walks were walked on (None where there are none)."""
+    seeds = [w["seed"] for w in gains_walks if w.get("seed")]
     return seeds_named(seeds) if seeds else None
 
 
@@ -257,7 +270,7 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
     required = [row.format(seeds=name) for name in fresh[:1] + ([groups["pooled"][0]] if "pooled" in groups else [])
                 for row in (SAVING_ROW, VS_SEARCHED_ROW)]
     optional = [EQ7_ROW.format(seeds=fresh[0])]
-    if gains := _gains_seeds([w for w in gains_walks or [] if not _is_tuned(w, recipe)], groups, recipe):
+    if gains := _gains_seeds(_fresh_gains(gains_walks, groups, recipe)):
         first, *others = (GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS)
         optional += [first, GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
                                                       row=SEARCHED_SAVING, seeds=gains), *others]
