@@ -4,6 +4,7 @@ a temporary folder); commands that train or walk for minutes are parsed by their
 reason they are not run listed in EXPENSIVE; the TensorBoard server is checked to be installed."""
 from __future__ import annotations
 
+import json
 import re
 import shlex
 import subprocess
@@ -211,6 +212,20 @@ def test_the_result_tables_are_the_shipped_results_as_made(page):
     for name in blocks:
         assert blocks[name] == tables[name], \
             f"{page}'s {name} table differs: python tools/make_readme_tables.py --write"
+
+
+def test_the_tables_are_made_from_saved_walks_without_loading_a_simulator_or_torch():
+    """`tools/make_readme_tables.py` reads results/figures_input/ alone: in a fresh interpreter that makes every
+    table, no physics engine, torch or walking code is imported."""
+    forbidden = ("torch", "pybullet", "mujoco", "cyberdog.sim", "cyberdog.loop", "cyberdog.rl", "cyberdog.envs",
+                 "cyberdog.analysis.walk", "cyberdog.analysis.compare")
+    code = ("import json, sys\nfrom tools.make_readme_tables import main\nmain([])\n"
+            "print(json.dumps(sorted(sys.modules)))")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "| 1.0 m/s | 1.2 m/s | 1.4 m/s |" in proc.stdout  # the tables were made
+    modules = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert [m for m in modules if any(m == f or m.startswith(f + ".") for f in forbidden)] == []
 
 
 def test_writing_the_tables_fills_both_pages_and_refuses_a_results_page_without_markers(tmp_path):

@@ -38,6 +38,7 @@ import math
 import time
 from dataclasses import dataclass
 
+from cyberdog.analysis.comparison_sets import BASELINES, LIFT_DECIMALS, REFERENCE, SETS, same_lift
 from cyberdog.analysis.parallel import map_in_processes, progress_log
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.analysis.walk import walk
@@ -48,10 +49,6 @@ from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
 from cyberdog.core.trajectories import FootTrajectory, SampledTrajectory
 
-BASELINES = ("cycloid", "straight")
-REFERENCE = "searched"  # the direct search's shape (trajectory name of its walks)
-SETS = ("paper", "same_lift")
-LIFT_DECIMALS = 4  # lift heights equal to 0.1 mm share their baseline walks
 COLUMNS = ["set", "trajectory", "seed", "lift_height_m", "speed_command_mps", "mean_speed_mps", "status",
            "energy_kJ", "energy_per_100m_kJ", "cost_of_transport", "electrical_energy_J", "positive_work_J",
            "foot_slip_mm_per_cycle", "D_t_pct", "D_t_per_100m_pct", "D_t_electrical_pct", "E_min_trajectory",
@@ -163,10 +160,6 @@ def _describe_job(job: WalkJob) -> str:
 # Eq. (12) and the table
 # ---------------------------------------------------------------------------------------------------------
 
-def _same(a: float, b: float) -> bool:
-    return round(a, LIFT_DECIMALS) == round(b, LIFT_DECIMALS)
-
-
 def reduction(e_min: float, e_s: float) -> float:
     """Eq. (12) in %, nan where it is undefined (no valid baseline or learned walk)."""
     if not (math.isfinite(e_min) and e_min > 0 and math.isfinite(e_s)):
@@ -193,7 +186,7 @@ def comparison_rows(walks: list[dict], paper_lift: float) -> list[dict]:
                 lw = mine[0]
                 lift = paper_lift if set_name == "paper" else lw["lift_height_m"]
                 base = [w for w in walks if w["trajectory"] in BASELINES and w["speed_command_mps"] == v
-                        and _same(w["lift_height_m"], lift)]
+                        and same_lift(w["lift_height_m"], lift)]
                 if not base:
                     continue
                 valid = [w for w in base if w["valid"]]

@@ -30,7 +30,7 @@ import math
 from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
-from cyberdog.analysis.compare import _same
+from cyberdog.analysis.comparison_sets import same_lift
 from cyberdog.analysis.markdown_cells import header, line, number
 from cyberdog.analysis.searched_start_table import RECIPES, Recipe
 from cyberdog.analysis.stats import mean_ci
@@ -135,7 +135,7 @@ def _table5_at(walks: list[dict], speed: float) -> dict[str, dict]:
     out = {}
     for learned in (w for w in here if w["trajectory"] == "learned"):
         common = next((w for w in here if w["trajectory"] == learned["E_min_trajectory"]
-                       and _same(w["lift_height_m"], learned["lift_height_m"])), None)
+                       and same_lift(w["lift_height_m"], learned["lift_height_m"])), None)
         out[learned["seed"]] = {"learned": learned, "common": common}
     return out
 

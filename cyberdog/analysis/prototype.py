@@ -35,14 +35,13 @@ from cyberdog.analysis.report import markdown_table, write_rows
 from cyberdog.analysis.walk import walk
 from cyberdog.config import (HARDWARE_LIKE, TRAJECTORY_NAMES, HardwareConfig, PIDConfig, RandomizationConfig,
                              WalkConfig)
-from cyberdog.config.paper import PAPER_SPEEDS, PROTOTYPE_DISTANCE_M, PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S
+from cyberdog.config.paper import (PAPER_RANGE_1MPS_M, PAPER_SIM_TO_REAL_GAP_PP, PAPER_SPEEDS, PROTOTYPE_DISTANCE_M,
+                                   PROTOTYPE_DRAWS, PROTOTYPE_RUN_UP_S)
 from cyberdog.core import energy as en
 from cyberdog.core.foot_offsets import FootOffsetPath
 from cyberdog.core.learned_set import LearnedSet, LearnedSetError
 from cyberdog.core.trajectories import FootTrajectory
 
-PAPER_RANGE_1MPS_M = {"cycloid": 3600.0, "learned": 3924.0}  # m on a full charge at 1 m/s, Section 4.2
-PAPER_SIM_TO_REAL_GAP_PP = 3.0  # percentage points: 12 % (simulation) vs 9 % (prototype) energy reduction
 MODES = ("ideal", "hardware")
 POLICY = "policy"  # the row of a policy walking closed loop (`run_prototype(policies=...)`)
 TIME_CAP_MARGIN_S = 10.0  # s added to 1.5 × distance / speed (+ the start-up ramp) before a walk is abandoned

@@ -38,14 +38,14 @@ from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import searched_start_table, table5
-from cyberdog.analysis.compare import REFERENCE
+from cyberdog.analysis.comparison_sets import REFERENCE
 from cyberdog.analysis.engine_table import HEADLINE_ROWS as ENGINE_HEADLINE_ROWS
 from cyberdog.analysis.engine_table import engine_markdown
 from cyberdog.analysis.markdown_cells import header as _header
 from cyberdog.analysis.markdown_cells import line as _line
 from cyberdog.analysis.markdown_cells import fewer_seeds, mean_ci, missed_walks, seeds_named
 from cyberdog.analysis.gains_table import gains_markdown
-from cyberdog.analysis.prototype import PAPER_RANGE_1MPS_M
+from cyberdog.config.paper import PAPER_RANGE_1MPS_M
 from cyberdog.analysis.torque_table import (TORQUE_FRESH_SAVING_ROW, TORQUE_SAVING_ROW, TORQUE_WALKS_ROW,
                                            torque_markdown)
 from cyberdog.config.paper import PAPER_LIFT_HEIGHT, PAPER_SPEEDS

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from cyberdog.analysis.compare import BASELINES, LIFT_DECIMALS, REFERENCE, SETS, _same
+from cyberdog.analysis.comparison_sets import BASELINES, LIFT_DECIMALS, REFERENCE, SETS, same_lift
 from cyberdog.analysis.stats import mean_ci
 from cyberdog.config.paper import PAPER_SPEEDS
 
@@ -98,11 +98,11 @@ def _lift_group_lines(set_name: str, set_rows: list[dict], lift: float, all_seed
     seeds = [s for s in all_seeds if any(r["trajectory"] == "learned" and r["seed"] == s for r in set_rows)]
     if set_name == "same_lift":
         seeds = [s for s in seeds if any(r["trajectory"] == "learned" and r["seed"] == s
-                                         and _same(r["lift_height_m"], lift) for r in set_rows)]
+                                         and same_lift(r["lift_height_m"], lift) for r in set_rows)]
         lines.append(_line(f"*control: baselines at the learned lift height H = {lift:.3f} m*", [""] * len(speeds)))
-    base = [r for r in set_rows if r["trajectory"] in BASELINES and _same(r["lift_height_m"], lift)]
+    base = [r for r in set_rows if r["trajectory"] in BASELINES and same_lift(r["lift_height_m"], lift)]
     group = base + [r for r in set_rows if r["trajectory"] == "learned" and r["seed"] in seeds
-                    and (set_name != "same_lift" or _same(r["lift_height_m"], lift))]  # matched: its own walks
+                    and (set_name != "same_lift" or same_lift(r["lift_height_m"], lift))]  # matched: its own walks
     for s in seeds:
         lr = [_pick(group, "learned", s, v) for v in speeds]
         # each walk's own lift, in the columns' order: one number when the seed's paths share it
@@ -174,7 +174,7 @@ def summary_rows(rows: list[dict]) -> list[dict]:
                 same = [b for b in rows if b["set"] == set_name and b["trajectory"] == name
                         and b["speed_command_mps"] == v]
                 if set_name == "same_lift":  # one baseline walk per learned walk, at that walk's lift height
-                    group = [next((b for b in same if _same(b["lift_height_m"], r["lift_height_m"])), None)
+                    group = [next((b for b in same if same_lift(b["lift_height_m"], r["lift_height_m"])), None)
                              for r in ok]
                     groups[name] = [b for b in group if b is not None]
                 else:  # the one walk at the paper's lift height
