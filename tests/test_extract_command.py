@@ -210,6 +210,7 @@ def test_a_speed_that_fails_keeps_the_paths_extracted_before_it(tmp_path, capsys
     prov = CommandedPath.load(tmp_path / "placed" / "learned" / "seed0_1mps.json").provenance
     assert prov["controller"]["sagittal_placement_gain"] == 0.0
     assert prov["replay_check"]["controller"]["sagittal_placement_gain"] == 0.1
+    assert prov["replay_check"]["walk_settings"] == {}  # the trot is recorded apart; nothing else was set
     # a policy trained under foot placement: without a --set its replay check walks the policy's own trot
     placed_walk = C.replace(C.EnvConfig().walk, controller=C.replace(C.ControllerConfig(),
                                                                      sagittal_placement_gain=0.2))
@@ -377,3 +378,10 @@ def test_extraction_over_worker_processes_saves_what_extraction_in_turn_saves(tm
                                             tmp_path / "failing", None)
     assert isinstance(result, str) and "1 m/s" in result
     assert not list((tmp_path / "failing").glob("learned/*.json"))
+
+
+def test_the_checks_other_settings_are_what_differs_from_the_defaults_but_the_trot_and_gait():
+    from cyberdog.analysis.replay_check import walk_settings
+
+    cfg = C.override(C.WalkConfig(), ["pid.kd=[3,3,3]", "controller.heading_gain=0.4", "gait.lift_height=0.09"])
+    assert walk_settings(cfg) == {"pid.kd": [3.0, 3.0, 3.0]} and walk_settings(C.WalkConfig()) == {}

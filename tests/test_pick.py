@@ -67,6 +67,16 @@ def test_costs_checked_by_different_walks_are_refused(tmp_path, two_lineages):
         pick(load_candidates([*two_lineages, other]))
 
 
+def test_costs_of_checks_on_robots_set_apart_are_refused_where_both_record_it(tmp_path, two_lineages):
+    other = tmp_path / "c"  # extracted with --set pid.kd=[3,3,3]: its check robots were damped apart
+    save(other, "seed7", checked(1.0, 7, 100.0, walk_settings={"pid.kd": [3.0, 3.0, 3.0]}))
+    same = tmp_path / "d"
+    save(same, "seed8", checked(1.0, 8, 100.0, walk_settings={}))
+    with pytest.raises(UsageError, match="checked by different walks"):
+        pick(load_candidates([same, other]))
+    assert pick(load_candidates([*two_lineages, other]))[1.0][0].label == "seed7"  # the others record none
+
+
 def test_the_command_saves_the_picks_under_one_label_that_loads_back(tmp_path, two_lineages, capsys):
     out = tmp_path / "picked"
     assert evaluate.main(["pick", "--learned", *map(str, two_lineages), "--out", str(out)]) == 0

@@ -15,7 +15,7 @@ from cyberdog import config as C
 from cyberdog.analysis.extract import CYCLE_CHOICES, ExtractionError, commanded_from_rollout, cycle_rows
 from cyberdog.analysis.extract_measured import extract_from_rollout
 from cyberdog.analysis.replay_check import (REPLAY_CHECK_S, ReplayCheck, check_settings, replay_check, replay_walk,
-                                            walk_status)
+                                            walk_settings, walk_status)
 from cyberdog.analysis.report import write_rows
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
 from cyberdog.evaluation.learned import (DEFAULT_LEARNED_BATTERY, default_learned, load_learned, policy_paths,
@@ -305,7 +305,8 @@ def _extract_commanded(actor, path: Path, speed: float, args, prov: dict, cfg, l
         "selected_by": "least electrical energy per metre on the hardware-like check robots",
         "dropped_shifts": check.dropped_shifts,  # leg-periods of the check's walks with a shift out of reach
         **check_settings(),
-        "controller": dataclasses.asdict(check_controller)}
+        "controller": dataclasses.asdict(check_controller),
+        "walk_settings": walk_settings(cfg)}  # what else the check's robots were set to (pick compares it)
     in_rollout = ex.path.provenance.get("rollout_dropped_shifts", 0)
     if check.dropped_shifts or in_rollout:
         log(f"  foot shifts out of reach, dropped (the unshifted target sent): {in_rollout} leg-periods in the "

@@ -32,6 +32,9 @@ PARAGRAPH = ("per speed, keep the learned path (commanded, extracted with the re
 SELECTED_BY = "least electrical energy per metre on the extraction's hardware-like check robots"
 # what the check walked: costs are comparable only where these agree (cyberdog.analysis.replay_check.check_settings)
 CHECK_KEYS = ("distance_m", "hardware_like_seeds", "hardware_like_pd_scales", "controller")
+# the check's other settings (replay_check.walk_settings), compared where every candidate records them: paths
+# extracted before they were recorded compare on CHECK_KEYS alone
+RECORDED_KEYS = ("walk_settings",)
 
 
 def add_options(p) -> None:
@@ -57,7 +60,7 @@ class Candidate:
     speed: float  # m/s it was recorded at
     seed: int | None  # the training seed of the policy it came from
     electrical_J_per_m: float
-    check: dict  # what the check walked (CHECK_KEYS)
+    check: dict  # what the check walked (CHECK_KEYS, RECORDED_KEYS)
     source: Path  # the --learned input it came from (a folder or the file itself)
     policy: str | None = None  # the actor it was extracted from, as its provenance names it
 
@@ -74,7 +77,7 @@ def check_cost(provenance: dict, where: str) -> tuple[float, dict]:
     if not kept or kept[0].get("electrical_J_per_m") is None:
         raise UsageError(f"{where}: its replay check recorded no electrical energy per metre for the kept path "
                          f"(rollout seed {provenance.get('rollout_seed')}, cycle {provenance.get('cycle')!r})")
-    return float(kept[0]["electrical_J_per_m"]), {k: check.get(k) for k in CHECK_KEYS}
+    return float(kept[0]["electrical_J_per_m"]), {k: check.get(k) for k in CHECK_KEYS + RECORDED_KEYS}
 
 
 def load_candidates(inputs: list[Path]) -> list[Candidate]:
@@ -114,10 +117,12 @@ def pick(candidates: list[Candidate]) -> dict[float, tuple[Candidate, list[Candi
     picks = {}
     for speed in sorted(groups):
         group = groups[speed]
-        differ = [c.file for c in group if c.check != group[0].check]
+        recorded = [k for k in RECORDED_KEYS if all(c.check.get(k) is not None for c in group)]
+        differ = [c.file for c in group if any(c.check.get(k) != group[0].check.get(k) for k in CHECK_KEYS)
+                  or any(c.check[k] != group[0].check[k] for k in recorded)]
         if differ:
             raise UsageError(f"at {speed:g} m/s, {group[0].file} and {differ[0]} were checked by different walks "
-                             f"({', '.join(CHECK_KEYS)}): their costs do not compare")
+                             f"({', '.join(CHECK_KEYS + RECORDED_KEYS)}): their costs do not compare")
         picks[speed] = (min(group, key=lambda c: c.electrical_J_per_m), group)
     return picks
 
@@ -202,5 +207,5 @@ def cmd_pick(args, cfg) -> int:
     return run.finish()
 
 
-__all__ = ["CHECK_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options", "check_cost", "cmd_pick",
+__all__ = ["CHECK_KEYS", "RECORDED_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options", "check_cost", "cmd_pick",
            "labelled", "load_candidates", "pick"]
