@@ -103,6 +103,14 @@ def test_settings_that_change_nothing_and_bad_labels_are_refused(tmp_path, two_l
     assert rc == 2 and words in capsys.readouterr().err and not (tmp_path / "o").exists()
 
 
+def test_a_config_is_refused_in_one_line_before_it_is_read(tmp_path, two_lineages, capsys):
+    cfg = tmp_path / "walk.yaml"  # a walk config with a hardware section, which a walking command would note
+    cfg.write_text("hardware:\n  seed: 3\n")
+    rc = evaluate.main(["pick", "--learned", *map(str, two_lineages), "--config", str(cfg), "--out", str(tmp_path / "o")])
+    captured = capsys.readouterr()
+    assert rc == 2 and captured.out == "" and captured.err.count("\n") == 1 and "walks nothing" in captured.err
+
+
 def test_unchecked_or_single_paths_are_refused(tmp_path, capsys):
     bare = tmp_path / "bare"
     save(bare, "seed1", commanded(1.0, -0.01, 1))

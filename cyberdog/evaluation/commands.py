@@ -14,7 +14,7 @@ from cyberdog.evaluation.extraction import learned_trajectories, take_recipe_ext
 from cyberdog.evaluation.options import UsageError
 from cyberdog.evaluation.output import Run, open_run
 from cyberdog.evaluation.pd_match import cmd_pd_match
-from cyberdog.evaluation.pick import cmd_pick
+from cyberdog.evaluation.pick import cmd_pick, refuse_walk_settings
 from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
 from cyberdog.evaluation.walked_robot import walk_config, walked_hardware
 
@@ -199,6 +199,8 @@ def run(args, argv: list[str], draw_figures=None) -> int:
     args.run = args.walked_hardware = None
     args.draw_figures = draw_figures
     try:
+        if args.command == "pick":  # it walks nothing: a walk's settings refused before the config says anything
+            refuse_walk_settings(args)
         cfg = walk_config(args)
         args.walked_hardware = walked_hardware(args, cfg)  # config.yaml's hardware section
         return COMMAND_FUNCTIONS[args.command](args, cfg)

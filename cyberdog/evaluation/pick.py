@@ -127,15 +127,20 @@ def pick(candidates: list[Candidate]) -> dict[float, tuple[Candidate, list[Candi
     return picks
 
 
+def refuse_walk_settings(args) -> None:
+    """UsageError where a walk's settings are given: pick walks nothing (called before any config is read)."""
+    if getattr(args, "overrides", None) or getattr(args, "config", None) or getattr(args, "no_recorded_trot", False):
+        raise UsageError("evaluate.py pick reads saved paths and walks nothing, so --set, --config and "
+                         "--no-recorded-trot change nothing; leave them out")
+
+
 def labelled(args, candidates: list[Candidate]) -> dict[str, list[Candidate]]:
     """The candidates of each label to save: all under --label (default the first input's label), or with
     --lineage-offset K the lineages of each seed, seeds N, N + K, N + 2K, ..., under `seed<N mod K>`. UsageError for
     settings that change nothing, a bad label, a label with nothing to choose between, one input holding several
     seeds' paths at a speed without --lineage-offset (a sweep's folder: its seeds would be picked as one), or one
     lineage's path at a speed given twice with it."""
-    if getattr(args, "overrides", None) or getattr(args, "config", None) or getattr(args, "no_recorded_trot", False):
-        raise UsageError("evaluate.py pick reads saved paths and walks nothing, so --set, --config and "
-                         "--no-recorded-trot change nothing; leave them out")
+    refuse_walk_settings(args)
     offset = getattr(args, "lineage_offset", None)
     if offset is None:
         label = args.label or candidates[0].label
@@ -208,4 +213,4 @@ def cmd_pick(args, cfg) -> int:
 
 
 __all__ = ["CHECK_KEYS", "RECORDED_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options", "check_cost", "cmd_pick",
-           "labelled", "load_candidates", "pick"]
+           "labelled", "load_candidates", "pick", "refuse_walk_settings"]
