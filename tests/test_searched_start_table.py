@@ -286,3 +286,11 @@ def test_a_recipe_whose_seed_sets_overlap_is_refused():
         sst.Recipe("r", "configs/battery_searched.yaml", "r", (sst._seeds(1, 4), sst._seeds(3, 5)), frozenset(), False)
     with pytest.raises(ValueError, match="seed0 in two"):
         sst.Recipe("r", "configs/battery_searched.yaml", "r", (sst._seeds(0, 4),), frozenset({"seed0"}), False)
+
+
+def test_an_empty_input_is_refused_by_the_table_and_the_headline_alike(tmp_path):
+    recipe = sst.SEARCHED_PICK
+    (tmp_path / recipe.prototype_source).write_text("[]")
+    for make in (sst.make_table, sst.headline_of):
+        with pytest.raises(ValueError, match="holds no walks"):
+            make(tmp_path, recipe)

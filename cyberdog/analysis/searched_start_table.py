@@ -279,7 +279,14 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
 
 
 def _read(results: Path, name: str) -> list[dict] | None:
-    return json.loads((results / name).read_text()) if (results / name).is_file() else None
+    """The walks of a shipped input, None where it is not there; ValueError for a file that holds none (a
+    half-made input: no table is made from it, rather than a table missing its rows)."""
+    if not (results / name).is_file():
+        return None
+    walks = json.loads((results / name).read_text())
+    if not walks:
+        raise ValueError(f"{results / name} holds no walks: make it again (tools/ship_searched.py)")
+    return walks
 
 
 def headline_of(results: Path, recipe: Recipe = SEARCHED_START) -> tuple[tuple[str, ...], frozenset[str]]:
