@@ -25,6 +25,7 @@ def test_files_round_trip_with_labels_from_the_seed_and_cycle_tables_left_out(tm
     (tmp_path / "learned" / "seed2_1mps_cycles.json").write_text("[]")  # extraction's per-cycle table
     back = LearnedSet.load([tmp_path / "learned"])
     assert back.labels == ["seed2", "seed10"] and back.speeds() == [1.0, 1.2]  # seeds in numeric order
+    assert len(back.paths()) == len(learned.paths()) == 3
     for p, q in zip(learned.paths(), back.paths()):
         assert (p.label, p.speed) == (q.label, q.speed)
         assert q.lift_height == pytest.approx(p.lift_height, abs=1e-5)
@@ -87,6 +88,7 @@ def test_a_table_row_and_its_figure_use_the_same_path(tmp_path):
     learned.save(folder / "learned")
     jobs = cmp.comparison_jobs(C.WalkConfig(), LearnedSet.load([folder / "learned"]), speeds=(1.0,))
     walked = {j.seed: j.learned for j in jobs if j.trajectory == "learned"}
+    assert sorted(walked) == ["seed0", "seed1"]
     drawn = results.load_results(folder)
     assert drawn.learned_speed == results.FIGURE7_SPEED == 1.0
     for label, path in walked.items():

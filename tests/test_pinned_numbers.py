@@ -1,5 +1,10 @@
 """Pinned numbers: refactoring the simulation loop, the hardware model or the env must not move them.
 
+These are regression guards, measured from the code itself: they say that a change changed nothing, not that the
+numbers are right. Whether they are right is tested against independent computations elsewhere (Eq. 7 and the
+electrical model against closed forms in tests/test_energy.py and tests/test_energy_models.py, the
+tables' energies against the power traces in tests/test_evaluate.py, the kinematics against Eq. 1-6).
+
 The values were measured when the joint controller got its own rate (400 Hz, torque held over the period,
 physics 800 Hz underneath, Eq. 7 as Σ|τ·Δq|; before, controller and physics ran at 1 kHz and the cycloid
 walk gave 327.33 J) and are compared to 1e-9 relative. The electrical energies then moved once more, by

@@ -112,7 +112,7 @@ def test_exported_inputs_draw_the_same_figures_as_the_full_folder(tmp_path):
     for pa, pb in zip(a, b):
         assert np.array_equal(pixels(pa), pixels(pb)), pa.name
     with np.load(tmp_path / "small" / "power_traces.npz") as z:
-        assert all(len(z[k]) == 800 for k in z.files)  # two 0.4 s cycles at 1 kHz, nothing more
+        assert z.files and all(len(z[k]) == 800 for k in z.files)  # two 0.4 s cycles at 1 kHz, nothing more
     with pytest.raises(ValueError, match="drawn from"):
         export_inputs(full, full)
 
@@ -131,6 +131,7 @@ def traces(ax) -> list:
 
 def test_figure10_draws_the_learned_trace_on_top(tmp_path):
     fig = figure10_of(fake_results(tmp_path / "r"))
+    assert len(fig.axes) == 4
     top_row, bottom_row = fig.axes[:2], fig.axes[2:]  # two speeds: (a), (b) above, (c), (d) below
     for ax in fig.axes:
         top = max(traces(ax), key=lambda ln: ln.get_zorder())

@@ -161,6 +161,7 @@ def test_2m_prototype_gives_ideal_and_hardware_rows(rows):
 
 def test_battery_percent_is_eq13_and_range_is_consistent(rows):
     e = CFG.energy
+    assert len(rows) == 2  # the ideal and the hardware-like walk
     for r in rows:
         assert r["battery_start_pct"] == pytest.approx(95.0)
         assert r["battery_used_pct"] == pytest.approx(r["battery_start_pct"] - r["battery_end_pct"])  # Eq. (13)

@@ -344,6 +344,7 @@ def test_every_readme_table_names_the_command_that_prints_it_as_shown(capsys, mo
     monkeypatch.syspath_prepend(str(ROOT / "tools"))
     import make_readme_tables
     from cyberdog.analysis.readme_tables import readme_blocks
+    assert readme_blocks(README)
     for name, block in readme_blocks(README).items():
         caption = README[:README.index(f"<!-- table:{name} -->")].rsplit("<!-- /table:", 1)[-1]
         assert f"--table {name}`" in caption, f"the README's {name} table does not say which command prints it"

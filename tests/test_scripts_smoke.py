@@ -91,8 +91,7 @@ def test_readme_times(tmp_path):
 
 
 @pytest.mark.slow
-def test_sb3_registered_task(tmp_path):
-    pytest.importorskip("stable_baselines3")
+def test_sb3_registered_task(tmp_path):  # stable-baselines3 is in the [test] extra: this runs wherever tests do
     out = script(tmp_path, "bench/sb3_registered_task.py", "--steps", "100", "--learning-starts", "50",
                  "--episodes", "1")
     for title in ("the zero action \\(the trot\\)", "SB3 TD3 untrained", "SB3 TD3 after 100 steps"):

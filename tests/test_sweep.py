@@ -83,6 +83,7 @@ def check_completed_sweep(sweep_dir: Path, killed_seed: int, killed_at: int, eva
     status = json.loads((sweep_dir / STATUS_FILE).read_text())
     assert status["finished"] and status["counts"]["done"] == 2
     by_seed = {s["seed"]: s for s in status["seeds"]}
+    assert sorted(by_seed) == [0, 1] and killed_seed in by_seed
     for seed, st in by_seed.items():
         run_dir = sweep_dir / f"seed{seed}"
         # the status counts env steps at the last logged episode (20 steps each)

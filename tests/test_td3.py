@@ -96,7 +96,9 @@ def test_critic_loss_and_gradients_equal_torchrl(algorithm):
     assert metrics["critic_loss"].item() == pytest.approx(ref.item(), rel=1e-5)
     for name in ("mean", "max"):
         assert metrics[f"q_{name}"].item() == pytest.approx(getattr(meta["pred_value"], name)().item(), rel=1e-5)
-    for g, g_ref in zip(grads(ours(agent.critic.named())), grads(critic_tensors(ref_loss))):
+    mine, theirs = grads(ours(agent.critic.named())), grads(critic_tensors(ref_loss))
+    assert len(mine) == len(theirs) > 0  # every trainable tensor compared, none left out by zip
+    for g, g_ref in zip(mine, theirs):
         assert torch.allclose(g, g_ref, rtol=1e-5, atol=1e-6)
 
 
@@ -109,7 +111,9 @@ def test_actor_loss_and_gradients_equal_torchrl(algorithm):
     got = agent.actor_loss(batch.clone(), UpdateSettings.of(agent.cfg))
     got.backward()
     assert got.item() == pytest.approx(ref.item(), rel=1e-5)
-    for g, g_ref in zip(grads(ours(agent.actor_net.named())), grads(actor_tensors(ref_loss))):
+    mine, theirs = grads(ours(agent.actor_net.named())), grads(actor_tensors(ref_loss))
+    assert len(mine) == len(theirs) > 0  # every trainable tensor compared, none left out by zip
+    for g, g_ref in zip(mine, theirs):
         assert torch.allclose(g, g_ref, rtol=1e-5, atol=1e-6)
     assert all(t.grad is None or not t.grad.any() for t in agent.critic.parameters())  # the critics stay put
 

@@ -40,6 +40,7 @@ def test_walk_strip_takes_the_same_frames_of_the_last_whole_gait_period_from_eac
     cycloid = fake_video_run(tmp_path / "cycloid", "cycloid", 40, lift=0.095)  # 1.6 s: the shorter video decides
     strip = walk_strip.extract([learned, cycloid])
     assert np.allclose(strip.times_s, [0.40, 0.48, 0.56, 0.64, 0.72])  # the period [0.4, 0.8) s, T = 0.4 s
+    assert len(strip.frames) == 2  # a row a video
     for row in strip.frames:  # frame i is grey 4·i: frames 10, 12, ..., 18 in both rows
         assert [int(np.median(f)) for f in row] == [40, 48, 56, 64, 72]
     # the learned row at its path's own lift (the feet's mean peak, 0.095 m), the cycloid at the same: its seed's
