@@ -106,7 +106,8 @@ def test_settings_that_change_nothing_and_bad_labels_are_refused(tmp_path, two_l
 def test_a_config_is_refused_in_one_line_before_it_is_read(tmp_path, two_lineages, capsys):
     cfg = tmp_path / "walk.yaml"  # a walk config with a hardware section, which a walking command would note
     cfg.write_text("hardware:\n  seed: 3\n")
-    rc = evaluate.main(["pick", "--learned", *map(str, two_lineages), "--config", str(cfg), "--out", str(tmp_path / "o")])
+    rc = evaluate.main(["pick", "--learned", *map(str, two_lineages), "--config", str(cfg),
+                        "--out", str(tmp_path / "o")])
     captured = capsys.readouterr()
     assert rc == 2 and captured.out == "" and captured.err.count("\n") == 1 and "walks nothing" in captured.err
 

@@ -212,5 +212,5 @@ def cmd_pick(args, cfg) -> int:
     return run.finish()
 
 
-__all__ = ["CHECK_KEYS", "RECORDED_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options", "check_cost", "cmd_pick",
-           "labelled", "load_candidates", "pick", "refuse_walk_settings"]
+__all__ = ["CHECK_KEYS", "RECORDED_KEYS", "Candidate", "LINE", "PARAGRAPH", "SELECTED_BY", "add_options",
+           "check_cost", "cmd_pick", "labelled", "load_candidates", "pick", "refuse_walk_settings"]
