@@ -172,16 +172,10 @@ def walk_settings(cfg: WalkConfig) -> dict:
     """{dotted.setting: value} of the check's walk config where it differs from the defaults (`--set pid.kd=...`,
     a --config), for a kept path's provenance: the costs of two paths compare only where their checks walked the
     same robots. The trot (`controller`) is recorded apart, and the gait is each path's own."""
-    from cyberdog.config.io import to_dict
+    from cyberdog.config.preset import changed_settings
 
-    def flat(d: dict, prefix: str = "") -> dict:
-        out = {}
-        for k, v in d.items():
-            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
-        return out
-
-    mine, default = flat(to_dict(cfg)), flat(to_dict(WalkConfig()))
-    return {k: v for k, v in mine.items() if v != default.get(k) and not k.startswith(("controller.", "gait."))}
+    return {k: v for k, (v, _) in changed_settings(cfg, WalkConfig()).items()
+            if not k.startswith(("controller.", "gait."))}
 
 
 def replay_check(path: LearnedPath, speed: float, cfg: WalkConfig | None = None, log=None) -> ReplayCheck:

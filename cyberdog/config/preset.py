@@ -244,9 +244,9 @@ def _extract(spec: Any, where: Path) -> dict:
     return out
 
 
-def changed_settings(config: ExperimentConfig, reference: ExperimentConfig | None = None) -> dict[str, tuple]:
-    """{dotted.setting: (value, reference value)} of every setting of `config` that differs from `reference`
-    (default: the defaults, ExperimentConfig())."""
+def changed_settings(config, reference=None) -> dict[str, tuple]:
+    """{dotted.setting: (value, reference value)} of every setting of `config` (an ExperimentConfig, or another
+    config dataclass such as a WalkConfig) that differs from `reference` (default: ExperimentConfig())."""
     def flat(d: dict, prefix: str = "") -> dict:
         out = {}
         for k, v in d.items():
