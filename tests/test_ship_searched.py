@@ -19,6 +19,19 @@ spec.loader.exec_module(tool)
 REAL_RUN = subprocess.run
 
 
+def step_of(cmd: list[str]) -> str:
+    """The step a command walks for: its --out folder, or the folder above where it is a batch of seeds."""
+    out = Path(after(cmd, "--out")[0])
+    return out.parent.name if out.name.startswith("seed") else out.name
+
+
+def seeds_walked(cmd: list[str]) -> list[str]:
+    """The seeds of the path files (or of every file in the folders) after --learned."""
+    files = [f for given in map(Path, after(cmd, "--learned"))
+             for f in (sorted(given.glob("seed*.json")) if given.is_dir() else [given])]
+    return sorted({f.name.split("_")[0] for f in files})
+
+
 def after(cmd: list[str], flag: str) -> list[str]:
     """The arguments that follow `flag` up to the next option."""
     i, out = cmd.index(flag) + 1, []
@@ -45,7 +58,7 @@ def fake_evaluate(monkeypatch, tmp_path):
         calls.append(cmd[1:])
         out = Path(after(cmd, "--out")[0])
         out.mkdir(parents=True, exist_ok=True)
-        if out.name in fail:
+        if step_of(cmd) in fail:
             return subprocess.CompletedProcess(cmd, 1)
         pid = {}
         for setting in after(cmd, "--set") if "--set" in cmd else []:
@@ -53,8 +66,8 @@ def fake_evaluate(monkeypatch, tmp_path):
             if key.startswith("pid."):
                 pid[key[4:]] = yaml.safe_load(value)
         (out / "config.yaml").write_text(yaml.safe_dump({"pid": pid}))
-        rows = [{"trajectory": t, "seed": "seed40", "pd_matched": "--pd-matched-from-default" in cmd,
-                 "step": out.name} for t in ("learned", "cycloid")]
+        rows = [{"trajectory": t, "seed": seed, "pd_matched": "--pd-matched-from-default" in cmd,
+                 "step": step_of(cmd)} for seed in seeds_walked(cmd) for t in ("learned", "cycloid")]
         (out / ("comparison.json" if cmd[2] == "compare" else "prototype.json")).write_text(json.dumps(rows))
         return subprocess.CompletedProcess(cmd, 0)
 
@@ -74,7 +87,7 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
     learned, results = paths_folder(tmp_path), tmp_path / "results"
     argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
     assert tool.main(argv) == 0
-    by_folder = {Path(after(c, "--out")[0]).name: c for c in calls}
+    by_folder = {step_of(c): c for c in calls}
     assert list(by_folder)[:4] == ["prototype", "compare", "mujoco", "own"] and len(calls) == 16
     own = C.load_preset(ROOT / "configs/battery_searched.yaml").phases[-1].config.env.walk.gait.sampled_file
     assert after(by_folder["own"], "--prototype-reference") == [own]
@@ -110,7 +123,7 @@ def test_a_remake_keeps_the_steps_done_and_writes_nothing_when_one_fails(tmp_pat
     done = len(calls)
     fail.clear()
     assert tool.main(argv + ["--workers", "1"]) == 0  # --workers changes no walk: the steps done are kept
-    again = [Path(after(c, "--out")[0]).name for c in calls[done:]]
+    again = [step_of(c) for c in calls[done:]]
     assert again[0] == "gains_kd2" and "prototype" not in again and len(again) == 16 - done + 1
     n = len(calls)
     assert tool.main(argv + ["--force"]) == 0 and len(calls) == n + 16
@@ -146,3 +159,65 @@ def test_paths_changed_in_their_folder_are_walked_again(tmp_path, fake_evaluate)
     assert tool.main(argv) == 0 and tool.main(argv) == 0 and len(calls) == 16  # the same paths: every step kept
     (learned / "seed40_1mps.json").write_text('{"re-picked": true}')
     assert tool.main(argv) == 0 and len(calls) == 32
+
+
+def test_seeds_added_are_the_only_ones_walked_and_the_batches_are_joined(tmp_path, fake_evaluate):
+    calls, _ = fake_evaluate
+    learned, results = paths_folder(tmp_path), tmp_path / "results"
+    argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
+    assert tool.main(argv) == 0
+    (learned / "seed41_1mps.json").write_text("{}")
+    (learned / "seed41_1.2mps.json").write_text("{}")
+    n = len(calls)
+    assert tool.main(argv) == 0
+    new = calls[n:]
+    assert len(new) == 16  # every step once more: the batched ones for seed41 alone, compare for both
+    assert {step_of(c): seeds_walked(c) for c in new if step_of(c) != "compare"} == \
+        {step: ["seed41"] for step in map(step_of, new) if step != "compare"}
+    assert seeds_walked(next(c for c in new if step_of(c) == "compare")) == ["seed40", "seed41"]
+    shipped = json.loads((results / "figures_input/prototype_searched_start.json").read_text())
+    assert [r["seed"] for r in shipped] == ["seed40", "seed40", "seed41", "seed41"]
+    gains = json.loads((results / "figures_input/gains_searched_start.json").read_text())
+    assert {r["seed"] for r in gains} == {"seed40", "seed41"} and len(gains) == 8 * 4
+
+
+def test_a_seed_changed_or_gone_is_walked_again_or_left_out(tmp_path, fake_evaluate):
+    calls, _ = fake_evaluate
+    learned, results, work = paths_folder(tmp_path), tmp_path / "results", tmp_path / "work"
+    argv = ["searched_start", "--learned", str(learned), "--work", str(work), "--results", str(results)]
+    assert tool.main(argv) == 0
+    (learned / "seed41_1mps.json").write_text("{}")
+    assert tool.main(argv) == 0
+    assert sorted(p.name for p in (work / "prototype").iterdir()) == ["all_seeds", "seed40", "seed41"]
+    (learned / "seed40_1mps.json").write_text('{"re-picked": true}')
+    n = len(calls)
+    assert tool.main(argv) == 0
+    assert {tuple(seeds_walked(c)) for c in calls[n:] if step_of(c) != "compare"} == {("seed40",)}
+    (learned / "seed41_1mps.json").unlink()
+    n = len(calls)
+    assert tool.main(argv) == 0 and [step_of(c) for c in calls[n:]] == ["compare"]  # its inputs changed
+    assert sorted(p.name for p in (work / "prototype").iterdir()) == ["all_seeds", "seed40"]
+    shipped = json.loads((results / "figures_input/prototype_searched_start.json").read_text())
+    assert {r["seed"] for r in shipped} == {"seed40"}
+
+
+def test_one_seeds_path_in_two_folders_is_refused(tmp_path, fake_evaluate):
+    calls, _ = fake_evaluate
+    learned = paths_folder(tmp_path)
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "seed40_1mps.json").write_text("{}")
+    with pytest.raises(SystemExit, match="seed40_1mps.json is in"):
+        tool.main(["searched_start", "--learned", str(learned), str(other), "--work", str(tmp_path / "work"),
+                   "--results", str(tmp_path / "results")])
+    assert calls == []
+
+
+def test_batches_walked_with_other_settings_are_not_joined(tmp_path):
+    for name, pid in (("seed40", {}), ("seed41", {"kp": [30.0] * 3})):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "config.yaml").write_text(yaml.safe_dump({"pid": pid}))
+        (tmp_path / name / "prototype.json").write_text(json.dumps([{"seed": name}]))
+    with pytest.raises(SystemExit, match="other settings"):
+        tool.join_batches([tmp_path / "seed40", tmp_path / "seed41"], tmp_path / "all_seeds", "prototype.json")
+    assert not (tmp_path / "all_seeds").exists()

@@ -22,18 +22,26 @@ folder under --work:
    (--pd-matched-from-default, no reference); joined by `tools/merge_walks.py gains`  -> gains_NAME.json
 6. gains_own_*: the four as commanded with the own start as the reference        -> gains_NAME_own.json
 
+The prototype-run steps (all but compare) walk each seed once: a step's folder holds batches, one per run,
+named by their seeds (`seed40-seed41-...`), and the step's walks are the batches' joined (`all_seeds/`). Every walk
+belongs to one seed (its path, and the references at its lift, on the same robots), so a batch walks its seeds as
+one run over every seed would. A batch is kept where it holds its result, made by the same command on the same
+inputs (each keeps its command, but for --workers, with a digest of its paths' and the reference shapes' files, in
+`ship_searched_command.txt`); the seeds no kept batch holds are walked in one new batch. So seeds added to
+--learned are the only ones walked, a re-make stopped half way continues where it stopped, and a seed whose paths
+were re-extracted or re-picked is walked again (with its batch's other seeds). compare walks every seed in one
+run (its references are walked once per lift for all seeds) and is kept the same way.
+
 The six files are made in --work (the gains runs joined into --work/joined/) and copied into
---results/figures_input/ once every step and join has succeeded, replacing the ones there. A step whose folder holds
-its result, made by the same command on the same inputs (each folder keeps its command, but for --workers, and a
-digest of the paths' and reference shapes' files, in `ship_searched_command.txt`), is kept: a re-make stopped half
-way continues where it stopped, and paths re-extracted or re-picked into the same folders are walked again. --force
-walks every step again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results
-folder other than the repository's: a check that the chain runs, not a result.
+--results/figures_input/ once every step and join has succeeded, replacing the ones there. --force walks every step
+again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results folder other
+than the repository's: a check that the chain runs, not a result.
 """
 from __future__ import annotations
 
 import argparse
 import hashlib
+import json
 import os
 import shutil
 import subprocess
@@ -60,22 +68,42 @@ def gain_setting(gain: str, scale: float) -> str:
     return f"pid.{gain}=[{','.join(repr(v * scale) for v in getattr(C.PIDConfig(), gain))}]"
 
 
-def steps(learned: list[Path], own_start: Path, eq7: Path) -> list[tuple[str, list, str]]:
-    """(folder, evaluate.py arguments, its result file) of every step, in the order they run."""
-    paths = ["--learned", *learned, "--skip-missing-paths"]
+def steps(own_start: Path, eq7: Path) -> list[tuple[str, list, str]]:
+    """(folder, evaluate.py arguments but the paths, its result file) of every step, in the order they run; the
+    paths go in as `--learned ... --skip-missing-paths` after the subcommand."""
     own = ["--prototype-reference", own_start]
-    out = [("prototype", ["prototype", *paths], "prototype.json"),
-           ("compare", ["compare", *paths, "--reference", eq7], "comparison.json"),
-           ("mujoco", ["prototype", *paths, "--set", "sim.engine=mujoco"], "prototype.json"),
-           ("own", ["prototype", *paths, *own], "prototype.json")]
+    out = [("prototype", ["prototype"], "prototype.json"),
+           ("compare", ["compare", "--reference", eq7], "comparison.json"),
+           ("mujoco", ["prototype", "--set", "sim.engine=mujoco"], "prototype.json"),
+           ("own", ["prototype", *own], "prototype.json")]
     for gain in ("kp", "kd"):
         for scale in GAIN_SCALES:
             tag, gains = f"{gain}{scale:g}", ["--prototype-modes", "hardware", "--set", gain_setting(gain, scale)]
-            out += [(f"gains_{tag}", ["prototype", *paths, *gains], "prototype.json"),
-                    (f"gains_{tag}_recommanded", ["prototype", *paths, *gains, "--no-prototype-reference",
+            out += [(f"gains_{tag}", ["prototype", *gains], "prototype.json"),
+                    (f"gains_{tag}_recommanded", ["prototype", *gains, "--no-prototype-reference",
                                                   "--pd-matched-from-default"], "prototype.json"),
-                    (f"gains_own_{tag}", ["prototype", *paths, *gains, *own], "prototype.json")]
+                    (f"gains_own_{tag}", ["prototype", *gains, *own], "prototype.json")]
     return out
+
+
+def with_paths(argv: list, paths: list) -> list:
+    """The step's evaluate.py arguments walking `paths` (folders or files)."""
+    return [argv[0], "--learned", *paths, "--skip-missing-paths", *argv[1:]]
+
+
+def seed_files(learned: list[Path]) -> dict[str, list[Path]]:
+    """{seed label: its path files} over the folders (seed<N>_<speed>mps.json), in the seeds' order; exits on a file
+    name found in two folders (one seed's path twice)."""
+    by_seed: dict[str, list[Path]] = {}
+    where: dict[str, Path] = {}
+    for folder in learned:
+        for f in sorted(folder.glob("seed*_*mps.json")):
+            if f.name in where:
+                sys.exit(f"--learned: {f.name} is in {where[f.name]} and in {folder}: give each seed's paths once")
+            where[f.name] = folder
+            by_seed.setdefault(f.name.split("_", 1)[0], []).append(f)
+    number = lambda label: (0, int(label[4:]), "") if label[4:].isdigit() else (1, 0, label)
+    return dict(sorted(by_seed.items(), key=lambda item: number(item[0])))
 
 
 def inputs_digest(files: list[Path]) -> str:
@@ -86,14 +114,24 @@ def inputs_digest(files: list[Path]) -> str:
     return h.hexdigest()
 
 
+def step_command(folder: Path, argv: list, digest: str) -> tuple[list, str]:
+    """The evaluate.py words of a step into `folder`, and the record that says what it walks: its command (but
+    --workers, which changes no walk) and the digest of what it reads."""
+    words = ["evaluate.py", *argv, "--out", folder]
+    return words, " ".join(str(w) for w in words) + (f"\ninputs sha256 {digest}" if digest else "")
+
+
+def is_kept(folder: Path, record: str, result: str) -> bool:
+    """`folder` holds `result` from the step `record` describes."""
+    made = folder / COMMAND_FILE
+    return (folder / result).is_file() and made.is_file() and made.read_text().strip() == record
+
+
 def run_step(folder: Path, argv: list, result: str, workers: int, force: bool, digest: str = "") -> None:
     """One evaluate.py step into `folder`, unless it holds `result` from the same command on inputs of the same
     `digest`; exits on a failure."""
-    words = ["evaluate.py", *argv, "--out", folder]
-    # what the walks are (--workers changes none of them), and what they read
-    command = " ".join(str(w) for w in words) + (f"\ninputs sha256 {digest}" if digest else "")
-    record = folder / COMMAND_FILE
-    if not force and (folder / result).is_file() and record.is_file() and record.read_text().strip() == command:
+    words, record = step_command(folder, argv, digest)
+    if not force and is_kept(folder, record, result):
         print(f"\nkept {folder} (its result, from the same command)", flush=True)
         return
     print(f"\n$ python {' '.join(str(w) for w in words)} --workers {workers}", flush=True)
@@ -102,8 +140,55 @@ def run_step(folder: Path, argv: list, result: str, workers: int, force: bool, d
                           cwd=REPO)  # --force: the folder is this tool's own
     if done.returncode != 0:
         sys.exit(f"failed (exit {done.returncode}): python {' '.join(str(w) for w in words)}")
-    record.write_text(command + "\n")
+    (folder / COMMAND_FILE).write_text(record + "\n")
     print(f"  ({time.monotonic() - t0:.0f} s)", flush=True)
+
+
+def run_batched_step(folder: Path, argv: list, result: str, by_seed: dict[str, list[Path]], shared: list[Path],
+                     workers: int, force: bool) -> Path:
+    """A prototype-run step over every seed of `by_seed`, walked in batches under `folder` (the module docstring):
+    the batches kept, the other seeds walked in one new batch, and their walks joined into `folder`/all_seeds/
+    (`result` and the runs' config.yaml, the same in every batch), which is returned."""
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def batch(seeds: list[str]) -> tuple[Path, list, str]:
+        files = [f for s in seeds for f in by_seed[s]]
+        return folder / "-".join(seeds), with_paths(argv, files), inputs_digest(files + shared)
+
+    batches, covered = [], set()
+    for old in sorted(p for p in folder.iterdir() if p.is_dir() and p.name.startswith("seed")):
+        seeds = old.name.split("-")
+        if force or not set(seeds) <= by_seed.keys() - covered or not is_kept(old, _record(batch(seeds)), result):
+            shutil.rmtree(old)  # the tool's own folder: seeds gone from --learned, or walked on other inputs
+            continue
+        print(f"\nkept {old} (its result, from the same command)", flush=True)
+        batches.append(old)
+        covered |= set(seeds)
+    todo = [s for s in by_seed if s not in covered]
+    if todo:
+        new, step_argv, digest = batch(todo)
+        run_step(new, step_argv, result, workers, True, digest)
+        batches.append(new)
+    return join_batches(sorted(batches, key=lambda b: list(by_seed).index(b.name.split("-")[0])), folder / "all_seeds",
+                        result)
+
+
+def _record(made: tuple[Path, list, str]) -> str:
+    folder, argv, digest = made
+    return step_command(folder, argv, digest)[1]
+
+
+def join_batches(batches: list[Path], out: Path, result: str) -> Path:
+    """The batches' walks (lists of rows) in one `result` under `out`, with their config.yaml (exits if two batches
+    walked other settings)."""
+    configs = {(b / "config.yaml").read_text() for b in batches}
+    if len(configs) != 1:
+        sys.exit(f"the batches {', '.join(b.name for b in batches)} walked with other settings (config.yaml)")
+    out.mkdir(parents=True, exist_ok=True)
+    rows = [row for b in batches for row in json.loads((b / result).read_text())]
+    (out / result).write_text(json.dumps(rows, indent=2))
+    (out / "config.yaml").write_text(configs.pop())
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -141,20 +226,26 @@ def main(argv: list[str] | None = None) -> int:
         sys.exit(f"{recipe.config}: its trot walks no searched shape (gait.sampled_file), so it has no own start to "
                  "walk as a reference: not a searched-start recipe")
     own_start = Path(sampled)
+    by_seed = seed_files(learned)
     digest = inputs_digest([f for folder in learned for f in folder.glob("*.json")] + [own_start, eq7])
 
     made = {}
-    for folder, step_argv, result in steps(learned, own_start, eq7):
-        small = QUICK["compare" if step_argv[0] == "compare" else "prototype"] if args.quick else []
-        run_step(work / folder, [*step_argv, *small], result, args.workers, args.force, digest)
-        made[folder] = work / folder / result
+    for folder, step_argv, result in steps(own_start, eq7):
+        if step_argv[0] == "compare":  # its references are walked once per lift for every seed: one run
+            run_step(work / folder, with_paths(step_argv, learned) + (QUICK["compare"] if args.quick else []),
+                     result, args.workers, args.force, digest)
+            made[folder] = work / folder / result
+        else:
+            step_argv = step_argv + (QUICK["prototype"] if args.quick else [])
+            made[folder] = run_batched_step(work / folder, step_argv, result, by_seed, [own_start, eq7],
+                                            args.workers, args.force) / result
 
     joined = work / "joined"  # the gains runs joined here first: nothing is shipped until all six files are made
     joined.mkdir(parents=True, exist_ok=True)
     own_gains = [f for f in made if f.startswith("gains_own_")]
     gains = [f for f in made if f.startswith("gains_") and f not in own_gains]
     for folders, target in ((gains, recipe.gains_source), (own_gains, recipe.own_gains_source)):
-        merge = [sys.executable, "tools/merge_walks.py", "gains", *(work / f for f in folders), "--out",
+        merge = [sys.executable, "tools/merge_walks.py", "gains", *(made[f].parent for f in folders), "--out",
                  joined / target, "--force"]
         print("\n$ python " + " ".join(str(w) for w in merge[1:]), flush=True)
         if subprocess.run([str(w) for w in merge]).returncode != 0:
