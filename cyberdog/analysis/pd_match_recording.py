@@ -38,7 +38,8 @@ def pd_matched_foot_offsets(cfg: WalkConfig, trajectory: FootTrajectory | None, 
     if new_pid == cfg.pid:
         return offsets
     table = offsets if offsets is not None else FootOffsetPath(np.zeros((4, PHASES, 3)), cfg.gait.period)
-    key = hashlib.sha256(pickle.dumps((cfg, trajectory, table.offsets.tobytes(), table.period, new_pid)))
+    torque = None if table.feedforward is None else table.feedforward.tobytes()
+    key = hashlib.sha256(pickle.dumps((cfg, trajectory, table.offsets.tobytes(), torque, table.period, new_pid)))
     key = key.hexdigest()
     if key in _cache:
         return _cache[key]

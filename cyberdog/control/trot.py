@@ -359,7 +359,7 @@ class TrotController:
                 dq: np.ndarray | list | None = None) -> JointCommand:
         """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,
         an array or a list of floats): joint targets and speeds from the trajectory and IK, the stance
-        feedforward torque, the PID's gains and, with integral action, its integral term advanced on (q, dq)
+        feedforward torque (and the foot path's joint torque, where it carries one), the PID's gains and, with integral action, its integral term advanced on (q, dq)
         (dq, rad/s, is needed then). `periods`: the controller periods until the next call (the speed
         integral's time step): 1 in the walker's loop, 10 for a command held over a 25 ms agent step (the
         torque-mode prior)."""
@@ -367,6 +367,12 @@ class TrotController:
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
             self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(), in_swing)
+        path = self.foot_offset_path
+        if path is not None and path.feedforward is not None:  # the path's own joint torque, blended in as its shift
+            blend = self._path_blend(t)
+            for leg, torques in enumerate(path.feedforward_at(self.scheduler.phases_at(t))):
+                for j, torque in enumerate(torques):
+                    feedforward[3 * leg + j] += blend * torque
         pid, integral = self.pid, None
         if pid.integrates:
             if dq is None:

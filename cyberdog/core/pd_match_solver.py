@@ -132,7 +132,7 @@ def pd_matched_offsets(phases: np.ndarray, q: np.ndarray, foot_targets: np.ndarr
                                      new_pid.kd, velocity_feedforward)
         side = np.full(n, kin.LEFT_RIGHT[leg])
         table[leg] += kin.foot_position(matched, robot, side=side) - kin.foot_position(c_mean[leg], robot, side=side)
-    return FootOffsetPath(table, offsets.period)
+    return FootOffsetPath(table, offsets.period, offsets.feedforward)  # a carried torque is the same under any gains
 
 
 __all__ = ["pd_matched_command", "pd_matched_offsets", "phase_means"]

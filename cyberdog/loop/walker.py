@@ -21,7 +21,7 @@ or absent for this one:
    integral term is the controller's, advanced once per period and sent with the command;
 4. the torque applied at each physics step and the joint angles after it are kept for Eq. (7) and the
    electrical energy, with `body_trace` the body's speed, attitude and height, and with `record` the state,
-   contacts and the controller's foot targets; with `gait_metrics` the non-foot ground contacts and the
+   contacts, the controller's foot targets and the feedforward torque the drivers ran; with `gait_metrics` the non-foot ground contacts and the
    feet's positions for foot slip are sampled.
 
 Energy and traces: `cyberdog.loop.books.WalkBooks`, read from the rows the period keeps.
@@ -71,6 +71,7 @@ def driver_rate_config(cfg: WalkConfig, joint_damping: float = 0.0, drive: bool 
 
 _NO_TARGET = [(float("nan"),) * 3] * 4
 _NO_OFFSET = [(0.0, 0.0, 0.0)] * 4
+_NO_TORQUE = [0.0] * 12
 
 
 class Walker(WalkBooks):
@@ -331,7 +332,7 @@ class Walker(WalkBooks):
             rpy = s.base_rpy
             self.body.append((s.base_linear_velocity_world[0], rpy[0], rpy[1], rpy[2], s.base_position[2]))
         if self.record:
-            self._record(s)
+            self._record(s, arrived)
         if self.gait_metrics:
             if k % self.contact_check_every == 0:
                 self.non_foot_contacts |= self.robot.ground_contact_links() - self.foot_link_names
@@ -358,16 +359,18 @@ class Walker(WalkBooks):
         self.physics_tau.extend(taus)
         self.physics_q.extend(angles)
 
-    def _record(self, s) -> None:
+    def _record(self, s, arrived) -> None:
         traces = self._traces
         if not traces:
             traces.update(base_position=Rows((3,)), contacts=Rows((4,), bool),
-                          foot_targets=Rows((4, 3)), foot_offsets=Rows((4, 3)))
+                          foot_targets=Rows((4, 3)), foot_offsets=Rows((4, 3)), feedforward=Rows((12,)))
         traces["base_position"].append(s.base_position)
         traces["contacts"].append(self.robot.foot_contacts())  # after the step
         c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
         traces["foot_targets"].append(c.last_foot_targets if self.drive and c.last_foot_targets else _NO_TARGET)
         traces["foot_offsets"].append(c.last_foot_offsets if self.drive and c.last_foot_offsets else _NO_OFFSET)
+        command = arrived[0] if arrived is not None else None  # what the drivers ran this step (after the latency)
+        traces["feedforward"].append(command.feedforward if command is not None else _NO_TORQUE)
 
     # ------------------------------------------------------------------------------------------------------
     def fallen(self, state=None) -> bool:
