@@ -3,12 +3,12 @@
 
   python evaluate.py                  # all: Table 5, the prototype experiment and the figures (the default)
   python evaluate.py SUB --help       # SUB: all, baselines, extract, compare, prototype, stiffness, figures,
-                                      #      video, check, pd-match, export, pick
+                                      #      video, check, pd-match, stance-force, export, pick
 
 The sub-commands live in `cyberdog/evaluation/`: `cli.py` parses (each sub-command has only its own options,
 `parsers.py`), `commands.py` runs one sub-command, `learned.py` and `extraction.py` load or extract the learned
-trajectories, `parts.py` walks, tabulates and draws; `check.py`, `pd_match.py` and `export.py` are the check,
-pd-match and export sub-commands, options included. The last line printed names the output folder.
+trajectories, `parts.py` walks, tabulates and draws; `check.py`, `pd_match.py`, `stance_force.py`, `export.py`
+and `pick.py` are those sub-commands, options included. The last line printed names the output folder.
 """
 from __future__ import annotations
 

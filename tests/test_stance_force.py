@@ -77,7 +77,8 @@ def test_a_path_written_as_motion_and_force_walks_as_it_did_and_halving_kp_chang
     table[:, 16:, 2] = -0.02 * np.sin(np.pi * np.arange(16) / 16)  # stance: phase >= 0.5
     path = CommandedPath(1.0, GAIT, FootOffsetPath(table, 0.4))
     written, record = stance_force_path(path, cfg, hardware=None, duration=4.0, run_up=2.0)
-    assert record["stance_error_rms_mm"] > 5 and written.offsets.n == 64 and written.provenance["stance_force"] == record
+    assert record["stance_error_rms_mm"] > 5 and written.offsets.n == 64
+    assert written.provenance["stance_force"] == record
     force = written.offsets.feedforward
     assert np.all(force[:, :32] == 0) and np.abs(force[:, 32:]).max() > 0.5  # stance only, and a real push
     soft = dataclasses.replace(cfg, pid=dataclasses.replace(cfg.pid, kp=tuple(0.5 * k for k in cfg.pid.kp)))
@@ -92,3 +93,21 @@ def test_a_path_written_as_motion_and_force_walks_as_it_did_and_halving_kp_chang
     assert change["force"] < 0.5 * change["offsets"]
     with pytest.raises(ValueError, match="already carries"):
         stance_force_path(written, cfg, hardware=None)
+
+
+def test_stance_force_writes_beside_never_over_and_refuses_what_it_cannot_rewrite(tmp_path, capsys):
+    import evaluate
+    from pathlib import Path
+
+    shipped = Path(__file__).resolve().parents[1] / "results/battery_searched_pick/paths/seed40_1.2mps.json"
+    out = tmp_path / "out"
+    assert evaluate.main(["stance-force", str(shipped), "--harmonics", "4", "--out", str(out)]) == 0
+    written = read_path(out / "learned" / shipped.name)
+    record = written.provenance["stance_force"]
+    assert record["harmonics"] == 4 and record["robot"] == "hardware-like, seed 1000"
+    assert written.offsets.feedforward is not None and written.speed == 1.2
+    assert "hardware: null" not in (out / "config.yaml").read_text()  # the model it walked is recorded
+    assert evaluate.main(["stance-force", str(shipped), "--out", str(out)]) == 2  # never over a run
+    assert evaluate.main(["stance-force", str(out / "learned"), "--out", str(tmp_path / "again")]) == 2
+    assert "already written with a stance torque" in capsys.readouterr().err
+    assert evaluate.main(["stance-force", str(shipped), "--harmonics", "40", "--out", str(tmp_path / "h")]) == 2

@@ -36,7 +36,12 @@ PHASES = 64  # samples per cycle of the written path
 HARMONICS = 6  # Fourier harmonics of the phase kept in each table
 RECORD_S = 10.0  # s, the walk whose cycles are averaged (after its run-up)
 RUN_UP_S = 3.0  # s, walked first and left out: the start from a stand and the blend into the path
-CHECK_ROBOT = dataclasses.replace(HARDWARE_LIKE, seed=HARDWARE_CHECK_SEEDS[0])
+
+
+def check_robot(model: HardwareConfig = HARDWARE_LIKE) -> HardwareConfig:
+    """The robot the path is walked on: `model` as the extraction's first check robot (its seed offset by the
+    model's own, as `evaluate.py check` offsets its robots)."""
+    return dataclasses.replace(model, seed=model.seed + HARDWARE_CHECK_SEEDS[0])
 
 
 def phase_table(values: np.ndarray, phases: np.ndarray, n: int = PHASES) -> np.ndarray:
@@ -66,7 +71,7 @@ def keep_harmonics(table: np.ndarray, harmonics: int) -> np.ndarray:
     return np.fft.irfft(spectrum, n=n, axis=1)
 
 
-def stance_force_path(path: CommandedPath, cfg: WalkConfig, hardware: HardwareConfig | None = CHECK_ROBOT,
+def stance_force_path(path: CommandedPath, cfg: WalkConfig, hardware: HardwareConfig | None = check_robot(),
                       harmonics: int = HARMONICS, duration: float = RECORD_S,
                       run_up: float = RUN_UP_S) -> tuple[CommandedPath, dict]:
     """The path as motion + stance force (the module docstring), and a record of how it was made; `cfg` is the walk
@@ -101,4 +106,4 @@ def stance_force_path(path: CommandedPath, cfg: WalkConfig, hardware: HardwareCo
     return written, record
 
 
-__all__ = ["CHECK_ROBOT", "HARMONICS", "PHASES", "keep_harmonics", "phase_table", "stance_force_path"]
+__all__ = ["HARMONICS", "PHASES", "check_robot", "keep_harmonics", "phase_table", "stance_force_path"]

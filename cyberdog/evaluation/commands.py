@@ -14,6 +14,7 @@ from cyberdog.evaluation.extraction import learned_trajectories, take_recipe_ext
 from cyberdog.evaluation.options import UsageError
 from cyberdog.evaluation.output import Run, open_run
 from cyberdog.evaluation.pd_match import cmd_pd_match
+from cyberdog.evaluation.stance_force import cmd_stance_force
 from cyberdog.evaluation.pick import cmd_pick, refuse_walk_settings
 from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
 from cyberdog.evaluation.walked_robot import walk_config, walked_hardware
@@ -187,7 +188,8 @@ def cmd_video(args, cfg: C.WalkConfig) -> int:
 
 COMMAND_FUNCTIONS = {"all": cmd_all, "baselines": cmd_baselines, "extract": cmd_extract, "compare": cmd_compare,
                      "prototype": cmd_prototype, "stiffness": cmd_stiffness, "figures": cmd_figures, "video": cmd_video,
-                     "check": cmd_check, "pd-match": cmd_pd_match, "export": cmd_export,
+                     "check": cmd_check, "pd-match": cmd_pd_match, "stance-force": cmd_stance_force,
+                     "export": cmd_export,
                      "pick": cmd_pick}
 
 

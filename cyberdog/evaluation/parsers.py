@@ -1,12 +1,13 @@
 """The options of each `evaluate.py` sub-command: one function per sub-command adds them to its parser, from the
-blocks several share (`options`) and its own; `check` and `pd-match` keep theirs beside their commands. `COMMANDS`
-lists every sub-command with its help and that function, in the order `evaluate.py --help` lists them.
+blocks several share (`options`) and its own; `check`, `pd-match`, `stance-force`, `export` and `pick` keep theirs
+beside their commands. `COMMANDS` lists every sub-command with its help and that function, in the order
+`evaluate.py --help` lists them.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from cyberdog.evaluation import check, export, pd_match, pick
+from cyberdog.evaluation import check, export, pd_match, pick, stance_force
 from cyberdog.evaluation.options import (BASELINE_CHOICES, add_duration_option, add_extract_workers_option,
                                          add_extraction_options, add_learned_option, add_metrics_option,
                                          add_output_options, add_prototype_options, add_speed_options,
@@ -63,6 +64,7 @@ HELP = {  # name: (one line for the list of sub-commands, the paragraph of its o
               "with its PD gains."),
     "check": (check.LINE, check.PARAGRAPH),
     "pd-match": (pd_match.LINE, pd_match.PARAGRAPH),
+    "stance-force": (stance_force.LINE, stance_force.PARAGRAPH),
     "export": (export.LINE, export.PARAGRAPH),
     "pick": (pick.LINE, pick.PARAGRAPH),
 }
@@ -171,6 +173,11 @@ def pd_match_options(p) -> None:
     pd_match.add_options(p)
 
 
+def stance_force_options(p) -> None:
+    add_output_options(p)
+    stance_force.add_options(p)
+
+
 def export_options(p) -> None:
     add_output_options(p)
     export.add_options(p)
@@ -184,6 +191,6 @@ def pick_options(p) -> None:
 ADD_OPTIONS = {"all": all_options, "baselines": baselines_options, "extract": extract_options,
                "compare": compare_options, "prototype": prototype_options, "stiffness": stiffness_options,
                "figures": figures_options, "video": video_options, "check": check_options,
-               "pd-match": pd_match_options, "export": export_options,
+               "pd-match": pd_match_options, "stance-force": stance_force_options, "export": export_options,
                "pick": pick_options}
 COMMANDS = {name: (line, paragraph, ADD_OPTIONS[name]) for name, (line, paragraph) in HELP.items()}

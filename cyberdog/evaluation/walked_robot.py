@@ -2,14 +2,14 @@
 its hardware-like walks.
 
 That model is HARDWARE_LIKE, or the --config file's `hardware:` section where it has one (read as training reads
-env.hardware: its fields over HardwareConfig()'s, every effect off; config.yaml holds every field), with
-`--set hardware.FIELD=V` laid over it. The prototype and stiffness runs walk it (`--prototype-modes hardware`,
-each draw its own seed), `check` on paths walks its spread and hardware parts on it (each check robot its own
-seed), and the video walks it with `--video-robot hardware`, the default where hardware settings are given. A
-sub-command that walks no hardware-like robot refuses `--set hardware.*` in one line (it would change nothing)
-and walks a --config file's hardware section not at all, with a note saying so. The output's config.yaml
-records the walk config and the model walked (null where the run walks the ideal robot only,
-`cyberdog.config.walked`), so that --config of it walks the same robot.
+env.hardware: its fields over HardwareConfig()'s, every effect off; config.yaml holds every field), with `--set
+hardware.FIELD=V` laid over it. The prototype and stiffness runs walk it (`--prototype-modes hardware`, each draw
+its own seed), `check` on paths walks its spread and hardware parts on it (each check robot its own seed),
+`stance-force` walks each path on it (as the first check robot), and the video walks it with `--video-robot
+hardware`, the default where hardware settings are given. A sub-command that walks no hardware-like robot refuses
+`--set hardware.*` in one line (it would change nothing) and walks a --config file's hardware section not at all,
+with a note saying so. The output's config.yaml records the walk config and the model walked (null where the run
+walks the ideal robot only, `cyberdog.config.walked`), so that --config of it walks the same robot.
 """
 from __future__ import annotations
 
@@ -32,6 +32,7 @@ IDEAL_ONLY = {
     "figures": "(it draws saved results)",
     "pick": "(it reads the costs saved in the paths)",
 }
+ALWAYS_HARDWARE = {"stance-force"}  # sub-commands that walk a hardware-like robot whatever their options
 
 
 def walk_config(args) -> C.WalkConfig:
@@ -73,7 +74,7 @@ def _walks_hardware(args) -> bool | None:
         return (prototype and not args.no_prototype) or (args.video and video_robot(args) == "hardware")
     if command == "check":
         return None if args.runs else args.parts is None or set(args.parts) != {"ideal"}
-    return False
+    return command in ALWAYS_HARDWARE
 
 
 def walked_hardware(args, cfg: C.WalkConfig) -> C.HardwareConfig | None:
