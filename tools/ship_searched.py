@@ -158,7 +158,8 @@ def run_batched_step(folder: Path, argv: list, result: str, by_seed: dict[str, l
     batches, covered = [], set()
     for old in sorted(p for p in folder.iterdir() if p.is_dir() and p.name.startswith("seed")):
         seeds = old.name.split("-")
-        if force or not set(seeds) <= by_seed.keys() - covered or not is_kept(old, _record(batch(seeds)), result):
+        if force or not set(seeds) <= by_seed.keys() - covered or not is_kept(old, step_command(*batch(seeds))[1],
+                                                                                   result):
             shutil.rmtree(old)  # the tool's own folder: seeds gone from --learned, or walked on other inputs
             continue
         print(f"\nkept {old} (its result, from the same command)", flush=True)
@@ -169,13 +170,8 @@ def run_batched_step(folder: Path, argv: list, result: str, by_seed: dict[str, l
         new, step_argv, digest = batch(todo)
         run_step(new, step_argv, result, workers, True, digest)
         batches.append(new)
-    return join_batches(sorted(batches, key=lambda b: list(by_seed).index(b.name.split("-")[0])), folder / "all_seeds",
-                        result)
-
-
-def _record(made: tuple[Path, list, str]) -> str:
-    folder, argv, digest = made
-    return step_command(folder, argv, digest)[1]
+    order = list(by_seed)
+    return join_batches(sorted(batches, key=lambda b: order.index(b.name.split("-")[0])), folder / "all_seeds", result)
 
 
 def join_batches(batches: list[Path], out: Path, result: str) -> Path:
