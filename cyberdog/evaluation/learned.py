@@ -205,3 +205,28 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
 __all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
            "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned",
            "load_learned", "metrics_files", "policy_paths", "reference_shape"]
+
+
+def open_path_rewrite(args, cfg: C.WalkConfig, why_commanded: str, refusal=None):
+    """The output run and the commanded paths of a sub-command that writes each path anew as
+    `<out>/learned/<same file name>` (`pd-match`, `stance-force`): the paths of `args.paths` (files or folders);
+    a sampled path (`why_commanded` says why it cannot be rewritten), an --out that would write over an input and
+    what `refusal(paths)` says (a message, or None) are UsageErrors, raised before the output folder is made."""
+    from cyberdog.core.learned_set import learned_files
+    from cyberdog.evaluation.output import new_out, open_run
+
+    files = learned_files(args.paths)
+    paths = LearnedSet.load(files).paths()
+    flat = [p.label for p in paths if not p.commanded]
+    if flat:
+        raise UsageError(f"{', '.join(flat)}: {why_commanded}; give commanded path files")
+    why = refusal(paths) if refusal is not None else None
+    if why:
+        raise UsageError(why)
+    args.out = args.out or new_out()
+    written = {(args.out / "learned" / p.file_name()).resolve() for p in paths}
+    if written & {f.resolve() for f in files}:
+        raise UsageError(f"--out {args.out} would write over the paths it reads: choose another folder")
+    run = open_run(args, cfg)
+    (run.out / "learned").mkdir(exist_ok=True)
+    return run, paths

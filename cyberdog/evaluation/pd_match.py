@@ -51,8 +51,7 @@ def new_pid(args, own):
 def cmd_pd_match(args, cfg) -> int:
     from cyberdog.analysis.pd_match_recording import RECORD_S, SETTLE_S, pd_matched_foot_offsets
     from cyberdog.core.commanded_path import CommandedPath
-    from cyberdog.core.learned_set import LearnedSet, learned_files
-    from cyberdog.evaluation.output import new_out, open_run
+    from cyberdog.evaluation.learned import open_path_rewrite
     from cyberdog.evaluation.recorded_trot import trot_for
 
     if args.kd is not None and args.kp is None:
@@ -61,17 +60,7 @@ def cmd_pd_match(args, cfg) -> int:
         target = new_pid(args, cfg.pid)
     except ValueError as err:
         raise UsageError(f"the new PD: {err}") from None
-    files = learned_files(args.paths)
-    paths = LearnedSet.load(files).paths()
-    flat = [p.label for p in paths if not p.commanded]
-    if flat:
-        raise UsageError(f"{', '.join(flat)}: a sampled path has no foot shifts to re-solve; give commanded path files")
-    args.out = args.out or new_out()
-    written = {(args.out / "learned" / p.file_name()).resolve() for p in paths}
-    if written & {f.resolve() for f in files}:
-        raise UsageError(f"--out {args.out} would write over the paths it reads: choose another folder")
-    run = open_run(args, cfg)
-    (run.out / "learned").mkdir(exist_ok=True)
+    run, paths = open_path_rewrite(args, cfg, "a sampled path has no foot shifts to re-solve")
     for path in paths:
         walk_cfg = trot_for(args, cfg, path.recorded_controller, path.file_name(), walked="it is recorded under it")
         walk_cfg, trajectory, offsets = path.walk_args(walk_cfg, path.speed)

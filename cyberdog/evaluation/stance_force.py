@@ -38,28 +38,13 @@ def add_options(p) -> None:
 
 def cmd_stance_force(args, cfg) -> int:
     from cyberdog.analysis.stance_force import HARMONICS, check_robot, stance_force_path
-    from cyberdog.core.learned_set import LearnedSet, learned_files
-    from cyberdog.evaluation.output import new_out, open_run
+    from cyberdog.evaluation.learned import open_path_rewrite
     from cyberdog.evaluation.recorded_trot import trot_for
 
     harmonics = HARMONICS if args.harmonics is None else args.harmonics
     if not 1 <= harmonics <= 31:
         raise UsageError(f"--harmonics {harmonics}: between 1 and 31 (the path has 64 phases)")
-    files = learned_files(args.paths)
-    paths = LearnedSet.load(files).paths()
-    flat = [p.label for p in paths if not p.commanded]
-    if flat:
-        raise UsageError(f"{', '.join(flat)}: a sampled path has no foot targets of its own to rewrite; give "
-                         "commanded path files")
-    carried = [p.label for p in paths if p.path.offsets.feedforward is not None]
-    if carried:
-        raise UsageError(f"{', '.join(carried)}: already written with a stance torque")
-    args.out = args.out or new_out()
-    written = {(args.out / "learned" / p.file_name()).resolve() for p in paths}
-    if written & {f.resolve() for f in files}:
-        raise UsageError(f"--out {args.out} would write over the paths it reads: choose another folder")
-    run = open_run(args, cfg)
-    (run.out / "learned").mkdir(exist_ok=True)
+    run, paths = open_path_rewrite(args, cfg, "a sampled path has no foot targets of its own to rewrite", _carried)
     for path in paths:
         walk_cfg = trot_for(args, cfg, path.recorded_controller, path.file_name(), walked="it is recorded under it")
         rewritten, record = stance_force_path(path.path, walk_cfg, check_robot(args.hardware), harmonics=harmonics)
@@ -69,6 +54,12 @@ def cmd_stance_force(args, cfg) -> int:
               f"stance torque {' / '.join(f'{v:.2f}' for v in record['mean_feedforward_Nm'])} N·m (abad / hip / "
               f"knee) -> {out}")
     return run.finish()
+
+
+def _carried(paths) -> str | None:
+    """The refusal of paths already written with a torque: their motion is no longer what the PD made of offsets."""
+    carried = [p.label for p in paths if p.path.offsets.feedforward is not None]
+    return f"{', '.join(carried)}: already written with a stance torque" if carried else None
 
 
 __all__ = ["add_options", "cmd_stance_force"]
