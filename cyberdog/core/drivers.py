@@ -45,7 +45,7 @@ class JointCommand(NamedTuple):
 
     q_target: list  # rad, q_des
     dq_target: list  # rad/s, qd_des
-    feedforward: list  # N·m, tau_ff (the stance legs' gravity compensation, a foot path's torque), added after the PD's clamp
+    feedforward: list  # N·m, tau_ff (stance gravity compensation, a foot path's torque), added after the PD's clamp
     kp: list  # N·m/rad
     kd: list  # N·m·s/rad
     integral: list | None = None  # N·m, the PID's integral term, inside the PD's clamp; None: no integral action
