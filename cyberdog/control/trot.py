@@ -357,12 +357,12 @@ class TrotController:
 
     def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None, periods: int = 1,
                 dq: np.ndarray | list | None = None) -> JointCommand:
-        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12,
-        an array or a list of floats): joint targets and speeds from the trajectory and IK, the stance
-        feedforward torque (and the foot path's joint torque, where it carries one), the PID's gains and, with integral action, its integral term advanced on (q, dq)
-        (dq, rad/s, is needed then). `periods`: the controller periods until the next call (the speed
-        integral's time step): 1 in the walker's loop, 10 for a command held over a 25 ms agent step (the
-        torque-mode prior)."""
+        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12, an array
+        or a list of floats): joint targets and speeds from the trajectory and IK, the stance feedforward torque
+        (and the foot path's joint torque, where it carries one), the PID's gains and, with integral action, its
+        integral term advanced on (q, dq) (dq, rad/s, is needed then). `periods`: the controller periods until the
+        next call (the speed integral's time step): 1 in the walker's loop, 10 for a command held over a 25 ms agent
+        step (the torque-mode prior)."""
         _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK, periods)
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:

@@ -14,9 +14,9 @@ from cyberdog.evaluation.extraction import learned_trajectories, take_recipe_ext
 from cyberdog.evaluation.options import UsageError
 from cyberdog.evaluation.output import Run, open_run
 from cyberdog.evaluation.pd_match import cmd_pd_match
-from cyberdog.evaluation.stance_force import cmd_stance_force
 from cyberdog.evaluation.pick import cmd_pick, refuse_walk_settings
 from cyberdog.evaluation.recorded_trot import note_searched_trot, searched_controller, walk_under_recorded_trot
+from cyberdog.evaluation.stance_force import cmd_stance_force
 from cyberdog.evaluation.walked_robot import walk_config, walked_hardware
 
 BASELINE_COLUMNS = ["trajectory", "speed_command_mps", "mean_speed_mps", "lateral_drift_m", "height_min_m",

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from cyberdog import config as C
-from cyberdog.core.learned_set import LearnedSet, LearnedSetError
+from cyberdog.core.learned_set import LearnedSet, LearnedSetError, learned_files
 from cyberdog.core.trajectories import SampledTrajectory
 from cyberdog.evaluation.options import UsageError
 from cyberdog.metrics_csv import run_name
@@ -202,9 +202,6 @@ def metrics_files(metrics: list[Path] | None, policies: list[Path] = ()) -> dict
     return dict(zip(unique_labels([run_name(m) for m in found]), found))
 
 
-__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
-           "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned",
-           "load_learned", "metrics_files", "policy_paths", "reference_shape"]
 
 
 def open_path_rewrite(args, cfg: C.WalkConfig, why_commanded: str, refusal=None):
@@ -212,7 +209,6 @@ def open_path_rewrite(args, cfg: C.WalkConfig, why_commanded: str, refusal=None)
     `<out>/learned/<same file name>` (`pd-match`, `stance-force`): the paths of `args.paths` (files or folders);
     a sampled path (`why_commanded` says why it cannot be rewritten), an --out that would write over an input and
     what `refusal(paths)` says (a message, or None) are UsageErrors, raised before the output folder is made."""
-    from cyberdog.core.learned_set import learned_files
     from cyberdog.evaluation.output import new_out, open_run
 
     files = learned_files(args.paths)
@@ -230,3 +226,8 @@ def open_path_rewrite(args, cfg: C.WalkConfig, why_commanded: str, refusal=None)
     run = open_run(args, cfg)
     (run.out / "learned").mkdir(exist_ok=True)
     return run, paths
+
+
+__all__ = ["DEFAULT_LEARNED", "DEFAULT_LEARNED_BATTERY", "DEFAULT_METRICS", "DEFAULT_PROTOTYPE_REFERENCE",
+           "DEFAULT_REFERENCE", "STAGE2_ACTORS", "check_learned_inputs", "default_learned",
+           "load_learned", "metrics_files", "open_path_rewrite", "policy_paths", "reference_shape"]
