@@ -21,8 +21,8 @@ or absent for this one:
    integral term is the controller's, advanced once per period and sent with the command;
 4. the torque applied at each physics step and the joint angles after it are kept for Eq. (7) and the
    electrical energy, with `body_trace` the body's speed, attitude and height, and with `record` the state,
-   contacts, the controller's foot targets and the feedforward torque the drivers ran; with `gait_metrics` the non-foot ground contacts and the
-   feet's positions for foot slip are sampled.
+   contacts, the controller's foot targets and the feedforward torque the drivers ran; with `gait_metrics` the
+   non-foot ground contacts and the feet's positions for foot slip are sampled.
 
 Energy and traces: `cyberdog.loop.books.WalkBooks`, read from the rows the period keeps.
 
