@@ -22,7 +22,7 @@ from cyberdog.config import WalkConfig
 from cyberdog.config.paper import PAPER_SPEEDS, PAPER_WALK_DURATION
 from cyberdog.control.trot import TrotController
 from cyberdog.core.drivers import JointCommand
-from cyberdog.core.kinematics import standing_joint_angles
+from cyberdog.core.kinematics import add_stance_weight_torque, standing_joint_angles
 from cyberdog.analysis.walk import walk
 from cyberdog.loop.walker import Walker
 
@@ -61,7 +61,7 @@ class TrotStance:
 
     def command(self, t: float, q, body=None, periods: int = 1, dq=None) -> JointCommand:
         feedforward = [0.0] * 12
-        self.trot._add_stance_feedforward(feedforward, list(q), [False] * 4)
+        add_stance_weight_torque(feedforward, list(q), [False] * 4, self.trot.robot, self.trot.body_weight)
         pid = self.trot.pid
         return JointCommand(self.target, [0.0] * 12, feedforward, pid.kp_list, pid.kd_list)
 

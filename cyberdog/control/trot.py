@@ -21,7 +21,8 @@ docs/robot.md: on a similar robot plain PD tracking reached only about half the 
   k·(v − v_cmd), Raibert's rule for the forward speed; a stabiliser of replayed paths, not the paper's trot;
 - a start-up ramp of the commanded speed (`speed_ramp_time`, 1 s): stepping from rest to full speed at once
   rolled the body by up to 0.8 rad and toppled the straight-line trot at 1.4 m/s. A learned path's per-leg
-  shift (`foot_offset_path`) is blended in over the same ramp, in proportion to the commanded speed.
+  shift (`foot_offset_path`), and its joint torque where it carries one, are blended in over the same ramp, in
+  proportion to the commanded speed.
 """
 from __future__ import annotations
 
@@ -357,22 +358,18 @@ class TrotController:
 
     def command(self, t: float, q: np.ndarray | list, body: BodyFeedback | None = None, periods: int = 1,
                 dq: np.ndarray | list | None = None) -> JointCommand:
-        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12, an array
-        or a list of floats): joint targets and speeds from the trajectory and IK, the stance feedforward torque
-        (and the foot path's joint torque, where it carries one), the PID's gains and, with integral action, its
-        integral term advanced on (q, dq) (dq, rad/s, is needed then). `periods`: the controller periods until the
-        next call (the speed integral's time step): 1 in the walker's loop, 10 for a command held over a 25 ms agent
-        step (the torque-mode prior)."""
+        """What the controller sends to the motor drivers at time t (s) for the measured joint angles q (12 floats, an
+        array or a list): joint targets and speeds from the trajectory and IK, the stance feedforward torque (and a
+        foot path's own), the PID's gains and, with integral action, its integral term advanced on (q, dq) (dq,
+        rad/s, is needed then). `periods`: the controller periods until the next call (the speed integral's time
+        step): 1 in the walker's loop, 10 for a command held over a 25 ms agent step (the torque-mode prior)."""
         _, _, q_t, dq_t, in_swing = self._leg_targets(t, body or _NO_FEEDBACK, periods)
         feedforward = [0.0] * 12
         if self.cfg.controller.gravity_compensation:
-            self._add_stance_feedforward(feedforward, q if type(q) is list else q.tolist(), in_swing)
-        path = self.foot_offset_path
-        if path is not None and path.feedforward is not None:  # the path's own joint torque, blended in as its shift
-            blend = self._path_blend(t)
-            for leg, torques in enumerate(path.feedforward_at(self.scheduler.phases_at(t))):
-                for j, torque in enumerate(torques):
-                    feedforward[3 * leg + j] += blend * torque
+            kin.add_stance_weight_torque(feedforward, q if type(q) is list else q.tolist(), in_swing, self.robot,
+                                         self.body_weight)
+        if self.foot_offset_path is not None:  # the path's own joint torque, if any, blended in as its shift
+            self.foot_offset_path.add_feedforward(feedforward, self.scheduler.phases_at(t), self._path_blend(t))
         pid, integral = self.pid, None
         if pid.integrates:
             if dq is None:
@@ -388,19 +385,3 @@ class TrotController:
         q = q if type(q) is list else q.tolist()
         dq = dq if type(dq) is list else dq.tolist()
         return driver_torque(command, q, dq, self.pid.torque_limit)
-
-    def _add_stance_feedforward(self, tau: list[float], q: list[float], in_swing: list[bool]) -> None:
-        """The stance legs carry the body: τ += Jᵀ f per stance leg, f = (0, 0, −m g / n_stance), added to tau (12
-        floats) in place, q as 12 floats, the legs' swing flags (4 bools): only the stance legs' Jacobian rows
-        are computed (the swing legs' terms are zeros; tests/oracles.py holds the array form)."""
-        n = 4 - sum(in_swing)
-        if n == 0:
-            return
-        r = self.robot
-        f_z = -self.body_weight / n  # N, each stance foot's share of the weight, pushing down
-        for leg, (swing, side) in enumerate(zip(in_swing, LEG_SIDE)):
-            if not swing:
-                i = 3 * leg
-                row = kin.leg_jacobian_z_row(q[i], q[i + 1], q[i + 2], side, r.l1, r.l2, r.l3)
-                for j in range(3):
-                    tau[i + j] += row[j] * f_z

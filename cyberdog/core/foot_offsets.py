@@ -86,6 +86,15 @@ class FootOffsetPath:
             return [(0.0, 0.0, 0.0)] * LEGS
         return [_interpolate(rows[leg], self.n, phase)[0] for leg, phase in enumerate(phases)]
 
+    def add_feedforward(self, tau: list[float], phases, share: float = 1.0) -> None:
+        """Add `share` of the path's joint torques at the legs' `phases` to `tau` (12 floats, N·m, legs LF, RF, LH,
+        RH × abad, hip, knee) in place; nothing where the path carries none."""
+        if self._feedforward_rows is None:
+            return
+        for leg, torques in enumerate(self.feedforward_at(phases)):
+            for j, torque in enumerate(torques):
+                tau[3 * leg + j] += share * torque
+
     def _interpolate(self, leg: int, phase: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """One leg's offset (m) at `phase` (wrapping) and its slope (m per unit phase) on that segment."""
         return _interpolate(self._rows[leg], self.n, phase)

@@ -30,6 +30,7 @@ import numpy as np
 from cyberdog.config import RobotConfig
 
 LEFT_RIGHT = np.array([1.0, -1.0, 1.0, -1.0])  # s per leg (LF, RF, LH, RH): +1 left, −1 right
+_SIDES = tuple(float(v) for v in LEFT_RIGHT)  # the same, as floats for the per-period paths
 FRONT_REAR = np.array([1.0, 1.0, -1.0, -1.0])  # +1 front legs, −1 hind legs
 
 
@@ -261,6 +262,25 @@ def leg_jacobian_z_row(abad: float, hip: float, knee: float, side: float, l1: fl
     s_hk, c_hk = math.sin(hip + knee), math.cos(hip + knee)
     z_leg = -l2 * math.cos(hip) - l3 * c_hk
     return (c1 * (side * l1) - s1 * z_leg, c1 * (l2 * math.sin(hip) + l3 * s_hk), c1 * (l3 * s_hk))
+
+
+def add_stance_weight_torque(tau: list[float], q: list[float], in_swing: list[bool], robot: RobotConfig,
+                             weight: float) -> None:
+    """The stance legs carry the body: τ += Jᵀ f per stance leg, f = (0, 0, −weight / n_stance) (N; virtual work:
+    τ·q̇ = f·ṗ, f the force the foot exerts), added to tau (12 floats, N·m) in place; q as 12 floats, the legs'
+    swing flags (4 bools). Only the stance legs' Jacobian rows are computed (the swing legs' terms are zeros;
+    tests/oracles.py holds the array form)."""
+    n = 4 - sum(in_swing)
+    if n == 0:
+        return
+    f_z = -weight / n  # N, each stance foot's share of the weight, pushing down
+    l1, l2, l3 = robot.l1, robot.l2, robot.l3
+    for leg, swing in enumerate(in_swing):
+        if not swing:
+            i = 3 * leg
+            row = leg_jacobian_z_row(q[i], q[i + 1], q[i + 2], _SIDES[leg], l1, l2, l3)
+            for j in range(3):
+                tau[i + j] += row[j] * f_z
 
 
 def lateral_velocity_body(quaternion, linear_velocity_world) -> float:

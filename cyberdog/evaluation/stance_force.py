@@ -57,7 +57,7 @@ def cmd_stance_force(args, cfg) -> int:
 
 
 def _carried(paths) -> str | None:
-    """The refusal of paths already written with a torque: their motion is no longer what the PD made of offsets."""
+    """The refusal of paths that carry a torque already: the PD alone did not make their motion."""
     carried = [p.label for p in paths if p.path.offsets.feedforward is not None]
     return f"{', '.join(carried)}: already written with a stance torque" if carried else None
 
