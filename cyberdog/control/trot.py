@@ -368,8 +368,9 @@ class TrotController:
         if self.cfg.controller.gravity_compensation:
             kin.add_stance_weight_torque(feedforward, q if type(q) is list else q.tolist(), in_swing, self.robot,
                                          self.body_weight)
-        if self.foot_offset_path is not None:  # the path's own joint torque, if any, blended in as its shift
-            self.foot_offset_path.add_feedforward(feedforward, self.scheduler.phases_at(t), self._path_blend(t))
+        path = self.foot_offset_path
+        if path is not None and path.feedforward is not None:  # the path's own torque, blended in as its shift
+            path.add_feedforward(feedforward, self.scheduler.phases_at(t), self._path_blend(t))
         pid, integral = self.pid, None
         if pid.integrates:
             if dq is None:
