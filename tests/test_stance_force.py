@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from cyberdog import config as C
-from cyberdog.analysis.stance_force import keep_harmonics, phase_table, stance_force_path
+from cyberdog.analysis.stance_force import (SPEED_TOLERANCE, SPEED_WALKS, STRETCH_BOUND, keep_harmonics,
+                                            match_speed, phase_table, stance_force_path, stretch_sweep)
 from cyberdog.analysis.walk import walk
 from cyberdog.control.trot import BodyFeedback, TrotController
 from cyberdog.core.commanded_path import CommandedPath
@@ -68,6 +69,37 @@ def test_phase_table_averages_each_legs_steps_at_each_phase_and_keep_harmonics_d
         keep_harmonics(rough, 8)
 
 
+def test_stretch_sweep_lengthens_the_fore_aft_motion_about_its_mean_and_nothing_else():
+    phase = np.arange(16) / 16
+    realised = np.zeros((4, 16, 3))
+    realised[..., 0] = 0.2 + 0.1 * np.sin(2 * np.pi * phase)  # x about 0.2 m
+    realised[..., 2] = -0.3
+    offsets = np.full((4, 16, 3), 0.01)
+    out = stretch_sweep(offsets, realised, 1.1)
+    moved = realised + out - offsets  # the motion the stretched offsets make
+    assert np.allclose(moved[..., 0] - 0.2, 1.1 * (realised[..., 0] - 0.2))
+    assert np.array_equal(out[..., 1:], offsets[..., 1:]) and np.array_equal(stretch_sweep(offsets, realised, 1.0),
+                                                                              offsets)
+    with pytest.raises(ValueError, match="stretch"):
+        stretch_sweep(offsets, realised, 0.0)
+
+
+def test_match_speed_stretches_in_proportion_to_the_speed_missed_and_keeps_the_nearest():
+    walked = []
+
+    def walk_speed(stretch):  # a robot 5 % slow whose speed grows 0.9x as fast as its stride
+        walked.append(stretch)
+        return 1.4 * 0.95 * (1 + 0.9 * (stretch - 1))
+
+    stretch, walks = match_speed(lambda s: s, 1.4, walk_speed)
+    assert walked[0] == 1.0 and len(walks) <= SPEED_WALKS and stretch > 1.05
+    assert abs(walks[-1]["speed_mps"] / 1.4 - 1) <= SPEED_TOLERANCE and stretch == walks[-1]["stretch"]
+    stretch, walks = match_speed(lambda s: s, 1.4, lambda s: 1.0 + 0.01 * s)  # a stride that hardly moves it
+    assert len(walks) == SPEED_WALKS and stretch == max(w["stretch"] for w in walks) == 1 + STRETCH_BOUND
+    stretch, walks = match_speed(lambda s: s, 1.0, lambda s: 1.001)  # already matched: one walk
+    assert (stretch, len(walks)) == (1.0, 1)
+
+
 def test_a_path_written_as_motion_and_force_walks_as_it_did_and_halving_kp_changes_it_less():
     """A path that pushes its stance feet 2 cm below where they can go (the ideal robot, short walks): as motion +
     force it draws the battery as it did at the default gains, and at kp 0.5x its draw moves less than the path's
@@ -79,6 +111,7 @@ def test_a_path_written_as_motion_and_force_walks_as_it_did_and_halving_kp_chang
     written, record = stance_force_path(path, cfg, hardware=None, duration=4.0, run_up=2.0)
     assert record["stance_error_rms_mm"] > 5 and written.offsets.n == 64
     assert written.provenance["stance_force"] == record
+    assert 1 <= len(record["speed_walks"]) <= SPEED_WALKS and record["sweep_stretch"] > 0
     force = written.offsets.feedforward
     assert np.all(force[:, :32] == 0) and np.abs(force[:, 32:]).max() > 0.5  # stance only, and a real push
     soft = dataclasses.replace(cfg, pid=dataclasses.replace(cfg.pid, kp=tuple(0.5 * k for k in cfg.pid.kp)))

@@ -14,7 +14,12 @@ leaves none of it, and since kp and kd scale what a position error makes, the ga
 
 each table kept to its first `harmonics` Fourier harmonics over the phase (the cycle means of a short walk are
 noisy, and a sharp corner in the motion is what stiffer damping makes costly). The PD then corrects departures
-from that motion only, and the force is the same under any gains. The path is walked once, under the trot it
+from that motion only, and the force is the same under any gains. The form is one gait with the path only where
+it walks at the path's speed: the mean stance torque carries no correction of the cycle-to-cycle speed, and where
+the trot's speed loop sits at its bound (1.4 m/s) the form walks up to 2–3 % slower. So its fore-aft motion is
+stretched about its cycle mean until it walks, on the same robot, at the speed the path walked
+(`match_speed`: a body on stance feet that do not slip moves as far as they sweep, so the speed goes with the
+stretch). The path is walked once, under the trot it
 was recorded with, on the extraction's first hardware-like check robot (`HARDWARE_CHECK_SEEDS`: never the
 prototype's test robots).
 """
@@ -36,6 +41,9 @@ PHASES = 64  # samples per cycle of the written path
 HARMONICS = 6  # Fourier harmonics of the phase kept in each table
 RECORD_S = 10.0  # s, the walk whose cycles are averaged (after its run-up)
 RUN_UP_S = 3.0  # s, walked first and left out: the start from a stand and the blend into the path
+SPEED_TOLERANCE = 0.005  # the form's speed within this share of the path's own: matched
+SPEED_WALKS = 3  # walks of the form at most while matching its speed
+STRETCH_BOUND = 0.10  # the sweep stretched by at most this share either way (the trot's speed loop's own bound)
 
 
 def check_robot(model: HardwareConfig = HARDWARE_LIKE) -> HardwareConfig:
@@ -71,6 +79,33 @@ def keep_harmonics(table: np.ndarray, harmonics: int) -> np.ndarray:
     return np.fft.irfft(spectrum, n=n, axis=1)
 
 
+def stretch_sweep(offsets: np.ndarray, realised: np.ndarray, stretch: float) -> np.ndarray:
+    """`offsets` (4, n, 3) shifted so that the fore-aft motion they make, `realised` (4, n, 3, the feet's position
+    in the leg frame), becomes `stretch` times as long about each leg's cycle mean; y and z unchanged."""
+    if not (np.isfinite(stretch) and stretch > 0):
+        raise ValueError(f"stretch must be > 0 and finite, got {stretch!r}")
+    out = np.array(offsets, dtype=float)
+    x = np.asarray(realised, dtype=float)[..., 0]
+    out[..., 0] += (stretch - 1.0) * (x - x.mean(axis=1, keepdims=True))
+    return out
+
+
+def match_speed(make, speed: float, walk_speed) -> tuple[float, list[dict]]:
+    """The stretch of the form's sweep (`make(stretch)` -> FootOffsetPath) whose walk (`walk_speed(offsets)` -> m/s)
+    comes nearest `speed`: walked at 1, then stretched in proportion to the speed missed, at most `SPEED_WALKS`
+    walks, stopping within `SPEED_TOLERANCE`, the stretch kept within 1 ± `STRETCH_BOUND`. Returns it and every
+    walk's (stretch, speed)."""
+    stretch, walks = 1.0, []
+    for _ in range(SPEED_WALKS):
+        v = float(walk_speed(make(stretch)))
+        walks.append({"stretch": round(stretch, 5), "speed_mps": round(v, 4)})
+        if abs(v / speed - 1.0) <= SPEED_TOLERANCE or v <= 0:
+            break
+        stretch = float(np.clip(stretch * speed / v, 1.0 - STRETCH_BOUND, 1.0 + STRETCH_BOUND))
+    best = min(walks, key=lambda w: abs(w["speed_mps"] - speed))
+    return best["stretch"], walks
+
+
 def stance_force_path(path: CommandedPath, cfg: WalkConfig, hardware: HardwareConfig | None = check_robot(),
                       harmonics: int = HARMONICS, duration: float = RECORD_S,
                       run_up: float = RUN_UP_S) -> tuple[CommandedPath, dict]:
@@ -86,24 +121,40 @@ def stance_force_path(path: CommandedPath, cfg: WalkConfig, hardware: HardwareCo
     traces = result.traces
     settled = traces["t"] >= run_up
     q = traces["q"][settled].reshape(-1, 4, 3)
-    error = kin.foot_position(q, cfg.robot, np.broadcast_to(kin.LEFT_RIGHT, q.shape[:-1])) \
-        - traces["foot_targets"][settled]  # m, leg frame: where the foot is less where it was sent
+    foot = kin.foot_position(q, cfg.robot, np.broadcast_to(kin.LEFT_RIGHT, q.shape[:-1]))  # m, leg frame
+    error = foot - traces["foot_targets"][settled]  # where the foot is less where it was sent
     pd_torque = (traces["tau"] - traces["feedforward"])[settled].reshape(-1, 4, 3)  # N·m, what the PD exerted
     phases = GaitScheduler.from_config(cfg.gait).leg_phases(traces["t"][settled])
     grid = np.arange(PHASES) / PHASES
     commanded = np.stack([path.offsets.sample(leg, grid) for leg in range(4)])
-    offsets = keep_harmonics(commanded + phase_table(error, phases), harmonics)
+    motion = commanded + phase_table(error, phases)
+    realised = phase_table(foot, phases)
     force = keep_harmonics(phase_table(pd_torque, phases), harmonics)
     force[:, grid < cfg.gait.swing_time / cfg.gait.period] = 0.0  # the swing's own PD stays as it was
+
+    def make(stretch: float) -> FootOffsetPath:
+        return FootOffsetPath(keep_harmonics(stretch_sweep(motion, realised, stretch), harmonics),
+                              path.offsets.period, force)
+
+    def walk_speed(offsets: FootOffsetPath) -> float:
+        form = walk(cfg, duration + run_up, None, foot_offsets=offsets, hardware=hardware, run_up=run_up)
+        if form.fell:
+            raise RuntimeError(f"the path as motion + force fell at {path.speed:g} m/s while matching its speed")
+        return form.mean_speed
+
+    stretch, speed_walks = match_speed(make, result.mean_speed, walk_speed)
     stance = traces["contacts"][settled]
     record = {"robot": "ideal" if hardware is None else f"hardware-like, seed {hardware.seed}",
               "walked_s": duration, "run_up_s": run_up, "harmonics": harmonics, "phases": PHASES,
               "pid": {"kp": list(cfg.pid.kp), "kd": list(cfg.pid.kd)},
               "stance_error_rms_mm": round(1e3 * float(np.sqrt(np.mean(np.sum(error[stance] ** 2, axis=-1)))), 2),
-              "mean_feedforward_Nm": np.round(np.abs(force).mean(axis=(0, 1)), 3).tolist()}
-    written = CommandedPath(path.speed, path.gait, FootOffsetPath(offsets, path.offsets.period, force),
+              "mean_feedforward_Nm": np.round(np.abs(force).mean(axis=(0, 1)), 3).tolist(),
+              "path_speed_mps": round(float(result.mean_speed), 4), "sweep_stretch": stretch,
+              "speed_walks": speed_walks}
+    written = CommandedPath(path.speed, path.gait, make(stretch),
                             {**path.provenance, "stance_force": record})
     return written, record
 
 
-__all__ = ["HARMONICS", "PHASES", "check_robot", "keep_harmonics", "phase_table", "stance_force_path"]
+__all__ = ["HARMONICS", "PHASES", "SPEED_TOLERANCE", "SPEED_WALKS", "STRETCH_BOUND", "check_robot", "keep_harmonics",
+           "match_speed", "phase_table", "stance_force_path", "stretch_sweep"]

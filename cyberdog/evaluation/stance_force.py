@@ -2,9 +2,10 @@
 
 A learned path commands foot targets its stance feet do not reach; the joint PD turns the error into the force that
 saves the energy, so the gains a user sets scale it. This writes each path as the motion its feet make with the
-stance torque its joints exert as a feedforward the trot adds (`cyberdog.analysis.stance_force`: walked once, 10 s
+stance torque its joints exert as a feedforward the trot adds (`cyberdog.analysis.stance_force`: walked 10 s
 after a 3 s run-up, under the trot it was recorded with and the walk config's PD, on the extraction's first
-hardware-like check robot: HARDWARE_LIKE, or as --set hardware.* makes it, at seed 1000 + hardware.seed), as
+hardware-like check robot: HARDWARE_LIKE, or as --set hardware.* makes it, at seed 1000 + hardware.seed), its
+fore-aft motion stretched until it walks there at the path's own speed, as
 `<out>/learned/<same file name>` with how it was made in its provenance (`stance_force`). Walk it as any path,
 under any gains:
 
@@ -21,11 +22,11 @@ from pathlib import Path
 from cyberdog.evaluation.options import UsageError
 
 LINE = "write learned paths as their feet's motion plus their stance legs' torque, a gait the gains do not scale"
-PARAGRAPH = ("each commanded path file (or folder of them) walks once on a hardware-like check robot under the walk "
+PARAGRAPH = ("each commanded path file (or folder of them) walks on a hardware-like check robot under the walk "
              "config's PD and the trot it was recorded with; the feet's mean realised path becomes its foot path and "
-             "the mean torque the joint PD exerted in stance a feedforward the trot adds "
-             "(cyberdog.analysis.stance_force); written as learned/<same name>. Walk them with `prototype --learned "
-             "OUT/learned`, under any --set pid.kp/pid.kd.")
+             "the mean torque the joint PD exerted in stance a feedforward the trot adds, the motion stretched fore "
+             "and aft until it walks at the path's speed (cyberdog.analysis.stance_force); written as "
+             "learned/<same name>. Walk them with `prototype --learned OUT/learned`, under any --set pid.kp/pid.kd.")
 
 
 def add_options(p) -> None:
@@ -52,7 +53,8 @@ def cmd_stance_force(args, cfg) -> int:
         rewritten.save(out)
         print(f"{path.label} at {path.speed:g} m/s: stance error {record['stance_error_rms_mm']:.1f} mm rms, mean "
               f"stance torque {' / '.join(f'{v:.2f}' for v in record['mean_feedforward_Nm'])} N·m (abad / hip / "
-              f"knee) -> {out}")
+              f"knee), fore-aft motion x{record['sweep_stretch']:.3f} to walk its {record['path_speed_mps']:.3f} m/s "
+              f"-> {out}")
     return run.finish()
 
 
