@@ -19,9 +19,8 @@ it walks at the path's speed: the mean stance torque carries no correction of th
 the trot's speed loop sits at its bound (1.4 m/s) the form walks up to 2–3 % slower. So its fore-aft motion is
 stretched about its cycle mean until it walks, on the same robot, at the speed the path walked
 (`match_speed`: a body on stance feet that do not slip moves as far as they sweep, so the speed goes with the
-stretch). The path is walked once, under the trot it
-was recorded with, on the extraction's first hardware-like check robot (`HARDWARE_CHECK_SEEDS`: never the
-prototype's test robots).
+stretch). The path and its form are walked under the trot the path was recorded with, on the extraction's first
+hardware-like check robot (`HARDWARE_CHECK_SEEDS`: never the prototype's test robots).
 """
 from __future__ import annotations
 
@@ -98,7 +97,7 @@ def match_speed(make, speed: float, walk_speed) -> tuple[float, list[dict]]:
     stretch, walks = 1.0, []
     for _ in range(SPEED_WALKS):
         v = float(walk_speed(make(stretch)))
-        walks.append({"stretch": round(stretch, 5), "speed_mps": round(v, 4)})
+        walks.append({"stretch": stretch, "speed_mps": v})
         if abs(v / speed - 1.0) <= SPEED_TOLERANCE or v <= 0:
             break
         stretch = float(np.clip(stretch * speed / v, 1.0 - STRETCH_BOUND, 1.0 + STRETCH_BOUND))
@@ -149,8 +148,8 @@ def stance_force_path(path: CommandedPath, cfg: WalkConfig, hardware: HardwareCo
               "pid": {"kp": list(cfg.pid.kp), "kd": list(cfg.pid.kd)},
               "stance_error_rms_mm": round(1e3 * float(np.sqrt(np.mean(np.sum(error[stance] ** 2, axis=-1)))), 2),
               "mean_feedforward_Nm": np.round(np.abs(force).mean(axis=(0, 1)), 3).tolist(),
-              "path_speed_mps": round(float(result.mean_speed), 4), "sweep_stretch": stretch,
-              "speed_walks": speed_walks}
+              "path_speed_mps": round(float(result.mean_speed), 4), "sweep_stretch": round(stretch, 5),
+              "speed_walks": [{k: round(v, 5) for k, v in w.items()} for w in speed_walks]}
     written = CommandedPath(path.speed, path.gait, make(stretch),
                             {**path.provenance, "stance_force": record})
     return written, record
