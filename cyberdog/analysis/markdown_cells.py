@@ -32,12 +32,16 @@ def header(first: str, speeds: list[float]) -> list[str]:
 
 
 def seeds_named(labels: Iterable[str]) -> str:
-    """"seeds 5–9": the first and last seed that labels "seedN" (or "N") name ("seed 0" where one does, "fresh
-    seeds" where none does)."""
+    """"seeds 5–9": the seeds that labels "seedN" (or "N") name, each run of consecutive seeds as its first and
+    last ("seeds 20–24, 40–44"; "seed 0" where one does, "fresh seeds" where none does)."""
     numbers = sorted({int(n) for n in (str(x).removeprefix("seed") for x in labels) if n.isdigit()})
     if not numbers:
         return "fresh seeds"
-    return f"seed {numbers[0]}" if len(numbers) == 1 else f"seeds {numbers[0]}–{numbers[-1]}"
+    if len(numbers) == 1:
+        return f"seed {numbers[0]}"
+    starts = [n for i, n in enumerate(numbers) if i == 0 or numbers[i - 1] != n - 1]
+    ends = [n for i, n in enumerate(numbers) if i == len(numbers) - 1 or numbers[i + 1] != n + 1]
+    return "seeds " + ", ".join(f"{a}–{b}" if b > a else f"{a}" for a, b in zip(starts, ends))
 
 
 def missed_walks(row: dict) -> str:
