@@ -9,8 +9,8 @@ from cyberdog import config as C
 from cyberdog.analysis.extract import rollout_provenance
 from cyberdog.core.learned_set import LearnedPath, LearnedSet
 from cyberdog.core.trajectories import SampledTrajectory
-from cyberdog.evaluation.recorded_trot import (controller_note, note_controllers, note_searched_trot, recorded_trot,
-                                      searched_trot, walk_under_recorded_trot, with_trot)
+from cyberdog.evaluation.recorded_trot import (controller_note, made_under, note_controllers, note_searched_trot,
+                                               recorded_trot, searched_trot, walk_under_recorded_trot, with_trot)
 
 PLACED = dataclasses.replace(C.ControllerConfig(), sagittal_placement_gain=0.1)
 
@@ -191,3 +191,14 @@ def test_the_searched_shape_walks_the_prototype_under_the_trot_it_was_searched_u
     jobs = _walk_jobs({"cycloid": None, REFERENCE: default_searched}, (1.0,), base, [("hardware", 0)],
                       C.HARDWARE_LIKE, 20.0, 3.0, None, None, {}, 1.0, None, own)
     assert {j.trajectory_name: j.cfg.controller for j in jobs} == {"cycloid": PLACED, REFERENCE: C.ControllerConfig()}
+
+
+def test_a_rewritten_path_records_the_trot_it_was_rewritten_under_and_keeps_its_sources_where_they_differ():
+    placed = {"controller": dataclasses.asdict(PLACED), "seed": 3}
+    same = made_under(placed, with_trot(C.WalkConfig(), placed["controller"]))
+    assert same == placed  # rewritten under its own trot: nothing to add
+    plain = made_under(placed, C.WalkConfig())  # a --set controller.* at the rewrite: the trot without placement
+    assert plain["controller"] == dataclasses.asdict(C.ControllerConfig()) and plain["seed"] == 3
+    assert plain["source_controller"]["sagittal_placement_gain"] == 0.1
+    assert placed["controller"]["sagittal_placement_gain"] == 0.1  # the source's record is not changed
+    assert made_under({}, C.WalkConfig())["controller"] == dataclasses.asdict(C.ControllerConfig())

@@ -134,10 +134,15 @@ def test_stance_force_writes_beside_never_over_and_refuses_what_it_cannot_rewrit
 
     shipped = Path(__file__).resolve().parents[1] / "results/battery_searched_pick/paths/seed40_1.2mps.json"
     out = tmp_path / "out"
-    assert evaluate.main(["stance-force", str(shipped), "--harmonics", "4", "--out", str(out)]) == 0
+    assert evaluate.main(["stance-force", str(shipped), "--harmonics", "4", "--out", str(out),
+                          "--set", "controller.sagittal_placement_gain=0.0"]) == 0
     written = read_path(out / "learned" / shipped.name)
     record = written.provenance["stance_force"]
     assert record["harmonics"] == 4 and record["robot"] == "hardware-like, seed 1000"
+    # made under the trot the command line set, the form records that trot, and the path's own beside it
+    assert written.provenance["controller"]["sagittal_placement_gain"] == 0.0
+    assert written.provenance["source_controller"]["sagittal_placement_gain"] == 0.2
+    assert written.provenance["controller"]["max_speed_correction"] == 0.3  # the config's own trot, as --set makes it
     assert written.offsets.feedforward is not None and written.speed == 1.2
     assert "hardware: null" not in (out / "config.yaml").read_text()  # the model it walked is recorded
     assert evaluate.main(["stance-force", str(shipped), "--out", str(out)]) == 2  # never over a run

@@ -11,7 +11,8 @@ was recorded with; the method in docs/evaluation.md, "Re-commanded for the PD").
     python evaluate.py prototype --learned runs/my_pd/learned --set "pid.kp=[84,84,84]" "pid.kd=[2.4,2.4,2.4]"
 
 (`--pd-scale S` instead: kp × S, kd × √S, `PIDConfig.stiffness_scaled`; the trot the paths record is applied by
-evaluate.py unless --set changes the controller). The command line (`cyberdog.evaluation.parsers`) imports this
+evaluate.py unless --set changes the controller, and the trot each path is re-solved under is the one it records
+then: `recorded_trot.made_under`). The command line (`cyberdog.evaluation.parsers`) imports this
 module for its help text and options (`LINE`, `PARAGRAPH`, `add_options`): it imports neither the simulator nor
 numpy until it runs.
 """
@@ -52,7 +53,7 @@ def cmd_pd_match(args, cfg) -> int:
     from cyberdog.analysis.pd_match_recording import RECORD_S, SETTLE_S, pd_matched_foot_offsets
     from cyberdog.core.commanded_path import CommandedPath
     from cyberdog.evaluation.learned import open_path_rewrite
-    from cyberdog.evaluation.recorded_trot import trot_for
+    from cyberdog.evaluation.recorded_trot import made_under, trot_for
 
     if args.kd is not None and args.kp is None:
         raise UsageError("--kd goes with --kp (--pd-scale scales kd by itself)")
@@ -69,7 +70,8 @@ def cmd_pd_match(args, cfg) -> int:
         record = {"from_pid": dataclasses.asdict(walk_cfg.pid), "to_pid": dataclasses.asdict(target),
                   "recorded_on": f"the ideal robot, {RECORD_S:g} s, the first {SETTLE_S:g} s left out"}
         out = run.out / "learned" / path.file_name()
-        CommandedPath(path.path.speed, path.path.gait, matched, {**path.provenance, "pd_matched": record}).save(out)
+        CommandedPath(path.path.speed, path.path.gait, matched,
+                      made_under({**path.provenance, "pd_matched": record}, walk_cfg)).save(out)
         print(f"{path.label} at {path.speed:g} m/s: foot shifts moved by up to {shift:.1f} mm -> {out}")
     return run.finish()
 

@@ -111,6 +111,18 @@ def walk_under_recorded_trot(args, cfg: C.WalkConfig, learned: LearnedSet, log=p
     return trot_for(args, cfg, shared, "the learned paths", log)
 
 
+def made_under(provenance: dict, cfg: C.WalkConfig) -> dict:
+    """The provenance of a path rewritten while walking under `cfg`'s trot (`stance-force`, `pd-match`): that trot
+    as the one the path is recorded under (`controller`), since the rewritten path is a gait of the trot it was
+    made on and a later evaluation walks it there; the source path's own record kept as `source_controller` where
+    the two differ (a `--set controller.*` at the rewrite)."""
+    source = provenance.get("controller")
+    out = {**provenance, "controller": dataclasses.asdict(cfg.controller)}
+    if source is not None and _differences(source, cfg.controller):
+        out["source_controller"] = source
+    return out
+
+
 def searched_trot(reference) -> dict | None:
     """The trot controller a searched shape (`tools/optimize_trajectory.py`'s `SampledTrajectory`) was searched
     under: the default `ControllerConfig` with the search's `--set controller.*` (its provenance's

@@ -6,8 +6,9 @@ stance torque its joints exert as a feedforward the trot adds (`cyberdog.analysi
 after a 3 s run-up, under the trot it was recorded with and the walk config's PD, on the extraction's first
 hardware-like check robot: HARDWARE_LIKE, or as --set hardware.* makes it, at seed 1000 + hardware.seed), its
 fore-aft motion stretched until it walks there at the path's own speed, as
-`<out>/learned/<same file name>` with how it was made in its provenance (`stance_force`). Walk it as any path,
-under any gains:
+`<out>/learned/<same file name>` with how it was made in its provenance (`stance_force`) and the trot it was made
+under as the one it records (`recorded_trot.made_under`: a --set controller.* here is the form's trot). Walk it as
+any path, under any gains:
 
     python evaluate.py stance-force results/battery_searched_pick/paths --out runs/stance_force
     python evaluate.py prototype --learned runs/stance_force/learned --set "pid.kd=[4,4,4]"
@@ -17,6 +18,7 @@ The command line (`cyberdog.evaluation.parsers`) imports this module for its hel
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from cyberdog.evaluation.options import UsageError
@@ -40,7 +42,7 @@ def add_options(p) -> None:
 def cmd_stance_force(args, cfg) -> int:
     from cyberdog.analysis.stance_force import HARMONICS, check_robot, stance_force_path
     from cyberdog.evaluation.learned import open_path_rewrite
-    from cyberdog.evaluation.recorded_trot import trot_for
+    from cyberdog.evaluation.recorded_trot import made_under, trot_for
 
     harmonics = HARMONICS if args.harmonics is None else args.harmonics
     if not 1 <= harmonics <= 31:
@@ -50,7 +52,7 @@ def cmd_stance_force(args, cfg) -> int:
         walk_cfg = trot_for(args, cfg, path.recorded_controller, path.file_name(), walked="it is recorded under it")
         rewritten, record = stance_force_path(path.path, walk_cfg, check_robot(args.hardware), harmonics=harmonics)
         out = run.out / "learned" / path.file_name()
-        rewritten.save(out)
+        dataclasses.replace(rewritten, provenance=made_under(rewritten.provenance, walk_cfg)).save(out)
         print(f"{path.label} at {path.speed:g} m/s: stance error {record['stance_error_rms_mm']:.1f} mm rms, mean "
               f"stance torque {' / '.join(f'{v:.2f}' for v in record['mean_feedforward_Nm'])} N·m (abad / hip / "
               f"knee), fore-aft motion x{record['sweep_stretch']:.3f} to walk its {record['path_speed_mps']:.3f} m/s "
