@@ -6,7 +6,8 @@ shape the battery recipe starts from, `--start`), each walked under the gains as
 configured PD), this splits the electrical energy per joint type (abad, hip, knee) into the legs' stance and swing
 (by each leg's gait phase), and gives the RMS of the motor torque and of the drivers' law's three terms at the
 controller periods: kp·e (e = q_des − q), kd·ė (ė = q̇_des − q̇) and the command's feedforward (stance gravity
-compensation), each per joint type in stance. 12 s walked, the first 3 s left out.
+compensation), each per joint type in stance, for the command as computed (before the hardware-like robot's latency)
+and the true joint state. 12 s walked, the first 3 s left out.
 
     python notebook/tools/stance_terms.py results/battery_searched_pick/paths/seed20_1.2mps.json --gains 1:1 1:2
 
@@ -32,6 +33,7 @@ from cyberdog.loop.walker import Walker
 
 JOINT_TYPES = ("abad", "hip", "knee")
 WALK_S, RUN_UP_S = 12.0, 3.0
+START = Path("results/searched_shapes/optimized_trajectory_H0.085_electrical_hardware_placed_loop.json")
 
 
 def by_joint_type(values: np.ndarray, mask: np.ndarray, dt: float) -> list[float]:
@@ -69,7 +71,7 @@ def walk_terms(cfg: WalkConfig, trajectory, offsets, hardware) -> dict:
     controller.command = recording
     with Walker(cfg, controller, hardware=hardware) as w:
         n, since = int(round(WALK_S / w.dt)), int(round(RUN_UP_S / w.dt))
-        q, dq, fell = [], [], False
+        q, dq, fell, x0 = [], [], False, None
         for k in range(n):
             if k == since:
                 x0 = float(w.state.base_position[0])
@@ -79,6 +81,8 @@ def walk_terms(cfg: WalkConfig, trajectory, offsets, hardware) -> dict:
             if w.fallen():
                 fell = True
                 break
+        if x0 is None:
+            raise RuntimeError(f"the walk fell in its {RUN_UP_S:g} s run-up: nothing to split")
         distance = float(w.state.base_position[0]) - x0
         p = w.physics_traces(since)
         power = en.electrical_joint_power(p["tau"], p["dq"], w.cfg.actuator, w.cfg.energy)
@@ -112,8 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("path", type=Path, help="a commanded path file (evaluate.py extract's learned/<label>_<v>mps.json)")
     ap.add_argument("--gains", type=gains, nargs="+", default=[(1.0, 1.0), (1.0, 2.0)],
                     help="kp:kd factors of the configured PD each walk runs under (default 1:1 1:2)")
-    ap.add_argument("--start", type=Path, default=Path("results/searched_shapes/"
-                                                       "optimized_trajectory_H0.085_electrical_hardware_placed_loop.json"),
+    ap.add_argument("--start", type=Path, default=START,
                     help="the trot's own path, walked as a third gait (default: the battery recipe's start)")
     ap.add_argument("--robot", choices=("ideal", "hardware"), default="ideal",
                     help="the ideal robot or the prototype's hardware-like one (HARDWARE_LIKE)")
@@ -131,21 +134,21 @@ def main(argv: list[str] | None = None) -> int:
     gaits = {"learned path": (cfg, None, offsets), "cycloid (its lift)": (matched, None, None),
              "the trot's own path": (own, start, None)}
     hardware = HARDWARE_LIKE if args.robot == "hardware" else None
-    print(f"{args.path} at {path.speed:g} m/s, {args.robot} robot; electrical J per joint type (abad / hip / knee), "
-          "stance RMS N·m")
+    print(f"{args.path} at {path.speed:g} m/s, {args.robot} robot; electrical J per joint type "
+          f"({' / '.join(JOINT_TYPES)}), stance RMS N·m")
     for name, (gait_cfg, trajectory, shift) in gaits.items():
         for kp_f, kd_f in args.gains:
             pid = gait_cfg.pid
             walked = dataclasses.replace(gait_cfg, pid=dataclasses.replace(
                 pid, kp=tuple(g * kp_f for g in pid.kp), kd=tuple(g * kd_f for g in pid.kd)))
             r = walk_terms(walked, trajectory, shift, hardware)
-            f = lambda v: " / ".join(f"{x:.0f}" for x in v)  # noqa: E731
-            g = lambda v: " / ".join(f"{x:.2f}" for x in v)  # noqa: E731
+            joules = lambda v: " / ".join(f"{x:.0f}" for x in v)  # noqa: E731
+            torques = lambda v: " / ".join(f"{x:.2f}" for x in v)  # noqa: E731
             t = r["stance_rms_Nm"]
             print(f"{name:20s} kp {kp_f:g}× kd {kd_f:g}×: {r['electrical_J_per_m']:.1f} J/m"
-                  f"{' FELL' if r['fell'] else ''} | stance {f(r['stance_J'])} swing {f(r['swing_J'])} | "
-                  f"τ {g(t['torque'])}, kp·e {g(t['kp_e'])}, kd·ė {g(t['kd_e_rate'])}, ff {g(t['feedforward'])}",
-                  flush=True)
+                  f"{' FELL' if r['fell'] else ''} | stance {joules(r['stance_J'])} swing {joules(r['swing_J'])} | "
+                  f"τ {torques(t['torque'])}, kp·e {torques(t['kp_e'])}, kd·ė {torques(t['kd_e_rate'])}, "
+                  f"ff {torques(t['feedforward'])}", flush=True)
     return 0
 
 
