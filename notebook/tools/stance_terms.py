@@ -38,7 +38,7 @@ START = Path("results/searched_shapes/optimized_trajectory_H0.085_electrical_har
 
 def by_joint_type(values: np.ndarray, mask: np.ndarray, dt: float) -> list[float]:
     """Σ values·dt over the rows where `mask` holds, per joint type (values, mask: (n, 12), legs × abad/hip/knee)."""
-    return [float((values * mask)[:, j::3].sum() * dt) for j in range(3)]
+    return (en.per_joint_type((values * mask).sum(axis=0)) * dt).tolist()
 
 
 def rms_by_joint_type(values: np.ndarray, mask: np.ndarray) -> list[float]:
