@@ -55,7 +55,7 @@ from cyberdog import config as C
 from cyberdog.config.preset import load_preset
 from cyberdog.rl.torchrl_env import make_gym_env
 from cyberdog.envs.cyberdog_env import observation_size
-from cyberdog.rl.trainer import ACTION_SIZE, Trainer
+from cyberdog.rl.trainer import Trainer
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -135,10 +135,10 @@ def run_ours(args, collection: str, num_envs: int = 1) -> dict:
     return out
 
 
-def random_transitions(n: int, obs_size: int, seed: int = 0) -> TensorDict:
+def random_transitions(n: int, obs_size: int, action_size: int, seed: int = 0) -> TensorDict:
     g = torch.Generator().manual_seed(seed)
     return TensorDict({"observation": torch.randn(n, obs_size, generator=g),
-                       "action": torch.rand(n, ACTION_SIZE, generator=g) * 2 - 1,
+                       "action": torch.rand(n, action_size, generator=g) * 2 - 1,
                        "next": {"observation": torch.randn(n, obs_size, generator=g),
                                 "reward": torch.randn(n, 1, generator=g),
                                 "done": torch.zeros(n, 1, dtype=torch.bool),
@@ -206,7 +206,7 @@ def bare_sb3(args, cfg: C.ExperimentConfig) -> float:
         obs_size = observation_size(cfg.env)
         model.replay_buffer.add(rng.standard_normal((1, obs_size), dtype=np.float32),
                                 rng.standard_normal((1, obs_size), dtype=np.float32),
-                                rng.uniform(-1, 1, (1, ACTION_SIZE)).astype(np.float32),
+                                rng.uniform(-1, 1, (1, cfg.env.action_size)).astype(np.float32),
                                 rng.standard_normal(1).astype(np.float32), np.zeros(1), [{}])
     model.train(gradient_steps=10, batch_size=256)  # warm-up
     t0, c0 = time.perf_counter(), time.process_time()
@@ -223,7 +223,7 @@ def env_only(cfg: C.ExperimentConfig, steps: int) -> tuple[float, float]:
     rng = np.random.default_rng(0)
     t0, c0 = time.perf_counter(), time.process_time()
     for _ in range(steps):
-        _, _, term, trunc, _ = env.step(rng.uniform(-0.1, 0.1, ACTION_SIZE).astype(np.float32))
+        _, _, term, trunc, _ = env.step(rng.uniform(-0.1, 0.1, cfg.env.action_size).astype(np.float32))
         if term or trunc:
             env.reset()
     rates = steps / (time.perf_counter() - t0), steps / (time.process_time() - c0)
@@ -276,7 +276,7 @@ def main() -> None:
         bare_trainer = Trainer(cfg, tmp, stages=(1,), progress=False)
         bare_trainer._begin_stage(cfg.train.stage1)  # the stage's update settings, resolved as a stage starts
         bare_trainer.progress.stage_env_steps = bare_trainer.progress.env_steps = 10 ** 9  # past learning_starts
-        bare_trainer.rb.extend(random_transitions(5000, observation_size(cfg.env)))
+        bare_trainer.rb.extend(random_transitions(5000, observation_size(cfg.env), cfg.env.action_size))
         bare_trainer._updates(10)  # warm-up
         for r in range(args.repeats):
             print(f"rep {r}:", flush=True)

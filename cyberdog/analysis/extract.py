@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from cyberdog.config import GaitConfig
+from cyberdog.config import FOOT_MODES, GaitConfig
 from cyberdog.config.paper import SPEED_BAND, speed_within_band
 from cyberdog.core import energy as en
 from cyberdog.core.commanded_path import CommandedPath
@@ -145,9 +145,13 @@ def extract_commanded(traces: dict, dt: float, speed_command: float, gait: GaitC
     # average them sample by sample, then order each leg's samples by its phase
     per = used[0].end - used[0].start
     mean_offsets = np.mean([offsets[c.start:c.end] for c in used], axis=0)  # (per, 4, 3)
+    # a foot_torque policy's joint torque, tabulated the same way (the path's own feedforward); none when zero
+    torque = np.asarray(traces.get("joint_torque", np.zeros((len(offsets), 12))), dtype=float)
+    mean_torque = (np.mean([torque[c.start:c.end] for c in used], axis=0).reshape(per, 4, 3) if torque.any()
+                   else None)
     first = used[0]
     phases = GaitScheduler.from_config(gait).leg_phases(np.asarray(traces["t"], dtype=float)[first.start:first.end])
-    table = FootOffsetPath.from_samples(phases, mean_offsets, gait.period, per)
+    table = FootOffsetPath.from_samples(phases, mean_offsets, gait.period, per, mean_torque)
     energy = float(np.mean([c.energy for c in used]))
     prov = {"source": "cyberdog.analysis.extract.extract_commanded", "path": "commanded", "cycle": cycle,
             "speed_command_mps": float(speed_command), "cycles_total": len(cycles),
@@ -155,6 +159,8 @@ def extract_commanded(traces: dict, dt: float, speed_command: float, gait: GaitC
             "cycle_energy_J": energy, "cycle_speed_mps": float(np.mean([c.speed for c in used])),
             "speed_tolerance": float(speed_tolerance), "settle_time_s": float(settle_time),
             "offset_rms_mm": np.round(1e3 * table.rms(), 3).tolist(), "controller_dt_s": float(dt),
+            **({} if table.feedforward is None else
+               {"feedforward_rms_Nm": np.round(np.sqrt(np.mean(table.feedforward ** 2, axis=1)), 3).tolist()}),
             **(provenance or {})}
     path = CommandedPath(float(speed_command), gait, table, prov)
     return CommandedExtraction(path, cycles, [c.index for c in used], energy)
@@ -163,7 +169,7 @@ def extract_commanded(traces: dict, dt: float, speed_command: float, gait: GaitC
 def commanded_from_rollout(rollout, env_config, cycle: str = "mean", speed_tolerance: float = SPEED_TOLERANCE,
                            settle_time: float = 2.0, provenance: dict | None = None) -> CommandedExtraction:
     """`extract_commanded` on a policy rollout (a WalkResult of `cyberdog.rl.rollout.rollout`) in `env_config`."""
-    if env_config.action_mode != "foot":
+    if env_config.action_mode not in FOOT_MODES:
         raise ExtractionError(f"a policy of action_mode {env_config.action_mode!r} commands no foot path; "
                               "use the measured-path extraction")
     prov = rollout_provenance(rollout, env_config, provenance)

@@ -99,7 +99,8 @@ STAGE2_REWARD = RewardConfig()  # stage 2: Eq. (11) with the energy term, E = �
 # The learning environment (paper Section 3, Tables 3-4)
 # ---------------------------------------------------------------------------------------------------------
 
-ACTION_MODES = ("torque", "residual", "foot")
+ACTION_MODES = ("torque", "residual", "foot", "foot_torque")
+FOOT_MODES = ("foot", "foot_torque")  # the modes whose action shifts the trot's foot targets (a commanded path)
 
 
 # what saved env configs may hold at these values, which leave the trot prior's decay as it is: the trainer's
@@ -126,9 +127,11 @@ class EnvConfig:
     episode_time: float = 10.0  # s, Tf; 400 steps at Ts = 25 ms (Table 4 "max steps")
     # "torque": the paper's, the action is the joint torque; "residual": torque added to the trot controller's;
     # "foot": offsets of the trot controller's foot targets (the controller's IK + PID then track them), the
-    # shipped agents' (Table 5, the battery); the paper's torque agent is configs/torque.yaml
+    # shipped agents' (Table 5, the battery); the paper's torque agent is configs/torque.yaml; "foot_torque": the
+    # foot offsets (12) and a joint torque (12) the trot adds to its feedforward, so that a force the path needs
+    # is sent as a force, not as a position error the PD's gains scale
     action_mode: str = "foot"
-    action_scale: float = 25.0  # N·m per unit action (Table 4 torque command limit); torque, residual modes
+    action_scale: float = 25.0  # N·m per unit action (Table 4 torque limit); torque, residual, foot_torque
     foot_offset_scale: float = 0.03  # m per unit action in action_mode="foot" (offset of each foot target)
     foot_offset_scale_z: Optional[float] = None  # m per unit action on the vertical axis; None = foot_offset_scale
     observe_last_action: bool = True  # append the previous action (12) to Table 3's observation (50 -> 62):
@@ -186,6 +189,11 @@ class EnvConfig:
     def decimation(self) -> int:
         """Controller periods (`walk.sim.controller_dt`) per agent step."""
         return int(round(self.control_dt / self.walk.sim.controller_dt))
+
+    @property
+    def action_size(self) -> int:
+        """Entries of the action: 12 (a torque or a foot shift per joint), 24 in "foot_torque" (both)."""
+        return 24 if self.action_mode == "foot_torque" else 12
 
     @property
     def max_episode_steps(self) -> int:

@@ -104,6 +104,8 @@ class TrotController:
         self.foot_offsets: list[tuple[float, float, float]] | None = None  # m, see set_foot_offsets
         self.foot_offset_rates: list[tuple[float, float, float]] | None = None  # m/s
         self.foot_offset_time: float | None = None  # s, when the offsets held `foot_offsets` (None: held still)
+        self.joint_torque: list[float] | None = None  # N·m, 12 added to the feedforward until changed (a policy's)
+        self.last_joint_torque: list[float] | None = None  # N·m, what the last command added (for recording)
         self._ramp_end = [(0.0, 0.0, 0.0)] * 4  # m, where the last foot-offset ramp ended
         # a periodic shift of each foot target over its phase (a learned trajectory's), on top of the above
         self.foot_offset_path = foot_offset_path
@@ -134,6 +136,7 @@ class TrotController:
         self.dropped_shifts = 0  # leg-periods whose shifted foot target was out of reach (the unshifted one went)
         self.foot_offsets = self.foot_offset_rates = self.foot_offset_time = None
         self.last_foot_targets = self.last_foot_offsets = None
+        self.joint_torque = self.last_joint_torque = None
         self._placement_held, self._placement_swing, self._was_swinging = [0.0] * 4, [0.0] * 4, [False] * 4
 
     def set_foot_offsets(self, offsets: np.ndarray | None, rates: np.ndarray | None = None,
@@ -176,6 +179,11 @@ class TrotController:
         self.foot_offsets = [(x0 + rx * dt, y0 + ry * dt, z0 + rz * dt)
                              for (x0, y0, z0), (rx, ry, rz) in zip(start, rates)]
         self.foot_offset_rates, self.foot_offset_time, self._ramp_end = rates, at_time, end
+
+    def set_joint_torque(self, torque: list[float] | None) -> None:
+        """Add `torque` (12 floats, N·m, joints leg-major) to each command's feedforward until the next call (None:
+        none): a foot_torque policy's force, sent as a path's own torque is, so the gains do not scale it."""
+        self.joint_torque = torque
 
     def set_speed(self, speed: float) -> None:
         if not np.isfinite(speed) or speed < 0:
@@ -371,6 +379,9 @@ class TrotController:
         path = self.foot_offset_path
         if path is not None and path.feedforward is not None:  # the path's own torque, blended in as its shift
             path.add_feedforward(feedforward, self.scheduler.phases_at(t), self._path_blend(t))
+        added = self.last_joint_torque = self.joint_torque
+        if added is not None:  # a policy's joint torque (foot_torque mode)
+            feedforward = [f + a for f, a in zip(feedforward, added)]
         pid, integral = self.pid, None
         if pid.integrates:
             if dq is None:

@@ -109,26 +109,21 @@ class FootOffsetPath:
         return cls(np.zeros((LEGS, n, 3)), period)
 
     @classmethod
-    def from_samples(cls, phases, offsets, period: float, n: int) -> "FootOffsetPath":
+    def from_samples(cls, phases, offsets, period: float, n: int, feedforward=None) -> "FootOffsetPath":
         """Build the table from recorded samples: `phases` (m, 4) each leg's phase at each sample, `offsets`
-        (m, 4, 3) m; the samples of one leg are sorted by phase and interpolated periodically at k / n."""
+        (m, 4, 3) m (and `feedforward`, (m, 4, 3) N·m, or None); the samples of one leg are sorted by phase and
+        interpolated periodically at k / n."""
         phases = np.mod(np.asarray(phases, dtype=float), 1.0)
         offsets = np.asarray(offsets, dtype=float)
         if phases.ndim != 2 or phases.shape[1] != LEGS or offsets.shape != phases.shape + (3,):
             raise ValueError(f"phases must be (m, 4) and offsets (m, 4, 3), got {phases.shape}, {offsets.shape}")
+        if feedforward is not None and np.shape(feedforward) != offsets.shape:
+            raise ValueError(f"feedforward samples must have the offsets' shape {offsets.shape}, got "
+                             f"{np.shape(feedforward)}")
         if len(phases) < 4:
             raise ValueError(f"need at least 4 samples, got {len(phases)}")
-        grid = np.arange(n) / n
-        table = np.empty((LEGS, n, 3))
-        for leg in range(LEGS):
-            order = np.argsort(phases[:, leg], kind="stable")
-            p = phases[order, leg]
-            v = offsets[order, leg]
-            p_ext = np.concatenate([p[-1:] - 1.0, p, p[:1] + 1.0])
-            for axis in range(3):
-                v_ext = np.concatenate([v[-1:, axis], v[:, axis], v[:1, axis]])
-                table[leg, :, axis] = np.interp(grid, p_ext, v_ext)
-        return cls(table, period)
+        torque = None if feedforward is None else _on_grid(phases, np.asarray(feedforward, dtype=float), n)
+        return cls(_on_grid(phases, offsets, n), period, torque)
 
     def to_dict(self) -> dict:
         # 1 µm steps: far below what IK + PID can track, and it keeps a 400-sample table near 50 kB; 0.1 mN·m
@@ -156,6 +151,22 @@ class FootOffsetPath:
     def __repr__(self) -> str:
         rms_mm = 1e3 * float(math.sqrt(np.mean(self.offsets ** 2)))
         return f"FootOffsetPath(n={self.n}, period={self.period:g} s, rms={rms_mm:.2f} mm)"
+
+
+def _on_grid(phases: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+    """(4, n, 3): per leg, `values` (m, 4, 3) at its `phases` (m, 4) in [0, 1), sorted by phase and interpolated
+    periodically at the phases k / n."""
+    grid = np.arange(n) / n
+    table = np.empty((LEGS, n, 3))
+    for leg in range(LEGS):
+        order = np.argsort(phases[:, leg], kind="stable")
+        p = phases[order, leg]
+        v = values[order, leg]
+        p_ext = np.concatenate([p[-1:] - 1.0, p, p[:1] + 1.0])
+        for axis in range(3):
+            v_ext = np.concatenate([v[-1:, axis], v[:, axis], v[:1, axis]])
+            table[leg, :, axis] = np.interp(grid, p_ext, v_ext)
+    return table
 
 
 def _rows(table: np.ndarray) -> list:

@@ -40,11 +40,12 @@ class CyberDogEnv(gym.Env):
     (the registration's `max_episode_steps`, Table 4). All of it runs in `cyberdog.loop.walker.Walker`, the
     loop of every scripted walk too.
 
-    **Action** (12,), float32 in [−1, 1], legs LF, RF, LH, RH × joints (abad, hip, knee), by `action_mode`:
+    **Action** (12,) ((24,) in foot_torque), float32 in [−1, 1], legs LF, RF, LH, RH × joints (abad, hip, knee):
 
     | mode | the action is | scale |
     |---|---|---|
     | `foot` (default) | a shift of the trot controller's foot targets (Δx, Δy, Δz) per leg, ramped from the last action's over the step; IK + PID track the shifted path | ±`foot_offset_scale` 0.03 m per axis (z: `foot_offset_scale_z` if set) |
+    | `foot_torque` | the foot shifts (the first 12, as `foot`) and a joint torque the trot adds to its feedforward, held over the step (the last 12) | as `foot`; × `action_scale` N·m |
     | `residual` | a torque added to the trot controller's | × `action_scale` N·m |
     | `torque` | the joint torque, held over the step (the paper's, Table 3) | × `action_scale` 25 N·m |
 
@@ -65,7 +66,7 @@ class CyberDogEnv(gym.Env):
     | 11:23, 23:35, 35:47 | joint angles, joint velocities, joint torques (last period) | rad, rad/s, N·m |
     | 47 | commanded speed (ramped from 0 over `walk.controller.speed_ramp_time`, then the set speed) | m/s |
     | 48:50 | sin, cos of LF's gait phase | – |
-    | 50:62 | the previous action (`observe_last_action`, on by default) | action units |
+    | 50:62 (50:74) | the previous action (`observe_last_action`, on by default) | action units |
     | last | hip PD stiffness / 60 N·m/rad (`observe_pd_stiffness`) | – |
 
     One entry per physical quantity of the paper's groups (Section 2; its 111-entry list is not given), no
@@ -141,7 +142,7 @@ class CyberDogEnv(gym.Env):
         low = np.concatenate([np.full(n, lo_, dtype=np.float32) for _, n, lo_, _, _ in layout])
         high = np.concatenate([np.full(n, hi_, dtype=np.float32) for _, n, _, hi_, _ in layout])
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (12,), dtype=np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (cfg.action_size,), dtype=np.float32)
         z_scale = cfg.foot_offset_scale if cfg.foot_offset_scale_z is None else cfg.foot_offset_scale_z
         self._foot_offset_scale = np.array([cfg.foot_offset_scale, cfg.foot_offset_scale, z_scale])  # m, x y z
         self._state = None
@@ -177,7 +178,7 @@ class CyberDogEnv(gym.Env):
         self.walker.set_speed(self.target_speed)
         self._state = self.walker.reset(mass_scale=mass_scale, sensor_rng=sensor_rng, draw=draw)
         self.last_torque = np.zeros(12)
-        self._last_action = np.zeros(12)  # the previous action, observed with `observe_last_action`
+        self._last_action = np.zeros(cfg.action_size)  # the previous action, observed with `observe_last_action`
         if self._speed_window is not None:
             self._speed_window.reset()
         info = {"target_speed": self.target_speed}
@@ -200,20 +201,23 @@ class CyberDogEnv(gym.Env):
         if self._state is None:
             raise RuntimeError("call reset() before step()")
         a = np.asarray(action, dtype=np.float64)
-        if a.shape != (12,):
-            raise ValueError(f"action must have shape (12,), got {a.shape}")
-        values = a.tolist()  # the action's checks and the foot offsets in floats: 12 numbers are too few for numpy
+        if a.shape != self.action_space.shape:
+            raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
+        values = a.tolist()  # the action's checks and the foot offsets in floats: too few numbers for numpy
         if not math.isfinite(sum(values)) and not all(map(math.isfinite, values)):
             raise ValueError(f"action must be finite, got {values}")
         clipped = [1.0 if x > 1.0 else -1.0 if x < -1.0 else x for x in values]  # np.clip to [-1, 1]
         self._last_action = np.array(clipped)
         w = self.walker
-        if self.cfg.action_mode == "foot":  # the action moves the foot targets; the controller's torque is as is
+        if self.cfg.action_mode in C.FOOT_MODES:  # the action moves the foot targets; the controller's torque is as is
             # a first-order hold over the agent step, from the last action's offsets to this one's: a staircase
             # of targets makes the PID jerk (docs/design.md)
             sx, sy, sz = self._foot_offset_scale.tolist()
             w.ramp_foot_offsets_to([(clipped[i] * sx, clipped[i + 1] * sy, clipped[i + 2] * sz)
                                     for i in range(0, 12, 3)], self.cfg.control_dt)  # m, 4 × (x, y, z)
+            if self.cfg.action_mode == "foot_torque":  # and sends a force through the drivers, held over the step
+                scale = self.cfg.action_scale
+                w.controller.set_joint_torque([x * scale for x in clipped[12:]])  # N·m
             tau_action = None
         else:
             tau_action = self._last_action * self.cfg.action_scale

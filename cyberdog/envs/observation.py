@@ -23,7 +23,8 @@ OBSERVATION_LAYOUT = (
 )
 
 
-# appended when `EnvConfig.observe_last_action` is set: the previous action, in action units
+# appended when `EnvConfig.observe_last_action` is set: the previous action, in action units (12 entries; 24 in
+# action_mode "foot_torque")
 LAST_ACTION_LAYOUT = (("last_action", 12, -1.0, 1.0, 1.0),)
 
 
@@ -34,13 +35,15 @@ DEFAULT_KP = C.PIDConfig().kp[1]  # N·m/rad, the hip's: what a stiffness of 1 m
 
 def observation_layout(cfg: C.EnvConfig | None = None) -> tuple:
     """The observation's (name, size, low, high, typical magnitude) groups for an env config."""
-    return (OBSERVATION_LAYOUT + (LAST_ACTION_LAYOUT if cfg is not None and cfg.observe_last_action else ())
+    last_action = ((("last_action", cfg.action_size, -1.0, 1.0, 1.0),) if cfg is not None and cfg.observe_last_action
+                   else ())
+    return (OBSERVATION_LAYOUT + last_action
             + (PD_STIFFNESS_LAYOUT if cfg is not None and cfg.observe_pd_stiffness else ()))
 
 
 def observation_size(cfg: C.EnvConfig | None = None) -> int:
-    """Entries of the observation: 50 (Table 3's groups), 12 more with `observe_last_action`, 1 more with
-    `observe_pd_stiffness`."""
+    """Entries of the observation: 50 (Table 3's groups), the action's size more (12; 24 in foot_torque) with
+    `observe_last_action`, 1 more with `observe_pd_stiffness`."""
     return sum(n for _, n, _, _, _ in observation_layout(cfg))
 
 

@@ -108,9 +108,9 @@ def extract_policies(paths: list[Path], args, speeds: list[float], out: Path, lo
     actors, kinds = [load_actor(path) for path in paths], []
     for path, actor in zip(paths, actors):  # every policy checked before the first rollout
         env = actor.config.env
-        kind = args.path_kind if args.path_kind != "auto" else ("commanded" if env.action_mode == "foot"
+        kind = args.path_kind if args.path_kind != "auto" else ("commanded" if env.action_mode in C.FOOT_MODES
                                                                   else "measured")
-        if kind == "commanded" and env.action_mode != "foot":
+        if kind == "commanded" and env.action_mode not in C.FOOT_MODES:
             raise UsageError(f"{path}: a policy of action_mode {env.action_mode!r} commands no foot path; use "
                              "--path measured")
         kinds.append(kind)

@@ -58,8 +58,8 @@ class WalkBooks:
     def traces(self) -> dict:
         """Every step's t, tau (its mean motor torque), dq (its mean joint speed), power (its mean of |τ·ω| over
         its physics steps, so that Σ power·dt is Eq. 7) per joint (and with `record`: q, base_position,
-        contacts, foot_targets, foot_offsets, feedforward: the drivers' τ_ff), arrays with the step as the first
-        axis."""
+        contacts, foot_targets, foot_offsets, feedforward: the drivers' τ_ff, joint_torque: a policy's added to it),
+        arrays with the step as the first axis."""
         tau, dq, p = self.tau.view(), self.joint_speeds(), self.physics_traces()
         power = np.abs(p["tau"] * p["dq"]).reshape(len(tau), self.substeps, 12).mean(axis=1)
         out = {"t": np.arange(len(tau)) * self.dt, "tau": tau, "dq": dq, "power": power}

@@ -363,12 +363,14 @@ class Walker(WalkBooks):
         traces = self._traces
         if not traces:
             traces.update(base_position=Rows((3,)), contacts=Rows((4,), bool),
-                          foot_targets=Rows((4, 3)), foot_offsets=Rows((4, 3)), feedforward=Rows((12,)))
+                          foot_targets=Rows((4, 3)), foot_offsets=Rows((4, 3)), feedforward=Rows((12,)),
+                          joint_torque=Rows((12,)))
         traces["base_position"].append(s.base_position)
         traces["contacts"].append(self.robot.foot_contacts())  # after the step
         c = self.controller  # its last call computed this step's torque (torque mode: it does not run)
         traces["foot_targets"].append(c.last_foot_targets if self.drive and c.last_foot_targets else _NO_TARGET)
         traces["foot_offsets"].append(c.last_foot_offsets if self.drive and c.last_foot_offsets else _NO_OFFSET)
+        traces["joint_torque"].append(c.last_joint_torque if self.drive and c.last_joint_torque else _NO_TORQUE)
         command = arrived[0] if arrived is not None else None  # what the drivers ran this step (after the latency)
         traces["feedforward"].append(command.feedforward if command is not None else _NO_TORQUE)
 

@@ -26,7 +26,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from cyberdog.config import JOINT_NAMES, LEG_NAMES
+from cyberdog.config import FOOT_MODES, JOINT_NAMES, LEG_NAMES
 from cyberdog.envs.cyberdog_env import CyberDogEnv
 from cyberdog.envs.observation import observation_layout
 from cyberdog.provenance import portable_path
@@ -53,6 +53,8 @@ ACTION_USE = {
     "foot": "a shift of the trot controller's foot target per leg (Δx, Δy, Δz; leg frame: x forward, y left, z up), "
             "ramped linearly from the previous action's shift over the control period; the trot (IK + PD + "
             "feedforward, the walk settings below) tracks the shifted path",
+    "foot_torque": "the first 12: a shift of the trot controller's foot target per leg, as in foot mode; the last 12: "
+                   "a joint torque the trot adds to its feedforward, held over the control period",
     "residual": "a joint torque added to the trot controller's, held over the control period",
     "torque": "the joint torque, held over the control period (no trot controller)"}
 
@@ -75,7 +77,7 @@ def require_onnx():
 
 
 class ExportedActor(nn.Module):
-    """observation (…, n) → (action (…, 12) in [−1, 1], action_si = action × scale), by the actor's own network."""
+    """observation (…, n) → (action (…, 12 or 24) in [−1, 1], action_si = action × scale), by the actor's network."""
 
     def __init__(self, actor: LoadedActor):
         super().__init__()
@@ -88,21 +90,25 @@ class ExportedActor(nn.Module):
 
 
 def action_scale(env_cfg) -> np.ndarray:
-    """(12,): what the env multiplies an action by (`CyberDogEnv.step`): m per unit in foot mode (x, y, z per
-    leg), N·m per unit in the torque modes."""
-    if env_cfg.action_mode == "foot":
-        z = env_cfg.foot_offset_scale if env_cfg.foot_offset_scale_z is None else env_cfg.foot_offset_scale_z
-        return np.tile([env_cfg.foot_offset_scale, env_cfg.foot_offset_scale, z], 4)
-    return np.full(12, float(env_cfg.action_scale))
+    """(12,) or (24,): what the env multiplies an action by (`CyberDogEnv.step`): m per unit for a foot shift (x,
+    y, z per leg), N·m per unit for a torque (foot_torque: the shifts, then the torques)."""
+    torque = np.full(12, float(env_cfg.action_scale))
+    if env_cfg.action_mode not in FOOT_MODES:
+        return torque
+    z = env_cfg.foot_offset_scale if env_cfg.foot_offset_scale_z is None else env_cfg.foot_offset_scale_z
+    foot = np.tile([env_cfg.foot_offset_scale, env_cfg.foot_offset_scale, z], 4)
+    return foot if env_cfg.action_mode == "foot" else np.concatenate([foot, torque])
 
 
 def action_layout(env_cfg) -> list[dict]:
-    """The 12 action entries: index, leg, name, unit, scale (× the action = `action_si`)."""
+    """The action's entries: index, leg, name, unit, scale (× the action = `action_si`)."""
     scale = action_scale(env_cfg).tolist()
-    foot = env_cfg.action_mode == "foot"
-    names = [f"{leg}_{axis}" for leg in LEG_NAMES for axis in ("dx", "dy", "dz")] if foot else JOINTS
-    return [{"index": i, "leg": LEG_NAMES[i // 3], "name": names[i], "joint": JOINTS[i] if not foot else None,
-             "unit": "m" if foot else "N·m", "scale": scale[i]} for i in range(12)]
+    shifts = [{"name": f"{leg}_{axis}", "joint": None, "unit": "m"}
+              for leg in LEG_NAMES for axis in ("dx", "dy", "dz")]
+    torques = [{"name": joint, "joint": joint, "unit": "N·m"} for joint in JOINTS]
+    entries = (shifts if env_cfg.action_mode == "foot" else shifts + torques if env_cfg.action_mode == "foot_torque"
+               else torques)
+    return [{"index": i, "leg": LEG_NAMES[(i % 12) // 3], **e, "scale": scale[i]} for i, e in enumerate(entries)]
 
 
 def observation_groups(actor: LoadedActor) -> list[dict]:
@@ -220,7 +226,8 @@ def policy_sidecar(actor: LoadedActor, actor_file: Path, files: dict[str, Path],
                                             "then tanh",
                         "before_the_graph": "the env clips each entry to [low, high]; the graph does not clip",
                         "groups": observation_groups(actor)},
-        "action": {"mode": cfg.action_mode, "outputs": {"action": ["batch", 12], "action_si": ["batch", 12]},
+        "action": {"mode": cfg.action_mode,
+                   "outputs": {"action": ["batch", cfg.action_size], "action_si": ["batch", cfg.action_size]},
                    "range": [-1.0, 1.0], "action_si": "action × scale, in each entry's unit",
                    "applied_as": ACTION_USE[cfg.action_mode], "layout": action_layout(cfg)},
         "walk": {"controller_dt_s": walk.sim.controller_dt, "gait": dataclasses.asdict(walk.gait),

@@ -52,7 +52,7 @@ def load_actor(path: str | Path) -> LoadedActor:
     # TensorDictModule wraps TanhActor: its parameters are stored under "module."
     weights = {k.removeprefix("module."): v for k, v in state["actor"].items()}
     scale = actor_observation_scale(cfg.env, cfg.agent.actor_observation)  # the saved buffer is loaded below
-    module = TanhActor(len(scale), 12, cfg.agent.hidden_sizes, scale)
+    module = TanhActor(len(scale), cfg.env.action_size, cfg.agent.hidden_sizes, scale)
     check_shapes(weights, module.state_dict(), "the actor", path)
     module.load_state_dict(weights)
     module.eval()
@@ -79,7 +79,7 @@ def _handover(cfg: C.EnvConfig, then_path: tuple[float, FootOffsetPath] | None,
     if then_path is None:
         return None, None
     t_hand, path_offsets = then_path
-    if cfg.action_mode != "foot":
+    if cfg.action_mode not in C.FOOT_MODES:
         raise ValueError(f"then_path hands the walk to a foot path: the policy must act on foot targets, "
                          f"not {cfg.action_mode!r}")
     if not isinstance(path_offsets, FootOffsetPath):
@@ -136,7 +136,8 @@ def rollout(actor: LoadedActor, speed: float = 1.0, duration: float = 10.0, seed
                 break
             if k == handover_step:
                 walker.controller.foot_offset_path = path_offsets  # the path's shift, at the controller's clock
-            action = actor(obs) if handover_step is None or k < handover_step else np.zeros(12, np.float32)
+            policy_acts = handover_step is None or k < handover_step
+            action = actor(obs) if policy_acts else np.zeros(cfg.action_size, np.float32)
             obs, reward_t, terminated, _, info = env.step(action)
             score += float(reward_t)
             if terminated:

@@ -60,7 +60,6 @@ from cyberdog.rl.stop import StopSignals, TrainingInterrupted
 from cyberdog.rl.td3 import TD3, NonFiniteError, UpdateSettings, metrics_to_float
 from cyberdog.runlock import RunFolderError, RunLock
 
-ACTION_SIZE = 12  # joint torques or foot offsets (Table 3); the observation's size is the env config's
 
 
 def resolve_device(name: str) -> str:
@@ -112,7 +111,7 @@ class Trainer(RunState):
         random.seed(tc.seed)
         obs_scale = observation_typical_magnitude(cfg.env)
         self.observation_size = len(obs_scale)
-        self.agent = TD3(cfg.agent, self.observation_size, ACTION_SIZE, self.device, obs_scale,
+        self.agent = TD3(cfg.agent, self.observation_size, cfg.env.action_size, self.device, obs_scale,
                          actor_observation_scale(cfg.env, cfg.agent.actor_observation))
         self.rb = make_replay_buffer(tc.buffer_size)
         self.stages = list(stages)
@@ -284,7 +283,7 @@ class Trainer(RunState):
         tc, env_cfg, done = self.cfg.train, self._collection_env(), self.progress.stage_env_steps
         if tc.collection == "async":
             return ProcessCollector(env_cfg, reward, seed, self.cfg.agent, self.agent.policy,
-                                    self.observation_size, ACTION_SIZE, tc.frames_per_batch, random_frames,
+                                    self.observation_size, env_cfg.action_size, tc.frames_per_batch, random_frames,
                                     tc.num_envs, done)
         return make_collector(make_env_for_collection(env_cfg, reward, seed, tc.num_envs, done), self.agent.policy,
                               tc.frames_per_batch, random_frames, self.device)
