@@ -59,3 +59,14 @@ def test_the_gains_reach_the_search_and_a_bad_pair_fails_before_any_walk(tmp_pat
         with pytest.raises(SystemExit):
             tool.parse_args([*bad, "--out", str(tmp_path)])
     assert "KP:KD" in capsys.readouterr().err
+
+
+def test_the_foot_inset_reaches_the_search_and_names_the_file(tmp_path, monkeypatch, capsys):
+    seen = _search_arguments(monkeypatch, ["--foot-inset", "0.02", "--out", str(tmp_path)])
+    assert seen["foot_inset"] == 0.02
+    assert tool.parse_args(["--foot-inset", "0.02", "--out", str(tmp_path)]).result.name.endswith("_inset20.json")
+    assert _search_arguments(monkeypatch, ["--out", str(tmp_path)])["foot_inset"] == 0.0
+    for bad in (["--foot-inset", "0.15"], ["--foot-inset", "nan"], ["--foot-inset", "0.02", "--replay-only", __file__]):
+        with pytest.raises(SystemExit):
+            tool.parse_args([*bad, "--out", str(tmp_path)])
+    assert "--foot-inset" in capsys.readouterr().err

@@ -27,6 +27,9 @@ summary.json. `--replay-only FILE` skips the optimisation and replays a saved pa
 user may set; the drivers step at the physics rate each needs), and the objective is the mean over them all: the
 shape cheapest over those gains, not at the default alone (the file's name ends in `_gains`).
 
+`--foot-inset D` searches the shape with every foot D m nearer the body's midline (a stance width; the file carries
+it, and whatever walks the shape walks it so; the name ends in `_inset<mm>`); the replay's common paths keep theirs.
+
 `--set SECTION.FIELD=VALUE` changes the walk config of every walk, search and replay alike (e.g. the trot with
 sagittal foot placement, `--set controller.sagittal_placement_gain=0.1`, so that the shape is searched under the
 trot the learned paths it is compared with walk under); the overrides are recorded in the path's provenance, and
@@ -78,6 +81,8 @@ def parse_args(argv=None) -> argparse.Namespace:
                    help="the joint PD's kp and kd factors each shape walks under, at each speed: the objective is "
                         "the mean over speeds and gains (e.g. 1:1 0.5:1 1:2, the default gains and the two that cost "
                         "the searched shape most; default 1:1 alone)")
+    p.add_argument("--foot-inset", type=float, default=0.0, metavar="M",
+                   help="m, every foot this much nearer the body's midline in the search (default 0: below the hips)")
     p.add_argument("--workers", type=int, default=2, help="parallel walk processes (default 2)")
     p.add_argument("--initial-step", type=float, default=0.2,
                    help="initial Nelder–Mead simplex size, share of each parameter's range (default 0.2)")
@@ -94,6 +99,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     # every check before any long work starts
     if args.gains is not None and args.replay_only is not None:
         p.error("--gains sets the search's walks; --replay-only runs no search (the replay walks the default gains)")
+    if args.foot_inset and args.replay_only is not None:
+        p.error("--foot-inset sets the search's walks; --replay-only walks the file's own (its foot_inset_m)")
+    if not (math.isfinite(args.foot_inset) and abs(args.foot_inset) < 0.1):
+        p.error(f"--foot-inset must be within ±0.1 m, got {args.foot_inset}")
     try:
         shape_search.check_objective_args(args.lift_height, args.speeds, args.duration, args.measure_from,
                                           gains=args.gains or shape_search.DEFAULT_GAINS)
@@ -119,6 +128,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     name = (f"optimized_trajectory_H{args.lift_height:.2f}" if (args.objective, args.robot) == ("eq7", "ideal")
             else f"optimized_trajectory_H{args.lift_height:.3f}_{args.objective}_{args.robot}")
     name += "_gains" if args.gains else ""
+    name += f"_inset{1e3 * args.foot_inset:.0f}" if args.foot_inset else ""
     args.result = args.result or REPO / "results" / "searched_shapes" / f"{name}.json"
     return args
 
@@ -222,7 +232,7 @@ def main(argv=None) -> int:
         res = shape_search.optimize_shape(args.lift_height, args.speeds, args.duration, args.measure_from, args.max_evals,
                                 args.workers, initial_step=args.initial_step, objective=args.objective,
                                 hardware=HARDWARE_LIKE if args.robot == "hardware" else None, base=args.base,
-                                gains=args.gains or shape_search.DEFAULT_GAINS)
+                                gains=args.gains or shape_search.DEFAULT_GAINS, foot_inset=args.foot_inset)
         write_csv(args.out / "history.csv", [e.row() for e in res.history])
         cpu_s = sum(w["cpu_s"] for e in res.history for w in e.walks)
         print(f"done: {len(res.history)} evaluations in {res.wall_s:.0f} s wall ({cpu_s:.0f} s CPU in walks); "
@@ -242,10 +252,10 @@ def main(argv=None) -> int:
             "per_speed_window_energy_J": {shape_search.walk_key(w): w["energy_window_J"] for w in res.best.walks},
             "evaluations": len(res.history), "best_eval": res.best.index, "optimize_wall_s": res.wall_s,
             "optimize_walk_cpu_s": cpu_s, "duration_s": args.duration, "measure_from_s": args.measure_from,
-            "optimizer_message": res.message})
+            "optimizer_message": res.message, **({"foot_inset_m": args.foot_inset} if args.foot_inset else {})})
         optimized = so.shape_trajectory(res.best.params, gait, provenance={
             "name": "optimized", "lift_height_m": args.lift_height,
-            **{k: v for k, v in summary.items() if k not in ("lift_height_m",)}})
+            **{k: v for k, v in summary.items() if k not in ("lift_height_m",)}}, foot_inset=args.foot_inset)
         for path in (args.result, args.out / "optimized_trajectory.json"):
             optimized.save(path)
         print(f"wrote {args.result}")

@@ -52,6 +52,7 @@ class ShapeWalk:
     objective: str = "eq7"  # one of OBJECTIVES
     hardware: HardwareConfig | None = None  # the robot walked: None = ideal, else the hardware-like effects
     pd_factors: tuple[float, float] = (1.0, 1.0)  # the joint PD's kp and kd, times the walk config's
+    foot_inset: float = 0.0  # m, every foot nearer the body's midline (the shape's stance width)
 
 
 def check_objective_args(lift_height: float, speeds: Sequence[float], duration: float,
@@ -89,7 +90,7 @@ def walk_cost(job: ShapeWalk) -> dict:
     pid = dataclasses.replace(job.base.pid, kp=tuple(g * kp for g in job.base.pid.kp),
                               kd=tuple(g * kd for g in job.base.pid.kd))
     cfg = dataclasses.replace(job.base, gait=gait, pid=pid)
-    traj = shape_trajectory(job.params, gait)
+    traj = shape_trajectory(job.params, gait, foot_inset=job.foot_inset)
     t0 = time.process_time()
     r = walk(cfg, job.duration, trajectory=traj, record=True, hardware=job.hardware)
     dt = cfg.sim.controller_dt
@@ -155,9 +156,10 @@ class ShapeObjective:
     def __init__(self, lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SPEEDS, duration: float = 6.0,
                  measure_from: float = 2.0, base: WalkConfig | None = None, pool: ProcessMap | None = None,
                  log: Callable[[str], None] | None = print, max_evals: int | None = None, objective: str = "eq7",
-                 hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS) -> None:
+                 hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS,
+                 foot_inset: float = 0.0) -> None:
         check_objective_args(lift_height, speeds, duration, measure_from, objective, hardware, gains)
-        self.objective, self.hardware = objective, hardware
+        self.objective, self.hardware, self.foot_inset = objective, hardware, float(foot_inset)
         self.gains = tuple((float(kp), float(kd)) for kp, kd in gains)
         self.lift_height, self.speeds = float(lift_height), tuple(float(v) for v in speeds)
         self.duration, self.measure_from = float(duration), float(measure_from)
@@ -169,7 +171,7 @@ class ShapeObjective:
 
     def evaluate(self, params: ShapeParams) -> Evaluation:
         jobs = [ShapeWalk(params, v, self.lift_height, self.duration, self.measure_from, self.base,
-                          self.objective, self.hardware, g) for g in self.gains for v in self.speeds]
+                          self.objective, self.hardware, g, self.foot_inset) for g in self.gains for v in self.speeds]
         t0 = time.perf_counter()
         walks = self.pool(walk_cost, jobs, describe=lambda j: f"{j.speed:g} m/s, PD {j.pd_factors} with {j.params}")
         ev = Evaluation(len(self.history), params, float(np.mean([w["cost_J"] for w in walks])), walks,
@@ -223,14 +225,16 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
                    measure_from: float = 2.0, max_evals: int = 100, workers: int = 2,
                    start: ShapeParams = CYCLOID_PARAMS, initial_step: float = 0.2, base: WalkConfig | None = None,
                    log: Callable[[str], None] | None = print, objective: str = "eq7",
-                   hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS) -> OptimizationResult:
+                   hardware: HardwareConfig | None = None, gains: Sequence = DEFAULT_GAINS,
+                   foot_inset: float = 0.0) -> OptimizationResult:
     """Bounded Nelder–Mead over the shape parameters (unit coordinates), started from `start`.
 
     initial_step: size of the initial simplex in unit coordinates (share of each parameter's range), each
     vertex stepping toward the interior from `start`. Walks of one evaluation run in `workers` spawned
     processes (1 = in this process). objective: what a walk's energy counts (OBJECTIVES); hardware: the robot
     walked (None: ideal; a HardwareConfig: its effects and its seeded mass draw, the same robot every walk);
-    gains: the (kp, kd) factors of the joint PD each shape walks under at each speed (the objective their mean).
+    gains: the (kp, kd) factors of the joint PD each shape walks under at each speed (the objective their mean);
+    foot_inset: m, every foot nearer the body's midline in every walk (a stance width the shape is searched at).
     """
     from scipy.optimize import minimize
 
@@ -250,7 +254,7 @@ def optimize_shape(lift_height: float = 0.10, speeds: Sequence[float] = PAPER_SP
         simplex.append(v)
     with ProcessMap(workers) as pool:  # the workers live through every evaluation (they start once)
         cost = ShapeObjective(lift_height, speeds, duration, measure_from, base, pool, log, max_evals, objective,
-                              hardware, gains)
+                              hardware, gains, foot_inset)
         try:
             res = minimize(cost, x0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * len(x0),
                            options={"maxfev": max_evals, "initial_simplex": np.array(simplex),

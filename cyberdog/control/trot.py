@@ -309,6 +309,7 @@ class TrotController:
         dy = c.lateral_placement_gain * body.lateral_speed
         dy = -MAX_ATTITUDE_SHIFT if -MAX_ATTITUDE_SHIFT > dy else MAX_ATTITUDE_SHIFT if MAX_ATTITUDE_SHIFT < dy else dy
         l1, l2, l3 = self._links
+        width = l1 - self.trajectory.foot_inset  # m, each foot's y from its abad axis (l1: below the hip)
         stand, feedforward = self.stand_height, c.velocity_feedforward
         placement = self._sagittal_placement(t, body, phases)
         offsets, rates = self._shift(t, phases)
@@ -317,7 +318,7 @@ class TrotController:
         feet, foot_vels, q_t, dq_t = [], [], [], []
         for leg, (x, z, vx, vz) in enumerate(self._foot_points(phases, S)):
             side = LEG_SIDE[leg]
-            y, z = side * l1 + dy, z - stand
+            y, z = side * width + dy, z - stand
             if placement is not None:
                 x, vx = x + placement[leg][0], vx + placement[leg][1]
             vy = 0.0
@@ -333,7 +334,7 @@ class TrotController:
                 a, h, k, da, dh, dk = ik(fx, fy, fz, wx, wy, wz, side, l1, l2, l3)
             except ValueError:
                 if offsets is None:  # unreachable: the array function raises with its full message
-                    kin.inverse_kinematics(np.array([(p[0], s * l1 + dy, p[1] - stand) for p, s in
+                    kin.inverse_kinematics(np.array([(p[0], s * width + dy, p[1] - stand) for p, s in
                                                      zip(self._foot_points(phases, S), LEG_SIDE)]), self.robot)
                     raise
                 # a shifted target out of reach: the unshifted one, at the unshifted speed; the record says so

@@ -170,12 +170,13 @@ def normalised_cycle(phase: Any, p: ShapeParams, swing_fraction: float) -> tuple
 
 
 def shape_trajectory(p: ShapeParams, gait: GaitConfig | None = None, n_points: int = DEFAULT_POINTS,
-                     provenance: dict | None = None) -> SampledTrajectory:
+                     provenance: dict | None = None, foot_inset: float = 0.0) -> SampledTrajectory:
     """The shape as a `SampledTrajectory` for the gait's timing (its swing fraction) and lift height.
 
     The samples are stored in metres at the gait's S (= speed·stance_time, or 0.2 m where the speed is 0)
     and H; the trajectory is normalised by them, so it replays at any speed's S and at whatever H the walk
-    is configured with (set the walk's lift_height to the same H to keep the optimised height).
+    is configured with (set the walk's lift_height to the same H to keep the optimised height). foot_inset: m,
+    every foot nearer the body's midline (`SampledTrajectory.foot_inset`).
     """
     gait = gait or GaitConfig(lift_height=0.10)
     if not (isinstance(n_points, (int, np.integer)) and n_points >= MIN_POINTS):
@@ -188,4 +189,4 @@ def shape_trajectory(p: ShapeParams, gait: GaitConfig | None = None, n_points: i
             "swing_fraction": beta, "period_s": gait.period, "swing_time_s": gait.swing_time,
             "n_points": int(n_points), **(provenance or {})}
     return SampledTrajectory(phase, step_length * x_hat, gait.lift_height * z_hat, step_length,
-                             gait.lift_height, meta)
+                             gait.lift_height, meta, foot_inset)

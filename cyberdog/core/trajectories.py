@@ -85,6 +85,7 @@ class FootTrajectory(ABC):
     """A foot trajectory: a swing path over τ ∈ [0, 1] plus the shared constant-speed stance."""
 
     name: str = ""
+    foot_inset: float = 0.0  # m, each foot this much nearer the body's midline than below its hip (stance width)
 
     @abstractmethod
     def swing_path(self, tau: Any, step_length: float, lift_height: float
@@ -254,8 +255,9 @@ class SampledTrajectory(FootTrajectory):
     The points (phase, x, z) cover the whole gait cycle with the same convention as the other trajectories
     (phase 0 = lift-off, x, z relative to the neutral point, z = 0 at ground contact). They are normalised by
     the recorded step length and lift height (x / S_rec, z / H_rec), so the curve can be replayed at another
-    S and H: x = S·x̂(φ), z = H·ẑ(φ), velocity = (S·x̂'(φ), H·ẑ'(φ)) / period. `position_velocity` uses the
-    curve over the full cycle (no swing/stance split: the learned trajectory defines both), and
+    S and H: x = S·x̂(φ), z = H·ẑ(φ), velocity = (S·x̂'(φ), H·ẑ'(φ)) / period; `foot_inset` (m, within ±0.1)
+    moves every foot toward the body's midline (a searched stance width; negative: wider). `position_velocity`
+    uses the curve over the full cycle (no swing/stance split: the learned trajectory defines both), and
     `swing_path(τ, S, H)` evaluates the same curve with τ read as the cycle phase.
     Files: `save`/`load` write and read JSON (points + provenance) or, for a ".csv" suffix, CSV.
     """
@@ -264,7 +266,7 @@ class SampledTrajectory(FootTrajectory):
     MIN_POINTS = 4
 
     def __init__(self, phase: Any, x: Any, z: Any, step_length: float, lift_height: float,
-                 provenance: dict | None = None) -> None:
+                 provenance: dict | None = None, foot_inset: float = 0.0) -> None:
         phase, x, z = (np.asarray(a, dtype=float) for a in (phase, x, z))
         for name, a in (("phase", phase), ("x", x), ("z", z)):
             if a.ndim != 1:
@@ -282,6 +284,9 @@ class SampledTrajectory(FootTrajectory):
                              f"end point), got {phase[0]!r} .. {phase[-1]!r}")
         _check_finite_positive("recorded step_length (m)", step_length)
         _check_finite_positive("recorded lift_height (m)", lift_height)
+        if not (math.isfinite(foot_inset) and abs(foot_inset) < 0.1):
+            raise ValueError(f"foot_inset must be finite and within ±0.1 m, got {foot_inset!r}")
+        self.foot_inset = float(foot_inset)
         provenance = dict(provenance or {})
         try:
             json.dumps(provenance)
@@ -319,7 +324,7 @@ class SampledTrajectory(FootTrajectory):
         return {"format": "cyberdog.sampled_foot_trajectory", "version": 1,
                 "step_length_m": self.step_length, "lift_height_m": self.lift_height,
                 "phase": self.phase.tolist(), "x_m": self.x.tolist(), "z_m": self.z.tolist(),
-                "provenance": self.provenance}
+                **({"foot_inset_m": self.foot_inset} if self.foot_inset else {}), "provenance": self.provenance}
 
     def save(self, path: str | Path) -> Path:
         """Write JSON (or CSV if the suffix is ".csv") atomically; returns the path."""
@@ -328,6 +333,7 @@ class SampledTrajectory(FootTrajectory):
         if path.suffix.lower() == ".csv":
             lines = ["# cyberdog sampled foot trajectory: phase 0 = lift-off; x, z in m from the neutral point",
                      f"# step_length_m: {self.step_length!r}", f"# lift_height_m: {self.lift_height!r}",
+                     *([f"# foot_inset_m: {self.foot_inset!r}"] if self.foot_inset else []),
                      f"# provenance: {json.dumps(self.provenance)}", "phase,x_m,z_m"]
             points = zip(self.phase.tolist(), self.x.tolist(), self.z.tolist())
             lines += [f"{p!r},{x!r},{z!r}" for p, x, z in points]  # repr: exact round trip
@@ -348,7 +354,7 @@ class SampledTrajectory(FootTrajectory):
         if path.suffix.lower() != ".csv":
             d = json.loads(path.read_text())
             return cls(d["phase"], d["x_m"], d["z_m"], d["step_length_m"], d["lift_height_m"],
-                       d.get("provenance"))
+                       d.get("provenance"), d.get("foot_inset_m", 0.0))
         meta: dict[str, str] = {}
         rows = []
         for line in path.read_text().splitlines():
@@ -363,7 +369,8 @@ class SampledTrajectory(FootTrajectory):
             raise ValueError(f"CSV {str(path)!r} lacks header line(s) {sorted(missing)}")
         pts = np.asarray(rows, dtype=float).reshape(-1, 3)
         return cls(pts[:, 0], pts[:, 1], pts[:, 2], float(meta["step_length_m"]),
-                   float(meta["lift_height_m"]), json.loads(meta.get("provenance", "{}")))
+                   float(meta["lift_height_m"]), json.loads(meta.get("provenance", "{}")),
+                   float(meta.get("foot_inset_m", 0.0)))
 
 
 def point_evaluator(trajectory: FootTrajectory):
