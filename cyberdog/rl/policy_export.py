@@ -3,8 +3,8 @@ JSON sidecar that documents both.
 
 The graph is the actor file's own network (`load_actor`: `TanhActor`, the observation divided by its scale, the
 MLP, tanh) in `ExportedActor`: input `observation` (batch, n) float32, the observation as `CyberDogEnv` returns it;
-outputs `action` (batch, 12) in [−1, 1], the PyTorch actor's action, and `action_si`, the action times the scale
-the env applies (m of foot-target shift in foot mode, N·m in the torque modes). The ONNX file is written by
+outputs `action` (batch, 12; 24 in foot_torque mode) in [−1, 1], the PyTorch actor's action, and `action_si`, the
+action times the scale the env applies (m of foot-target shift, N·m of torque). The ONNX file is written by
 `torch.onnx.export(..., dynamo=True)`, the torch.export-based exporter (it needs onnxscript), opset `ONNX_OPSET`,
 with a dynamic batch dimension and the weights inside the file; the TorchScript file by `torch.jit.trace`.
 `export_policy` writes the three files and checks both graphs against the PyTorch actor on the observations of a
