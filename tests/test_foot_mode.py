@@ -1,10 +1,13 @@
-"""action_mode="foot": the policy shifts the trot controller's foot targets (controller and env)."""
+"""action_mode="foot": the policy shifts the trot controller's foot targets (controller and env); "foot_torque": it
+also sends a joint torque through the drivers, and the path extracted from it carries that torque as its own
+feedforward."""
 import numpy as np
 import pytest
 
 from cyberdog import config as C
 from cyberdog.control.trot import TrotController
 from cyberdog.envs.cyberdog_env import CyberDogEnv
+from cyberdog.envs.observation import observation_size
 
 
 @pytest.fixture()
@@ -92,3 +95,107 @@ def test_foot_action_ramps_each_offset_to_the_clipped_action_times_the_scale():
         np.testing.assert_allclose(last, target, atol=1e-12)
         previous = target
     env.close()
+
+
+# ---- foot_torque: the foot shifts and a joint torque ----------------------------------------------------------
+TORQUE = np.linspace(-0.6, 0.6, 12)  # action units of the torque half: N·m per unit × action_scale
+
+
+def test_the_action_and_the_observed_last_action_are_24_wide():
+    cfg = C.EnvConfig(action_mode="foot_torque")
+    env = CyberDogEnv(config=cfg, reward="stage2")
+    assert env.action_space.shape == (24,) and cfg.action_size == 24
+    assert env.observation_space.shape == (observation_size(cfg),) == (50 + 24,)
+    with pytest.raises(ValueError, match=r"shape \(24,\)"):
+        env.reset(seed=0)
+        env.step(np.zeros(12, dtype=np.float32))
+    env.close()
+
+
+def test_a_zero_torque_half_walks_exactly_like_foot_mode():
+    shift = np.tile([0.2, -0.1, 0.3], 4).astype(np.float32)
+    foot, e_foot = _episode(shift, 40, action_mode="foot")
+    both, e_both = _episode(np.concatenate([shift, np.zeros(12, np.float32)]), 40, action_mode="foot_torque")
+    np.testing.assert_array_equal(both[:, :50], foot[:, :50])  # Table 3's entries; the last action is wider
+    assert e_both == e_foot
+
+
+def test_the_torque_half_is_added_to_the_commands_feedforward_times_action_scale():
+    env = CyberDogEnv(action_mode="foot_torque", action_scale=5.0, target_speed_range=())
+    env.reset(seed=0)
+    action = np.concatenate([np.zeros(12), TORQUE * 2.5]).astype(np.float32)  # clipped to ±1 first
+    env.step(action)
+    c = env.walker.controller
+    expected = np.clip(action[12:].astype(float), -1.0, 1.0) * 5.0
+    np.testing.assert_allclose(c.last_joint_torque, expected, rtol=1e-6)
+    # the command carries it on top of the trot's own feedforward, and nothing else changes
+    q = env.walker.reading.q
+    with_torque = c.command(env.t, q)
+    c.set_joint_torque(None)
+    without = c.command(env.t, q)
+    np.testing.assert_allclose(np.subtract(with_torque.feedforward, without.feedforward), expected, atol=1e-12)
+    assert with_torque.q_target == without.q_target
+    env.close()
+
+
+def test_the_trot_adds_a_set_joint_torque_until_reset():
+    c = TrotController(C.EnvConfig().walk)
+    q = np.zeros(12)
+    plain = c.command(0.3, q).feedforward
+    c.set_joint_torque(list(TORQUE))
+    np.testing.assert_allclose(np.subtract(c.command(0.3, q).feedforward, plain), TORQUE, atol=1e-12)
+    c.reset()
+    assert c.command(0.3, q).feedforward == plain and c.last_joint_torque is None
+
+
+def _constant_actor_file(path, action, **env_changes):
+    """An actor file whose policy outputs `action` whatever it sees (zero weights, bias atanh(action))."""
+    torch = pytest.importorskip("torch")
+    from cyberdog.envs.observation import observation_typical_magnitude
+    from cyberdog.rl.networks import TanhActor
+
+    cfg = C.ExperimentConfig()
+    cfg = C.replace(cfg, env=C.replace(cfg.env, target_speed_range=(), **env_changes),
+                    agent=C.replace(cfg.agent, hidden_sizes=(8,)))
+    scale = observation_typical_magnitude(cfg.env)
+    actor = TanhActor(len(scale), cfg.env.action_size, (8,), scale)
+    with torch.no_grad():
+        actor.net[-1].weight.zero_()
+        actor.net[-1].bias.copy_(torch.atanh(torch.as_tensor(action, dtype=torch.float32)))
+    torch.save({"actor": {f"module.{k}": v for k, v in actor.state_dict().items()}, "config": C.to_dict(cfg),
+                "stage": 2, "episode": 1}, path)
+    return path
+
+
+def test_the_extracted_path_carries_the_policys_torque_as_its_feedforward(tmp_path):
+    pytest.importorskip("torch")
+    from cyberdog.analysis.extract import commanded_from_rollout
+    from cyberdog.rl.rollout import load_actor, rollout
+
+    action = np.concatenate([np.zeros(12), TORQUE * 0.5])  # ±1.5 N·m at action_scale 5
+    actor = load_actor(_constant_actor_file(tmp_path / "actor.pt", action, action_mode="foot_torque",
+                                            action_scale=5.0))
+    r = rollout(actor, speed=1.0, duration=6.0)
+    assert not r.fell
+    path = commanded_from_rollout(r, actor.config.env).path
+    table = path.offsets.feedforward
+    assert table is not None and table.shape == (4, path.offsets.n, 3)
+    # a constant torque at every phase of every leg, as sent (float32 actions)
+    np.testing.assert_allclose(table, np.broadcast_to((TORQUE * 0.5 * 5.0).reshape(4, 1, 3), table.shape), atol=1e-5)
+    np.testing.assert_allclose(path.provenance["feedforward_rms_Nm"], np.abs(TORQUE * 2.5).reshape(4, 3), atol=1e-3)
+    # and a foot-mode policy's path carries none
+    plain = load_actor(_constant_actor_file(tmp_path / "plain.pt", np.zeros(12), action_mode="foot"))
+    assert commanded_from_rollout(rollout(plain, speed=1.0, duration=6.0), plain.config.env).path.offsets.feedforward \
+        is None
+
+
+def test_the_exported_layout_names_shifts_then_torques():
+    torch = pytest.importorskip("torch")  # noqa: F841 (policy_export imports torch)
+    from cyberdog.rl.policy_export import action_layout
+
+    layout = action_layout(C.EnvConfig(action_mode="foot_torque", action_scale=5.0, foot_offset_scale=0.02))
+    assert [e["index"] for e in layout] == list(range(24))
+    assert [e["unit"] for e in layout] == ["m"] * 12 + ["N·m"] * 12
+    assert layout[0]["name"] == "LF_dx" and layout[0]["scale"] == 0.02
+    assert layout[12]["joint"] == layout[12]["name"] and layout[12]["leg"] == "LF" and layout[12]["scale"] == 5.0
+    assert layout[23]["leg"] == "RH"
