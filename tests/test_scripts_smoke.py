@@ -211,11 +211,12 @@ def test_ship_searched_quick_on_a_shipped_path(tmp_path):
     learned, results = tmp_path / "learned", tmp_path / "results"
     learned.mkdir()
     shutil.copyfile(RESULTS / "battery_searched_wide" / "paths" / "seed30_1mps.json", learned / "seed30_1mps.json")
-    # sixteen evaluate.py processes: about 3 min of CPU, several times that on a machine busy with other work
+    # seventeen evaluate.py processes: about 3 min of CPU, several times that on a machine busy with other work
     script(tmp_path, "tools/ship_searched.py", "searched_wide", "--learned", learned, "--work", tmp_path / "work",
            "--results", results, "--workers", "1", "--quick", timeout=1800)
     figures = results / "figures_input"
-    for name in ("prototype", "comparison", "prototype_mujoco", "prototype_own", "gains", "gains_own"):
+    for name in ("prototype", "comparison", "prototype_mujoco", "prototype_own", "prototype_inset", "gains",
+                 "gains_own"):
         kind, _, twin = name.partition("_")
         rows = json.loads((figures / f"{kind}_searched_wide{'_' + twin if twin else ''}.json").read_text())
         key = "speed_command_mps" if kind == "comparison" else "speed_mps"

@@ -196,6 +196,41 @@ def test_a_second_fresh_set_has_its_own_rows_and_the_pooled_rows_join_both(tmp_p
     assert optional == set(head[4:])
 
 
+def test_the_lead_over_the_shape_searched_with_a_narrower_stance_comes_from_its_own_run():
+    """The inset run (the prototype run with that shape as its reference) gives each group it walked a row of the
+    paths against it, named by its own seeds; the headline holds it beside the first set's and the pooled rows
+    without pushing out the optional rows, and only where the inset run walked the same seeds."""
+    walks = _walks()
+    first = [{**w, "seed": f"seed{int(w['seed'][4:]) + 20}"} for w in walks]
+    second = [{**w, "seed": f"seed{int(w['seed'][4:]) + 25}"} for w in walks]
+    cheaper = [{**w, "battery_used_pct": 0.9 * w["battery_used_pct"]} if w["trajectory"] == ps.REFERENCE else w
+               for w in first + second]  # a reference 10 % cheaper: a smaller lead than the searched shape's
+    rows = _rows(sst.searched_start_markdown(first + second, inset_walks=cheaper))
+    for name in ("seeds 20–24 (never tuned on)", "seeds 20–29 (never tuned on, pooled)"):
+        group = [w for w in cheaper if name.endswith("pooled)") or int(w["seed"][4:]) < 25]
+        expected = {r["speed_mps"]: r for r in ps.summary_rows(group)
+                    if r["robot"] == "hardware" and r["trajectory"] == "learned"}
+        inset = rows[sst.VS_INSET_ROW.format(seeds=name)]
+        assert inset == [f"**{mean_ci(expected[v], 'battery_vs_searched_pct', '.1f', ' %', sign=True)}**"
+                         for v in sorted(expected)]
+        assert inset != rows[sst.VS_SEARCHED_ROW.format(seeds=name)]
+    head, optional = sst.headline_rows(first + second, _gains(first + second, "kd", 2.0), inset_walks=cheaper)
+    without, _ = sst.headline_rows(first + second, _gains(first + second, "kd", 2.0))
+    pooled = "seeds 20–29 (never tuned on, pooled)"
+    assert head[:6] == (without[0], without[1], sst.VS_INSET_ROW.format(seeds="seeds 20–24 (never tuned on)"),
+                        without[2], without[3], sst.VS_INSET_ROW.format(seeds=pooled))
+    assert head[6:] == without[4:] and optional == set(without[4:])
+    # an inset run over the first set alone: its row there, none for the pooled seeds
+    head, _ = sst.headline_rows(first + second, inset_walks=[w for w in cheaper if int(w["seed"][4:]) < 25])
+    assert [r for r in head if "narrower" in r] == [
+        sst.VS_INSET_ROW.format(seeds="seeds 20–24 (never tuned on)")]
+    # an inset run over fewer seeds than the set: its row in the table is named by them, none in the headline
+    some = [w for w in cheaper if w["seed"] in ("seed20", "seed21")]
+    assert sst.VS_INSET_ROW.format(seeds="seeds 20–21 (never tuned on)") in _rows(
+        sst.searched_start_markdown(first + second, inset_walks=some))
+    assert not [r for r in sst.headline_rows(first + second, inset_walks=some)[0] if "narrower" in r]
+
+
 def test_a_gains_run_that_walked_the_searched_shape_gives_its_saving_and_the_lead_over_it(tmp_path):
     """The gains rows against the searched shape come from the walks under those gains (the reference walked
     too), never from the default gains' walks."""

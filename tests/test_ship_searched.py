@@ -17,6 +17,7 @@ spec = importlib.util.spec_from_file_location("ship_searched", ROOT / "tools/shi
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)
 REAL_RUN = subprocess.run
+N_STEPS = len(tool.steps(Path("own.json"), Path("eq7.json"), Path("inset.json")))  # evaluate.py runs a make walks
 
 
 def step_of(cmd: list[str]) -> str:
@@ -88,7 +89,7 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
     argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
     assert tool.main(argv) == 0
     by_folder = {step_of(c): c for c in calls}
-    assert list(by_folder)[:4] == ["prototype", "compare", "mujoco", "own"] and len(calls) == 16
+    assert list(by_folder)[:4] == ["prototype", "compare", "mujoco", "own"] and len(calls) == 17
     own = C.load_preset(ROOT / "configs/battery_searched.yaml").phases[-1].config.env.walk.gait.sampled_file
     assert after(by_folder["own"], "--prototype-reference") == [own]
     assert after(by_folder["compare"], "--reference") == [str(tool.EQ7_REFERENCE.relative_to(ROOT))]
@@ -99,12 +100,14 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
     recommanded = by_folder["gains_kp2_recommanded"]
     assert "--pd-matched-from-default" in recommanded and "--no-prototype-reference" in recommanded
     assert after(by_folder["gains_own_kd0.5"], "--prototype-reference") == [own]
+    assert after(by_folder["inset"], "--prototype-reference") == [tool.INSET_REFERENCE]
 
     figures = results / "figures_input"
     assert [r["step"] for r in json.loads((figures / "prototype_searched_start.json").read_text())] == ["prototype"] * 2
     assert json.loads((figures / "comparison_searched_start.json").read_text())[0]["step"] == "compare"
     assert json.loads((figures / "prototype_searched_start_mujoco.json").read_text())[0]["step"] == "mujoco"
     assert json.loads((figures / "prototype_searched_start_own.json").read_text())[0]["step"] == "own"
+    assert json.loads((figures / "prototype_searched_start_inset.json").read_text())[0]["step"] == "inset"
     gains = json.loads((figures / "gains_searched_start.json").read_text())
     assert sorted({(r["gain"], r["gain_scale"], r["pd_matched"]) for r in gains}) == \
         sorted((g, s, m) for g in ("kd", "kp") for s in (0.5, 2.0) for m in (False, True))
@@ -124,9 +127,9 @@ def test_a_remake_keeps_the_steps_done_and_writes_nothing_when_one_fails(tmp_pat
     fail.clear()
     assert tool.main(argv + ["--workers", "1"]) == 0  # --workers changes no walk: the steps done are kept
     again = [step_of(c) for c in calls[done:]]
-    assert again[0] == "gains_kd2" and "prototype" not in again and len(again) == 16 - done + 1
+    assert again[0] == "gains_kd2" and "prototype" not in again and len(again) == N_STEPS - done + 1
     n = len(calls)
-    assert tool.main(argv + ["--force"]) == 0 and len(calls) == n + 16
+    assert tool.main(argv + ["--force"]) == 0 and len(calls) == n + N_STEPS
 
 
 def test_bad_input_is_refused_before_any_walk(tmp_path, fake_evaluate):
@@ -156,9 +159,9 @@ def test_paths_changed_in_their_folder_are_walked_again(tmp_path, fake_evaluate)
     calls, _ = fake_evaluate
     learned, results = paths_folder(tmp_path), tmp_path / "results"
     argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
-    assert tool.main(argv) == 0 and tool.main(argv) == 0 and len(calls) == 16  # the same paths: every step kept
+    assert tool.main(argv) == 0 and tool.main(argv) == 0 and len(calls) == N_STEPS  # the same paths: every step kept
     (learned / "seed40_1mps.json").write_text('{"re-picked": true}')
-    assert tool.main(argv) == 0 and len(calls) == 32
+    assert tool.main(argv) == 0 and len(calls) == 2 * N_STEPS
 
 
 def test_seeds_added_are_the_only_ones_walked_and_the_batches_are_joined(tmp_path, fake_evaluate):
@@ -171,7 +174,7 @@ def test_seeds_added_are_the_only_ones_walked_and_the_batches_are_joined(tmp_pat
     n = len(calls)
     assert tool.main(argv) == 0
     new = calls[n:]
-    assert len(new) == 16  # every step once more: the batched ones for seed41 alone, compare for both
+    assert len(new) == N_STEPS  # every step once more: the batched ones for seed41 alone, compare for both
     assert {step_of(c): seeds_walked(c) for c in new if step_of(c) != "compare"} == \
         {step: ["seed41"] for step in map(step_of, new) if step != "compare"}
     assert seeds_walked(next(c for c in new if step_of(c) == "compare")) == ["seed40", "seed41"]

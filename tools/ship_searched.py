@@ -21,6 +21,8 @@ folder under --work:
    commanded, the searched shape walked under the same gains, and re-commanded for them
    (--pd-matched-from-default, no reference); joined by `tools/merge_walks.py gains`  -> gains_NAME.json
 6. gains_own_*: the four as commanded with the own start as the reference        -> gains_NAME_own.json
+7. inset: step 1 with the shape searched for the battery with a 30 mm narrower stance as the reference
+   (`searched_start_table.INSET_REFERENCE`; --inset-reference)                   -> prototype_NAME_inset.json
 
 The prototype-run steps (all but compare) walk each seed once: a step's folder holds batches, one per run,
 named by their seeds (`seed40-seed41-...`), and the step's walks are the batches' joined (`all_seeds/`). Every walk
@@ -32,7 +34,7 @@ inputs (each keeps its command, but for --workers, with a digest of its paths' a
 were re-extracted or re-picked is walked again (with its batch's other seeds). compare walks every seed in one
 run (its references are walked once per lift for all seeds) and is kept the same way.
 
-The six files are made in --work (the gains runs joined into --work/joined/) and copied into
+The seven files are made in --work (the gains runs joined into --work/joined/) and copied into
 --results/figures_input/ once every step and join has succeeded, replacing the ones there. --force walks every step
 again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results folder other
 than the repository's: a check that the chain runs, not a result.
@@ -53,7 +55,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
 from cyberdog import config as C  # noqa: E402
-from cyberdog.analysis.searched_start_table import RECIPES  # noqa: E402
+from cyberdog.analysis.searched_start_table import INSET_REFERENCE, RECIPES  # noqa: E402
 from cyberdog.provenance import repo_relative  # noqa: E402
 
 EQ7_REFERENCE = REPO / "results/searched_shapes/optimized_trajectory_H0.085_placed_loop.json"  # Eq. 7, H 0.085 m
@@ -68,7 +70,7 @@ def gain_setting(gain: str, scale: float) -> str:
     return f"pid.{gain}=[{','.join(repr(v * scale) for v in getattr(C.PIDConfig(), gain))}]"
 
 
-def steps(own_start: Path, eq7: Path) -> list[tuple[str, list, str]]:
+def steps(own_start: Path, eq7: Path, inset: Path) -> list[tuple[str, list, str]]:
     """(folder, evaluate.py arguments but the paths, its result file) of every step, in the order they run; the
     paths go in as `--learned ... --skip-missing-paths` after the subcommand."""
     own = ["--prototype-reference", own_start]
@@ -83,7 +85,7 @@ def steps(own_start: Path, eq7: Path) -> list[tuple[str, list, str]]:
                     (f"gains_{tag}_recommanded", ["prototype", *gains, "--no-prototype-reference",
                                                   "--pd-matched-from-default"], "prototype.json"),
                     (f"gains_own_{tag}", ["prototype", *gains, *own], "prototype.json")]
-    return out
+    return out + [("inset", ["prototype", "--prototype-reference", inset], "prototype.json")]
 
 
 def with_paths(argv: list, paths: list) -> list:
@@ -199,6 +201,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--eq7-reference", type=Path, default=EQ7_REFERENCE,
                    help=f"the shape searched on Eq. 7 at the paths' lift, step 2's reference (default "
                         f"{EQ7_REFERENCE.relative_to(REPO)})")
+    p.add_argument("--inset-reference", type=Path, default=REPO / INSET_REFERENCE,
+                   help=f"the shape searched for the battery with a narrower stance, step 7's reference (default "
+                        f"{INSET_REFERENCE})")
     p.add_argument("--workers", type=int, default=2, help="walk processes at once in each step (default 2)")
     p.add_argument("--force", action="store_true", help="walk every step again, even one whose result is there")
     p.add_argument("--quick", action="store_true", help="every step at 1.0 m/s with short walks, into a --results "
@@ -206,13 +211,16 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     recipe = names[args.name]
     learned = [repo_relative(f) for f in args.learned]
-    work, results, eq7 = (repo_relative(f) for f in (args.work, args.results, args.eq7_reference))
+    work, results, eq7, inset = (repo_relative(f) for f in (args.work, args.results, args.eq7_reference,
+                                                             args.inset_reference))
     os.chdir(REPO)  # as each step runs
     for given, folder in zip(args.learned, learned):
         if not folder.is_dir() or not any(folder.glob("seed*_*mps.json")):
             sys.exit(f"--learned {given}: not a folder of paths (seed<N>_<speed>mps.json)")
-    if not eq7.is_file():
-        sys.exit(f"--eq7-reference {args.eq7_reference}: no such file")
+    for given, reference in ((f"--eq7-reference {args.eq7_reference}", eq7),
+                             (f"--inset-reference {args.inset_reference}", inset)):
+        if not reference.is_file():
+            sys.exit(f"{given}: no such file")
     if args.workers < 1:
         sys.exit(f"--workers {args.workers}: at least 1")
     if args.quick and results == Path("results"):
@@ -223,20 +231,20 @@ def main(argv: list[str] | None = None) -> int:
                  "walk as a reference: not a searched-start recipe")
     own_start = Path(sampled)
     by_seed = seed_files(learned)
-    digest = inputs_digest([f for folder in learned for f in folder.glob("*.json")] + [own_start, eq7])
+    digest = inputs_digest([f for folder in learned for f in folder.glob("*.json")] + [own_start, eq7, inset])
 
     made = {}
-    for folder, step_argv, result in steps(own_start, eq7):
+    for folder, step_argv, result in steps(own_start, eq7, inset):
         if step_argv[0] == "compare":  # its references are walked once per lift for every seed: one run
             run_step(work / folder, with_paths(step_argv, learned) + (QUICK["compare"] if args.quick else []),
                      result, args.workers, args.force, digest)
             made[folder] = work / folder / result
         else:
             step_argv = step_argv + (QUICK["prototype"] if args.quick else [])
-            made[folder] = run_batched_step(work / folder, step_argv, result, by_seed, [own_start, eq7],
+            made[folder] = run_batched_step(work / folder, step_argv, result, by_seed, [own_start, eq7, inset],
                                             args.workers, args.force) / result
 
-    joined = work / "joined"  # the gains runs joined here first: nothing is shipped until all six files are made
+    joined = work / "joined"  # the gains runs joined here first: nothing is shipped until all seven files are made
     joined.mkdir(parents=True, exist_ok=True)
     own_gains = [f for f in made if f.startswith("gains_own_")]
     gains = [f for f in made if f.startswith("gains_") and f not in own_gains]
@@ -251,11 +259,13 @@ def main(argv: list[str] | None = None) -> int:
     figures.mkdir(parents=True, exist_ok=True)
     for source, target in (("prototype", recipe.prototype_source), ("compare", recipe.compare_source),
                            ("mujoco", f"prototype_{recipe.name}_mujoco.json"), ("own", recipe.own_start_source),
+                           ("inset", recipe.inset_source),
                            (recipe.gains_source, recipe.gains_source),
                            (recipe.own_gains_source, recipe.own_gains_source)):
         shutil.copyfile(made[source], figures / target)
     print(f"\nwrote {figures}/: {recipe.prototype_source}, {recipe.compare_source}, prototype_{recipe.name}_mujoco"
-          f".json, {recipe.own_start_source}, {recipe.gains_source}, {recipe.own_gains_source}; the table: python "
+          f".json, {recipe.own_start_source}, {recipe.gains_source}, {recipe.own_gains_source}, "
+          f"{recipe.inset_source}; the table: python "
           f"tools/make_readme_tables.py --table {recipe.name}")
     return 0
 

@@ -16,7 +16,10 @@ prototype walks are shipped):
 - `prototype_NAME_own.json`: the same prototype run with the recipe's own start as the reference
   (`--prototype-reference` the shape its trot walks, which a zero action walks): what the policy adds to it;
 - `gains_NAME_own.json`: the gains runs as commanded with that start as the reference: its saving under
-  each gain, and what the policy adds to it there.
+  each gain, and what the policy adds to it there;
+- `prototype_NAME_inset.json`: the prototype run with the shape searched for the battery with a narrower stance as
+  its reference (`INSET_REFERENCE`, `tools/optimize_trajectory.py --foot-inset 0.03`: the cheapest shape a search
+  that also places the feet finds): the paths' lead over it.
 """
 from __future__ import annotations
 
@@ -31,6 +34,9 @@ from cyberdog.analysis.gains_table import SEARCHED, SEARCHED_SAVING, gains_rows
 from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
 OWN_START = "its own start"  # the recipe's start shape under its trot, as the gains rows name it
+# the battery shape searched with every foot 30 mm nearer the body's midline (the cheapest of 10-40 mm): the
+# reference of prototype_NAME_inset.json
+INSET_REFERENCE = "results/searched_shapes/optimized_trajectory_H0.085_electrical_hardware_inset30.json"
 
 
 def _seeds(first: int, last: int) -> frozenset[str]:
@@ -81,6 +87,10 @@ class Recipe:
         return f"gains_{self.name}_own.json"
 
     @property
+    def inset_source(self) -> str:  # the prototype run against the shape searched with a narrower stance
+        return f"prototype_{self.name}_inset.json"
+
+    @property
     def headline(self) -> str:  # the README's table of it
         return f"{self.name}_headline"
 
@@ -108,6 +118,7 @@ SAVING_ROW = "**battery saving against the cheaper common trajectory, {seeds}**"
 VS_SEARCHED_ROW = "**learned against the shape searched for the battery, {seeds}**"
 EQ7_ROW = "learned against the shape searched on Eq. 7, on E (ideal robot), {seeds}"  # its lift: the caption's
 OWN_START_ROW = "learned against its own start (a zero action's gait), {seeds}"
+VS_INSET_ROW = "**learned against the shape searched for the battery with a narrower stance, {seeds}**"
 GAINS_ROW = "the saving at {gains}, {seeds}"  # a gains row: "kp 0.5×, as commanded" (bold where re-commanded)
 GAINS_SEARCHED_ROW = "{gains}: {row}, {seeds}"  # its rows of the searched shape walked under those gains
 FRESH, POOLED = " (never tuned on)", " (never tuned on, pooled)"  # the notes that name a group's seeds
@@ -173,35 +184,39 @@ def _eq7_lines(walks: list[dict], name: str, speeds: list[float]) -> list[str]:
                  ["–" if v not in same else mean_ci(same[v], "D_ref_pct", ".1f", " %", sign=True) for v in speeds])]
 
 
-def _own_start_lines(walks: list[dict], name: str, speeds: list[float], robot: str) -> list[str]:
-    """The learned paths against the recipe's start (the run's reference row: the shape a zero action walks)."""
+def _vs_reference_lines(walks: list[dict], row: str, name: str, speeds: list[float], robot: str) -> list[str]:
+    """The learned paths against the run's reference row (the recipe's start, or the shape searched with a
+    narrower stance), `row` naming it; bold where the row is."""
     by = {r["speed_mps"]: r for r in ps.summary_rows(walks) if r["robot"] == robot and r["trajectory"] == "learned"}
     if not any(math.isfinite(r.get("battery_vs_searched_pct_mean", math.nan)) for r in by.values()):
         return []
-    return [line(OWN_START_ROW.format(seeds=name), ["–" if v not in by else
-                                                    mean_ci(by[v], "battery_vs_searched_pct", ".1f", " %", sign=True)
-                                                    + fewer_seeds(walks, robot, v) for v in speeds])]
+    bold = "**" if row.startswith("**") else ""
+    return [line(row.format(seeds=name), ["–" if v not in by else
+                                          bold + mean_ci(by[v], "battery_vs_searched_pct", ".1f", " %", sign=True)
+                                          + bold + fewer_seeds(walks, robot, v) for v in speeds])]
 
 
 def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dict] | None = None,
                             gains_walks: list[dict] | None = None, robot: str = "hardware",
                             own_start_walks: list[dict] | None = None,
                             own_start_gains_walks: list[dict] | None = None,
-                            recipe: Recipe = SEARCHED_START) -> str:
-    """The table: per group of seeds (never tuned on, then tuned on) the prototype rows, the row against the
-    recipe's own start (`own_start_walks`: the prototype run with that start as its reference) and the Eq. 7
-    row, then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone), and
+                            recipe: Recipe = SEARCHED_START, inset_walks: list[dict] | None = None) -> str:
+    """The table: per group of seeds (never tuned on, then tuned on) the prototype rows, the row against the shape
+    searched with a narrower stance (`inset_walks`: the prototype run with it as its reference), the row against
+    the recipe's own start (`own_start_walks`: the same with that start as its reference) and the Eq. 7 row,
+    then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone), and
     the own start's under the gains (`own_start_gains_walks`: the gains runs with it as the reference)."""
     speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
     if not speeds:
         raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
     lines = header(f"`{recipe.config}`, hardware-like robot", speeds)
     compared, own = _groups(compare_walks or [], recipe), _groups(own_start_walks or [], recipe)
-    groups = _groups(prototype_walks, recipe)
+    inset, groups = _groups(inset_walks or [], recipe), _groups(prototype_walks, recipe)
     for kind, (name, walks) in groups.items():
         lines += _prototype_lines(walks, name, speeds, robot)
-        if kind in own:
-            lines += _own_start_lines(own[kind][1], name, speeds, robot)
+        for reference, row in ((inset, VS_INSET_ROW), (own, OWN_START_ROW)):  # named by the seeds they walked
+            if kind in reference:
+                lines += _vs_reference_lines(reference[kind][1], row, reference[kind][0], speeds, robot)
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
     lines += _gains_lines(_fresh_gains(gains_walks, groups, recipe), groups, robot, recipe)
@@ -248,7 +263,8 @@ def _gains_seeds(gains_walks: list[dict]) -> str | None:
     return seeds_named(seeds) if seeds else None
 
 
-HEADLINE_MAX_ROWS = 6  # the README's headline: the prototype's rows, then the optional rows in this order
+HEADLINE_MAX_ROWS = 6  # the README's headline: the prototype's rows, then the optional rows in this order (the rows
+# against the shape searched with a narrower stance come beside them, not in their place)
 # the gains rows after the Eq. 7 row, as room is left: the saving at the gain that costs it most without a fall, the
 # searched shape's own saving there, then the next gain's
 HEADLINE_GAINS = ("kd 2×", "kp 0.5×")
@@ -256,10 +272,12 @@ HEADLINE_SEARCHED_GAINS = "kd 2×"
 
 
 def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = None,
-                  recipe: Recipe = SEARCHED_START) -> tuple[tuple[str, ...], frozenset[str]]:
+                  recipe: Recipe = SEARCHED_START,
+                  inset_walks: list[dict] | None = None) -> tuple[tuple[str, ...], frozenset[str]]:
     """The README's rows of the table and which of them may be missing: the first fresh group's saving against
-    the cheaper common trajectory and against the searched shape, the pooled fresh seeds' (where several sets are
-    shipped), then, up to `HEADLINE_MAX_ROWS`, the first group's row against the Eq. 7 shape, the saving at the
+    the cheaper common trajectory, against the searched shape and, where `inset_walks` hold that group, against
+    the shape searched with a narrower stance, the pooled fresh seeds' alike (where several sets are shipped),
+    then, up to `HEADLINE_MAX_ROWS`, the first group's row against the Eq. 7 shape, the saving at the
     first of `HEADLINE_GAINS`, the searched shape's saving at `HEADLINE_SEARCHED_GAINS` and the saving at the
     next gain (the row against the recipe's own start stays in the full table). The prototype's rows are
     required; the others' inputs (the Eq. 7 comparison, the gains runs) are optional. No rows where no fresh seed
@@ -268,14 +286,20 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
     fresh = [name for kind, (name, _) in groups.items() if kind.startswith("fresh")]
     if not fresh:
         return (), frozenset()
-    required = [row.format(seeds=name) for name in fresh[:1] + ([groups["pooled"][0]] if "pooled" in groups else [])
-                for row in (SAVING_ROW, VS_SEARCHED_ROW)]
+    inset = {name: kind for kind, (name, _) in _groups([w for w in inset_walks or [] if w["trajectory"] == "learned"],
+                                                       recipe).items()}
+    named = [(kind, groups[kind][0]) for kind in ([next(k for k in groups if k.startswith("fresh"))]
+                                                  + (["pooled"] if "pooled" in groups else []))]
+    with_inset = [inset.get(name) == kind for kind, name in named]  # the inset run walked the same seeds
+    required = [row.format(seeds=name) for (kind, name), both in zip(named, with_inset)
+                for row in (SAVING_ROW, VS_SEARCHED_ROW, *([VS_INSET_ROW] if both else []))]
+    room = HEADLINE_MAX_ROWS - len(required) + sum(with_inset)
     optional = [EQ7_ROW.format(seeds=fresh[0])]
     if gains := _gains_seeds(_fresh_gains(gains_walks, groups, recipe)):
         first, *others = (GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS)
         optional += [first, GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
                                                       row=SEARCHED_SAVING, seeds=gains), *others]
-    optional = optional[:max(0, HEADLINE_MAX_ROWS - len(required))]
+    optional = optional[:max(0, room)]
     return tuple(required + optional), frozenset(optional)
 
 
@@ -294,8 +318,8 @@ def headline_of(results: Path, recipe: Recipe = SEARCHED_START) -> tuple[tuple[s
     """`headline_rows` of the recipe's shipped inputs in `results` (no rows where its prototype walks are not
     there)."""
     walks = _read(Path(results), recipe.prototype_source)
-    return (headline_rows(walks, _read(Path(results), recipe.gains_source), recipe) if walks
-            else ((), frozenset()))
+    return (headline_rows(walks, _read(Path(results), recipe.gains_source), recipe,
+                          _read(Path(results), recipe.inset_source)) if walks else ((), frozenset()))
 
 
 def make_table(results: Path, recipe: Recipe = SEARCHED_START) -> str | None:
@@ -306,4 +330,5 @@ def make_table(results: Path, recipe: Recipe = SEARCHED_START) -> str | None:
     return searched_start_markdown(
         _read(results, recipe.prototype_source), _read(results, recipe.compare_source),
         _read(results, recipe.gains_source), own_start_walks=_read(results, recipe.own_start_source),
-        own_start_gains_walks=_read(results, recipe.own_gains_source), recipe=recipe)
+        own_start_gains_walks=_read(results, recipe.own_gains_source), recipe=recipe,
+        inset_walks=_read(results, recipe.inset_source))
