@@ -17,7 +17,7 @@ spec = importlib.util.spec_from_file_location("ship_searched", ROOT / "tools/shi
 tool = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(tool)
 REAL_RUN = subprocess.run
-N_STEPS = len(tool.steps(Path("own.json"), Path("eq7.json"), Path("inset.json")))  # evaluate.py runs a make walks
+N_STEPS = len(tool.steps(Path("own.json"), Path("eq7.json"), Path("inset.json")))  # the evaluate.py runs of one make
 
 
 def step_of(cmd: list[str]) -> str:
