@@ -164,6 +164,24 @@ def test_paths_changed_in_their_folder_are_walked_again(tmp_path, fake_evaluate)
     assert tool.main(argv) == 0 and len(calls) == 2 * N_STEPS
 
 
+def test_a_changed_reference_shape_walks_again_only_the_steps_that_walk_it(tmp_path, fake_evaluate, monkeypatch):
+    calls, _ = fake_evaluate
+    learned, results = paths_folder(tmp_path), tmp_path / "results"
+    inset, default = tmp_path / "inset.json", tmp_path / "default.json"
+    for shape in (inset, default):
+        shape.write_text("{}")
+    monkeypatch.setattr(tool, "DEFAULT_PROTOTYPE_REFERENCE", default)
+    argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results),
+            "--inset-reference", str(inset)]
+    assert tool.main(argv) == 0 and len(calls) == N_STEPS
+    inset.write_text('{"searched": "again"}')
+    assert tool.main(argv) == 0 and [step_of(c) for c in calls[N_STEPS:]] == ["inset"]
+    default.write_text('{"searched": "again"}')  # the prototype run's own reference: every step naming none
+    assert tool.main(argv) == 0
+    assert sorted(step_of(c) for c in calls[N_STEPS + 1:]) == sorted(
+        ["prototype", "mujoco", "gains_kp0.5", "gains_kp2", "gains_kd0.5", "gains_kd2"])
+
+
 def test_seeds_added_are_the_only_ones_walked_and_the_batches_are_joined(tmp_path, fake_evaluate):
     calls, _ = fake_evaluate
     learned, results = paths_folder(tmp_path), tmp_path / "results"

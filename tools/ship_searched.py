@@ -28,8 +28,8 @@ The prototype-run steps (all but compare) walk each seed once: a step's folder h
 named by their seeds (`seed40-seed41-...`), and the step's walks are the batches' joined (`all_seeds/`). Every walk
 belongs to one seed (its path, and the references at its lift, on the same robots), so a batch walks its seeds as
 one run over every seed would. A batch is kept where it holds its result, made by the same command on the same
-inputs (each keeps its command, but for --workers, with a digest of its paths' and the reference shapes' files, in
-`ship_searched_command.txt`); the seeds no kept batch holds are walked in one new batch. So seeds added to
+inputs (each keeps its command, but for --workers, with a digest of its paths' files and of the reference shape it
+walks, in `ship_searched_command.txt`); the seeds no kept batch holds are walked in one new batch. So seeds added to
 --learned are the only ones walked, a re-make stopped half way continues where it stopped, and a seed whose paths
 were re-extracted or re-picked is walked again (with its batch's other seeds). compare walks every seed in one
 run (its references are walked once per lift for all seeds) and is kept the same way.
@@ -56,6 +56,7 @@ sys.path.insert(0, str(REPO))  # run as a script from anywhere
 
 from cyberdog import config as C  # noqa: E402
 from cyberdog.analysis.searched_start_table import INSET_REFERENCE, RECIPES  # noqa: E402
+from cyberdog.evaluation.learned import DEFAULT_PROTOTYPE_REFERENCE  # noqa: E402
 from cyberdog.provenance import repo_relative  # noqa: E402
 
 EQ7_REFERENCE = REPO / "results/searched_shapes/optimized_trajectory_H0.085_placed_loop.json"  # Eq. 7, H 0.085 m
@@ -106,6 +107,16 @@ def seed_files(learned: list[Path]) -> dict[str, list[Path]]:
             by_seed.setdefault(f.name.split("_", 1)[0], []).append(f)
     number = lambda label: (0, int(label[4:]), "") if label[4:].isdigit() else (1, 0, label)
     return dict(sorted(by_seed.items(), key=lambda item: number(item[0])))
+
+
+def step_references(argv: list) -> list[Path]:
+    """The reference shape a step walks beside the paths: the file its arguments name, else the prototype run's
+    default (none with --no-prototype-reference)."""
+    for flag in ("--reference", "--prototype-reference"):
+        if flag in argv:
+            return [Path(argv[argv.index(flag) + 1])]
+    none = argv[0] != "prototype" or "--no-prototype-reference" in argv
+    return [] if none else [repo_relative(DEFAULT_PROTOTYPE_REFERENCE)]
 
 
 def inputs_digest(files: list[Path]) -> str:
@@ -231,18 +242,18 @@ def main(argv: list[str] | None = None) -> int:
                  "walk as a reference: not a searched-start recipe")
     own_start = Path(sampled)
     by_seed = seed_files(learned)
-    digest = inputs_digest([f for folder in learned for f in folder.glob("*.json")] + [own_start, eq7, inset])
+    paths = [f for folder in learned for f in folder.glob("*.json")]
 
     made = {}
     for folder, step_argv, result in steps(own_start, eq7, inset):
         if step_argv[0] == "compare":  # its references are walked once per lift for every seed: one run
             run_step(work / folder, with_paths(step_argv, learned) + (QUICK["compare"] if args.quick else []),
-                     result, args.workers, args.force, digest)
+                     result, args.workers, args.force, inputs_digest(paths + step_references(step_argv)))
             made[folder] = work / folder / result
         else:
             step_argv = step_argv + (QUICK["prototype"] if args.quick else [])
-            made[folder] = run_batched_step(work / folder, step_argv, result, by_seed, [own_start, eq7, inset],
-                                            args.workers, args.force) / result
+            made[folder] = run_batched_step(work / folder, step_argv, result, by_seed,
+                                            step_references(step_argv), args.workers, args.force) / result
 
     joined = work / "joined"  # the gains runs joined here first: nothing is shipped until all seven files are made
     joined.mkdir(parents=True, exist_ok=True)
