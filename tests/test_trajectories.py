@@ -233,3 +233,15 @@ def test_sampled_bad_inputs_raise(phase, x, z, kwargs, match):
 def test_sampled_missing_file_raises(tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         SampledTrajectory.load(tmp_path / "missing.json")
+
+
+@pytest.mark.parametrize("edit, match", [
+    (lambda text: text.replace("# lift_height_m", "# lift_m"), "lacks header"),
+    (lambda text: text.replace("phase,x_m,z_m\n", "phase,x_m,z_m\n0.0,0.1\n"), "a point is phase,x_m,z_m"),
+])
+def test_a_broken_csv_file_is_refused_with_what_it_lacks(tmp_path, edit, match):
+    phase, x, z = _learned_like_points(8)
+    path = SampledTrajectory.from_points(phase, x, z, S, H).save(tmp_path / "traj.csv")
+    path.write_text(edit(path.read_text()))
+    with pytest.raises(ValueError, match=match):
+        SampledTrajectory.load(path)

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Any
@@ -31,6 +30,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from cyberdog.config import STRAIGHT_SHAPES, TRAJECTORY_NAMES, GaitConfig
+from cyberdog.core import sampled_file
 
 
 def swing_fraction(swing_time: float, stance_time: float) -> float:
@@ -259,7 +259,8 @@ class SampledTrajectory(FootTrajectory):
     moves every foot toward the body's midline (a searched stance width; negative: wider). `position_velocity`
     uses the curve over the full cycle (no swing/stance split: the learned trajectory defines both), and
     `swing_path(τ, S, H)` evaluates the same curve with τ read as the cycle phase.
-    Files: `save`/`load` write and read JSON (points + provenance) or, for a ".csv" suffix, CSV.
+    Files: `save`/`load` write and read JSON (points + provenance) or, for a ".csv" suffix, CSV
+    (`cyberdog.core.sampled_file`).
     """
 
     name = "sampled"
@@ -319,58 +320,23 @@ class SampledTrajectory(FootTrajectory):
         x, z, dx, dz = self._curve(phase, step_length, lift_height)
         return np.stack([x, z], axis=-1), np.stack([dx / period, dz / period], axis=-1)
 
-    # ---- files -------------------------------------------------------------------------------------------
+    # ---- files (cyberdog.core.sampled_file) -----------------------------------------------------------------
     def to_dict(self) -> dict:
-        return {"format": "cyberdog.sampled_foot_trajectory", "version": 1,
+        return {"format": sampled_file.FORMAT, "version": sampled_file.VERSION,
                 "step_length_m": self.step_length, "lift_height_m": self.lift_height,
                 "phase": self.phase.tolist(), "x_m": self.x.tolist(), "z_m": self.z.tolist(),
                 **({"foot_inset_m": self.foot_inset} if self.foot_inset else {}), "provenance": self.provenance}
 
     def save(self, path: str | Path) -> Path:
         """Write JSON (or CSV if the suffix is ".csv") atomically; returns the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if path.suffix.lower() == ".csv":
-            lines = ["# cyberdog sampled foot trajectory: phase 0 = lift-off; x, z in m from the neutral point",
-                     f"# step_length_m: {self.step_length!r}", f"# lift_height_m: {self.lift_height!r}",
-                     *([f"# foot_inset_m: {self.foot_inset!r}"] if self.foot_inset else []),
-                     f"# provenance: {json.dumps(self.provenance)}", "phase,x_m,z_m"]
-            points = zip(self.phase.tolist(), self.x.tolist(), self.z.tolist())
-            lines += [f"{p!r},{x!r},{z!r}" for p, x, z in points]  # repr: exact round trip
-            text = "\n".join(lines) + "\n"
-        else:
-            text = json.dumps(self.to_dict(), indent=1)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
-        return path
+        return sampled_file.write(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | Path) -> "SampledTrajectory":
         """Read a file written by `save` (JSON, or CSV by its ".csv" suffix)."""
-        path = Path(path)
-        if not path.is_file():
-            raise ValueError(f"sampled trajectory file {str(path)!r} does not exist")
-        if path.suffix.lower() != ".csv":
-            d = json.loads(path.read_text())
-            return cls(d["phase"], d["x_m"], d["z_m"], d["step_length_m"], d["lift_height_m"],
-                       d.get("provenance"), d.get("foot_inset_m", 0.0))
-        meta: dict[str, str] = {}
-        rows = []
-        for line in path.read_text().splitlines():
-            if line.startswith("#"):
-                key, sep, value = line[1:].partition(":")
-                if sep:
-                    meta[key.strip()] = value.strip()
-            elif line.strip() and not line.startswith("phase"):
-                rows.append([float(v) for v in line.split(",")])
-        missing = {"step_length_m", "lift_height_m"} - set(meta)
-        if missing:
-            raise ValueError(f"CSV {str(path)!r} lacks header line(s) {sorted(missing)}")
-        pts = np.asarray(rows, dtype=float).reshape(-1, 3)
-        return cls(pts[:, 0], pts[:, 1], pts[:, 2], float(meta["step_length_m"]),
-                   float(meta["lift_height_m"]), json.loads(meta.get("provenance", "{}")),
-                   float(meta.get("foot_inset_m", 0.0)))
+        d = sampled_file.read(path)
+        return cls(d["phase"], d["x_m"], d["z_m"], d["step_length_m"], d["lift_height_m"], d.get("provenance"),
+                   d.get("foot_inset_m", 0.0))
 
 
 def point_evaluator(trajectory: FootTrajectory):
