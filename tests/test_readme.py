@@ -274,22 +274,27 @@ def test_the_readme_tables_follow_the_rows_they_are_made_from(tmp_path):
         replace_blocks("no markers here", {"prototype": after["prototype"]})
 
 
-def test_fresh_seeds_rows_are_those_seeds_walks_as_table5_summarises_them(tmp_path):
-    """With comparison_fresh.json (the recipe's paths of seeds it was never tuned on) Table 5 gains their E and
-    D_t rows, named by their seeds; the same walks relabelled give the shipped rows' numbers."""
-    import json
+def _shipped_inputs_with_seeds_5_9(tmp_path: Path, name: str) -> list[dict]:
+    """Copies this engine's shipped table inputs into tmp_path and returns the walks of `name` among them with
+    seeds 0-4 renamed 5-9: walks a table can take for a fresh set whose rows must equal the shipped ones."""
     import shutil
 
     from cyberdog.analysis.engine_table import TWIN_SUFFIX
-    from cyberdog.analysis.readme_tables import make_tables
     source = ROOT / "results" / "figures_input"
     for f in source.glob("*.json"):
         if not f.name.endswith(TWIN_SUFFIX):  # the other engine's twins walked the shipped paths, not these
             shutil.copy(f, tmp_path / f.name)
-    walks = json.loads((source / "comparison.json").read_text())
     relabel = {f"seed{k}": f"seed{k + 5}" for k in range(5)}
-    (tmp_path / "comparison_fresh.json").write_text(json.dumps(
-        [dict(w, seed=relabel.get(str(w.get("seed")), w.get("seed"))) for w in walks]))
+    return [dict(w, seed=relabel.get(str(w.get("seed")), w.get("seed")))
+            for w in json.loads((source / name).read_text())]
+
+
+def test_fresh_seeds_rows_are_those_seeds_walks_as_table5_summarises_them(tmp_path):
+    """With comparison_fresh.json (the recipe's paths of seeds it was never tuned on) Table 5 gains their E and
+    D_t rows, named by their seeds; the same walks relabelled give the shipped rows' numbers."""
+    from cyberdog.analysis.readme_tables import make_tables
+    walks = _shipped_inputs_with_seeds_5_9(tmp_path, "comparison.json")
+    (tmp_path / "comparison_fresh.json").write_text(json.dumps(walks))
     table = make_tables(tmp_path)["table5"].splitlines()
     row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in table[2:]}
     fresh = row["**D_t on E, seeds 5–9 (never tuned on)**"]
@@ -302,18 +307,8 @@ def test_fresh_seeds_prototype_rows_are_those_seeds_walks_as_the_prototype_summa
     prototype run) the prototype table gains their battery, saving and against-the-search rows, named by their
     seeds (the last only where the run walked the searched shape); the same walks
     relabelled give the shipped rows' numbers, and a fresh walk that fell is counted in its cell."""
-    import json
-    import shutil
-
-    from cyberdog.analysis.engine_table import TWIN_SUFFIX
     from cyberdog.analysis.readme_tables import FRESH_PROTOTYPE_ROW, FRESH_VS_SEARCHED_ROW, make_tables
-    source = ROOT / "results" / "figures_input"
-    for f in source.glob("*.json"):
-        if not f.name.endswith(TWIN_SUFFIX):  # the other engine's twins walked the shipped paths, not these
-            shutil.copy(f, tmp_path / f.name)
-    walks = json.loads((source / "prototype.json").read_text())
-    relabel = {f"seed{k}": f"seed{k + 5}" for k in range(5)}
-    fresh = [dict(w, seed=relabel.get(str(w.get("seed")), w.get("seed"))) for w in walks]
+    fresh = _shipped_inputs_with_seeds_5_9(tmp_path, "prototype.json")
     (tmp_path / "prototype_fresh.json").write_text(json.dumps(fresh))
     tables = make_tables(tmp_path)
     row = {line.split("|")[1].strip(): line.split("|")[2:5] for line in tables["prototype"].splitlines()[2:]}

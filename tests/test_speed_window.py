@@ -52,17 +52,18 @@ def test_window_restarts_at_reset_and_zero_is_per_step():
     np.testing.assert_allclose(terms0, (cmd0 - v0) ** 2, rtol=1e-12)
 
 
-def test_speed_window_is_checked_and_reaches_the_stage_reward():
-    with pytest.raises(ValueError, match="speed_window"):
-        C.RewardConfig(speed_window=-0.1)
-    with pytest.raises(ValueError, match="speed_window"):
-        C.RewardConfig(speed_window=float("nan"))
-    windowed = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, speed_window=0.4))
-    assert C.stage_reward(windowed).speed_window == 0.4
-    assert C.stage_reward(C.TrainConfig().stage2).speed_window == 0.0
-    with pytest.raises(ValueError, match="speed_window"):  # a relabel keeps each stored speed term as it was
-        C.TrainConfig(buffer_between_stages="relabel", stage2=windowed)
-    C.TrainConfig(buffer_between_stages="clear", stage2=windowed)
+@pytest.mark.parametrize("name, value, bad_values", [("speed_window", 0.4, (-0.1, float("nan"))),
+                                                     ("speed_deadband", 0.03, (-0.01, 1.0, float("nan")))])
+def test_speed_window_and_deadband_are_checked_and_reach_the_stage_reward(name, value, bad_values):
+    for bad in bad_values:
+        with pytest.raises(ValueError, match=name):
+            C.RewardConfig(**{name: bad})
+    stage = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, **{name: value}))
+    assert getattr(C.stage_reward(stage), name) == value
+    assert getattr(C.stage_reward(C.TrainConfig().stage2), name) == 0.0
+    with pytest.raises(ValueError, match=name):  # a relabel keeps each stored speed term as it was
+        C.TrainConfig(buffer_between_stages="relabel", stage2=stage)
+    C.TrainConfig(buffer_between_stages="clear", stage2=stage)
 
 
 def test_speed_window_class_keeps_the_last_steps():
@@ -100,18 +101,6 @@ def test_env_applies_the_deadband_to_the_windows_means():
         assert terms[k] == pytest.approx(max(0.0, error - band * abs(cmd[lo:k + 1].mean())) ** 2,
                                          rel=1e-9, abs=1e-15), k
     assert (terms > 0).any() and (terms < np.array(plain)).all()  # the start lags off the band: less, not 0
-
-
-def test_speed_deadband_is_checked_and_reaches_the_stage_reward():
-    for bad in (-0.01, 1.0, float("nan")):
-        with pytest.raises(ValueError, match="speed_deadband"):
-            C.RewardConfig(speed_deadband=bad)
-    banded = C.StageConfig(reward=C.replace(C.STAGE2_REWARD, speed_deadband=0.03))
-    assert C.stage_reward(banded).speed_deadband == 0.03
-    assert C.stage_reward(C.TrainConfig().stage2).speed_deadband == 0.0
-    with pytest.raises(ValueError, match="speed_deadband"):  # a relabel keeps each stored speed term as it was
-        C.TrainConfig(buffer_between_stages="relabel", stage2=banded)
-    C.TrainConfig(buffer_between_stages="clear", stage2=banded)
 
 
 def test_speed_at_nominal_stride_pays_the_speed_loops_lengthening():
