@@ -45,8 +45,8 @@ def after(cmd: list[str], flag: str) -> list[str]:
 @pytest.fixture
 def fake_evaluate(monkeypatch, tmp_path):
     """evaluate.py steps record their command and write what a prototype or compare run writes, as far as the tool
-    and tools/merge_walks.py read it (the run's gains in config.yaml); every other command runs for real. A step
-    whose folder is named in `fail` fails, and every join where "join" is."""
+    and tools/merge_walks.py read it (the run's --set settings in config.yaml); every other command runs for real.
+    A step whose folder is named in `fail` fails, and every join where "join" is."""
     calls, fail = [], set()
     monkeypatch.chdir(tmp_path)  # the tool moves to the repository: back here after each test
 
@@ -61,12 +61,12 @@ def fake_evaluate(monkeypatch, tmp_path):
         out.mkdir(parents=True, exist_ok=True)
         if step_of(cmd) in fail:
             return subprocess.CompletedProcess(cmd, 1)
-        pid = {}
+        config = {"pid": {}}
         for setting in after(cmd, "--set") if "--set" in cmd else []:
             key, value = setting.split("=", 1)
-            if key.startswith("pid."):
-                pid[key[4:]] = yaml.safe_load(value)
-        (out / "config.yaml").write_text(yaml.safe_dump({"pid": pid}))
+            section, field = key.split(".")
+            config.setdefault(section, {})[field] = yaml.safe_load(value)
+        (out / "config.yaml").write_text(yaml.safe_dump(config))
         rows = [{"trajectory": t, "seed": seed, "pd_matched": "--pd-matched-from-default" in cmd,
                  "step": step_of(cmd)} for seed in seeds_walked(cmd) for t in ("learned", "cycloid")]
         (out / ("comparison.json" if cmd[2] == "compare" else "prototype.json")).write_text(json.dumps(rows))
@@ -89,7 +89,7 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
     argv = ["searched_start", "--learned", str(learned), "--work", str(tmp_path / "work"), "--results", str(results)]
     assert tool.main(argv) == 0
     by_folder = {step_of(c): c for c in calls}
-    assert list(by_folder)[:4] == ["prototype", "compare", "mujoco", "own"] and len(calls) == 17
+    assert list(by_folder)[:4] == ["prototype", "compare", "mujoco", "own"] and len(calls) == 20
     own = C.load_preset(ROOT / "configs/battery_searched.yaml").phases[-1].config.env.walk.gait.sampled_file
     assert after(by_folder["own"], "--prototype-reference") == [own]
     assert after(by_folder["compare"], "--reference") == [str(tool.EQ7_REFERENCE.relative_to(ROOT))]
@@ -101,6 +101,9 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
     assert "--pd-matched-from-default" in recommanded and "--no-prototype-reference" in recommanded
     assert after(by_folder["gains_own_kd0.5"], "--prototype-reference") == [own]
     assert after(by_folder["inset"], "--prototype-reference") == [tool.INSET_REFERENCE]
+    for tag, setting in (("payload3", "robot.payload=3.0"), ("friction0.4", "sim.ground_friction=0.4")):
+        assert after(by_folder[f"conditions_{tag}"], "--prototype-reference") == [tool.INSET_REFERENCE]
+        assert after(by_folder[f"conditions_{tag}"], "--set") == [setting]
 
     figures = results / "figures_input"
     assert [r["step"] for r in json.loads((figures / "prototype_searched_start.json").read_text())] == ["prototype"] * 2
@@ -113,6 +116,10 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
         sorted((g, s, m) for g in ("kd", "kp") for s in (0.5, 2.0) for m in (False, True))
     own_gains = json.loads((figures / "gains_searched_start_own.json").read_text())
     assert {r["step"] for r in own_gains} == {f"gains_own_{g}{s}" for g in ("kp", "kd") for s in ("0.5", "2")}
+    conditions = json.loads((figures / "conditions_searched_start.json").read_text())
+    assert sorted({(r["step"], r["condition"], r["condition_value"]) for r in conditions}) == [
+        ("conditions_friction0.4", "sim.ground_friction", 0.4), ("conditions_friction1.2", "sim.ground_friction", 1.2),
+        ("conditions_payload3", "robot.payload", 3.0)]
 
 
 def test_a_remake_keeps_the_steps_done_and_writes_nothing_when_one_fails(tmp_path, fake_evaluate):
@@ -175,10 +182,11 @@ def test_a_changed_reference_shape_walks_again_only_the_steps_that_walk_it(tmp_p
             "--inset-reference", str(inset)]
     assert tool.main(argv) == 0 and len(calls) == N_STEPS
     inset.write_text('{"searched": "again"}')
-    assert tool.main(argv) == 0 and [step_of(c) for c in calls[N_STEPS:]] == ["inset"]
+    walks_inset = ["inset", "conditions_payload3", "conditions_friction0.4", "conditions_friction1.2"]
+    assert tool.main(argv) == 0 and [step_of(c) for c in calls[N_STEPS:]] == walks_inset
     default.write_text('{"searched": "again"}')  # the prototype run's own reference: every step naming none
     assert tool.main(argv) == 0
-    assert sorted(step_of(c) for c in calls[N_STEPS + 1:]) == sorted(
+    assert sorted(step_of(c) for c in calls[N_STEPS + len(walks_inset):]) == sorted(
         ["prototype", "mujoco", "gains_kp0.5", "gains_kp2", "gains_kd0.5", "gains_kd2"])
 
 

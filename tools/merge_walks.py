@@ -4,6 +4,8 @@
     python tools/merge_walks.py stiffness runs/stiffness_320_s012 runs/stiffness_320_s34 --out runs/stiffness_320_s01234
     python tools/merge_walks.py gains runs/gains_kp05 runs/gains_kp05_rematched ... \
         --out results/figures_input/gains_walks.json
+    python tools/merge_walks.py conditions runs/payload3 runs/friction0.4 runs/friction1.2 \
+        --out results/figures_input/conditions_searched_pick.json
 
 stiffness: one stiffness table from several `evaluate.py stiffness` runs, seeds walked apart (on other machines,
   or a seed trained later) summarised together. Every walk of the study is deterministic and belongs to one
@@ -22,6 +24,13 @@ gains: the gains table's walks from `evaluate.py prototype` runs, one per change
   Every walk gets `gain` ("kp" or "kd"), `gain_scale` (the factor) and keeps `pd_matched`. A run that changes both
   gains, neither, or the two unevenly across joints is refused, as is a gain, factor and kind (as commanded or
   re-commanded) given twice. Exit 2 on a refused run or an existing --out.
+
+conditions: a searched-start recipe's conditions rows' walks from `evaluate.py prototype` runs, each with one setting
+  of `cyberdog.analysis.conditions_table.CONDITIONS` (a payload, the floor's friction) set apart from its default
+  and the drivers' gains at theirs, read from its `config.yaml`: each run's walks labelled `condition` (the setting)
+  and `condition_value`, into one JSON file (`results/figures_input/conditions_NAME.json`). A run that changes none
+  of them, several, or the gains is refused, as is a setting and value given twice. Exit 2 on a refused run or an
+  existing --out.
 """
 from __future__ import annotations
 
@@ -32,8 +41,9 @@ from pathlib import Path
 
 import yaml
 
+from cyberdog.analysis.conditions_table import CONDITIONS
 from cyberdog.analysis.stiffness import write_stiffness
-from cyberdog.config import PIDConfig
+from cyberdog.config import PIDConfig, WalkConfig
 
 STIFFNESS_WALKS = "stiffness_walks.json"
 WALL_CLOCK = ("wall_s",)  # fields that differ between two walks of the same seed (machine time, not physics)
@@ -128,12 +138,46 @@ def gains_walks(folders: list[Path]) -> list[dict]:
     return walks
 
 
-def gains_command(p: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+# ---- conditions -----------------------------------------------------------------------------------------------
+def run_condition(folder: Path) -> tuple[str, float]:
+    """(setting, value) of the one condition a prototype run folder's config changes; ValueError otherwise."""
+    config = yaml.safe_load((folder / "config.yaml").read_text()) or {}
+    default = WalkConfig()
+    changed = {}
+    for setting in CONDITIONS:
+        section, field = setting.split(".")
+        value = float((config.get(section) or {}).get(field, getattr(getattr(default, section), field)))
+        if value != getattr(getattr(default, section), field):
+            changed[setting] = value
+    pid = config.get("pid") or {}
+    if any([float(v) for v in pid.get(g, getattr(default.pid, g))] != list(getattr(default.pid, g))
+           for g in ("kp", "kd")):
+        raise ValueError(f"{folder}: its drivers' gains are not the defaults (a gains run: merge_walks.py gains)")
+    if len(changed) != 1:
+        raise ValueError(f"{folder}: a conditions run changes one of {', '.join(CONDITIONS)}, this one changes "
+                         f"{', '.join(sorted(changed)) or 'none'}")
+    return next(iter(changed.items()))
+
+
+def conditions_walks(folders: list[Path]) -> list[dict]:
+    walks, seen = [], {}
+    for folder in folders:
+        setting, value = run_condition(folder)
+        if (setting, value) in seen:
+            raise ValueError(f"{folder}: {setting} = {value:g} is also {seen[setting, value]}")
+        seen[setting, value] = folder
+        rows = json.loads((folder / "prototype.json").read_text())
+        walks += [dict(r, condition=setting, condition_value=value) for r in rows]
+    return walks
+
+
+def labelled_command(label: str, args: argparse.Namespace) -> int:
+    """`gains` or `conditions`: the runs' walks labelled into --out."""
     if args.out.exists() and not args.force:
         print(f"error: {args.out} exists (--force to overwrite)", file=sys.stderr)
         return 2
     try:
-        walks = gains_walks(args.runs)
+        walks = (gains_walks if label == "gains" else conditions_walks)(args.runs)
     except (ValueError, OSError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
@@ -145,7 +189,7 @@ def gains_command(p: argparse.ArgumentParser, args: argparse.Namespace) -> int:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = p.add_subparsers(dest="command", required=True, metavar="{stiffness,gains}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="{stiffness,gains,conditions}")
     s = sub.add_parser("stiffness", help="one stiffness table from evaluate.py stiffness runs over other seeds")
     s.add_argument("runs", type=Path, nargs="+",
                    help=f"output folders of evaluate.py stiffness (with {STIFFNESS_WALKS})")
@@ -154,9 +198,15 @@ def main(argv=None) -> int:
     g.add_argument("runs", type=Path, nargs="+", help="evaluate.py prototype output folders")
     g.add_argument("--out", type=Path, required=True, help="the JSON file to write (refused if it exists)")
     g.add_argument("--force", action="store_true", help="overwrite --out")
+    c = sub.add_parser("conditions", help="the conditions rows' walks from evaluate.py prototype runs, one per "
+                       "payload or floor")
+    c.add_argument("runs", type=Path, nargs="+", help="evaluate.py prototype output folders")
+    c.add_argument("--out", type=Path, required=True, help="the JSON file to write (refused if it exists)")
+    c.add_argument("--force", action="store_true", help="overwrite --out")
     args = p.parse_args(argv)
-    parser = s if args.command == "stiffness" else g
-    return (stiffness_command if args.command == "stiffness" else gains_command)(parser, args)
+    if args.command == "stiffness":
+        return stiffness_command(s, args)
+    return labelled_command(args.command, args)
 
 
 if __name__ == "__main__":

@@ -23,6 +23,8 @@ folder under --work:
 6. gains_own_*: the four as commanded with the own start as the reference        -> gains_NAME_own.json
 7. inset: step 1 with the shape searched for the battery with a 30 mm narrower stance as the reference
    (`searched_start_table.INSET_REFERENCE`; --inset-reference)                   -> prototype_NAME_inset.json
+8. conditions_*: step 7 with a 3 kg payload, and on floors of friction 0.4 and 1.2 (`CONDITION_SETTINGS`: past
+   the ranges the recipes train over); joined by `tools/merge_walks.py conditions`  -> conditions_NAME.json
 
 The prototype-run steps (all but compare) walk each seed once: a step's folder holds batches, one per run,
 named by their seeds (`seed40-seed41-...`), and the step's walks are the batches' joined (`all_seeds/`). Every walk
@@ -34,7 +36,7 @@ walks, in `ship_searched_command.txt`); the seeds no kept batch holds are walked
 were re-extracted or re-picked is walked again (with its batch's other seeds). compare walks every seed in one
 run (its references are walked once per lift for all seeds) and is kept the same way.
 
-The seven files are made in --work (the gains runs joined into --work/joined/) and copied into
+The eight files are made in --work (the gains and the conditions runs joined into --work/joined/) and copied into
 --results/figures_input/ once every step and join has succeeded, replacing the ones there. --force walks every step
 again. `--quick` walks every step at 1.0 m/s with short walks (2 m and one draw; 2 s), into a --results folder other
 than the repository's: a check that the chain runs, not a result.
@@ -62,6 +64,10 @@ from cyberdog.provenance import repo_relative  # noqa: E402
 EQ7_REFERENCE = REPO / "results/searched_shapes/optimized_trajectory_H0.085_placed_loop.json"  # Eq. 7, H 0.085 m
 COMMAND_FILE = "ship_searched_command.txt"
 GAIN_SCALES = (0.5, 2.0)
+# step 8's settings (`cyberdog.analysis.conditions_table.CONDITIONS`), beyond the recipes' training ranges (mass scale
+# 0.9-1.15 on 13.6 kg, floor friction 0.8 x 0.7-1.3): by step name, its --set
+CONDITION_SETTINGS = {"payload3": "robot.payload=3.0", "friction0.4": "sim.ground_friction=0.4",
+                      "friction1.2": "sim.ground_friction=1.2"}
 QUICK = {"prototype": ["--speeds", "1.0", "--prototype-distance", "2", "--prototype-draws", "1"],
          "compare": ["--speeds", "1.0", "--duration", "2"]}
 
@@ -86,7 +92,9 @@ def steps(own_start: Path, eq7: Path, inset: Path) -> list[tuple[str, list, str]
                     (f"gains_{tag}_recommanded", ["prototype", *gains, "--no-prototype-reference",
                                                   "--pd-matched-from-default"], "prototype.json"),
                     (f"gains_own_{tag}", ["prototype", *gains, *own], "prototype.json")]
-    return out + [("inset", ["prototype", "--prototype-reference", inset], "prototype.json")]
+    out.append(("inset", ["prototype", "--prototype-reference", inset], "prototype.json"))
+    return out + [(f"conditions_{tag}", ["prototype", "--prototype-reference", inset, "--set", setting],
+                   "prototype.json") for tag, setting in CONDITION_SETTINGS.items()]
 
 
 def with_paths(argv: list, paths: list) -> list:
@@ -255,12 +263,14 @@ def main(argv: list[str] | None = None) -> int:
             made[folder] = run_batched_step(work / folder, step_argv, result, by_seed,
                                             step_references(step_argv), args.workers, args.force) / result
 
-    joined = work / "joined"  # the gains runs joined here first: nothing is shipped until all seven files are made
+    joined = work / "joined"  # the runs joined here first: nothing is shipped until all eight files are made
     joined.mkdir(parents=True, exist_ok=True)
     own_gains = [f for f in made if f.startswith("gains_own_")]
     gains = [f for f in made if f.startswith("gains_") and f not in own_gains]
-    for folders, target in ((gains, recipe.gains_source), (own_gains, recipe.own_gains_source)):
-        merge = [sys.executable, "tools/merge_walks.py", "gains", *(made[f].parent for f in folders), "--out",
+    conditions = [f for f in made if f.startswith("conditions_")]
+    for kind, folders, target in (("gains", gains, recipe.gains_source), ("gains", own_gains, recipe.own_gains_source),
+                                  ("conditions", conditions, recipe.conditions_source)):
+        merge = [sys.executable, "tools/merge_walks.py", kind, *(made[f].parent for f in folders), "--out",
                  joined / target, "--force"]
         print("\n$ python " + " ".join(str(w) for w in merge[1:]), flush=True)
         if subprocess.run([str(w) for w in merge]).returncode != 0:
@@ -272,11 +282,12 @@ def main(argv: list[str] | None = None) -> int:
                            ("mujoco", f"prototype_{recipe.name}_mujoco.json"), ("own", recipe.own_start_source),
                            ("inset", recipe.inset_source),
                            (recipe.gains_source, recipe.gains_source),
-                           (recipe.own_gains_source, recipe.own_gains_source)):
+                           (recipe.own_gains_source, recipe.own_gains_source),
+                           (recipe.conditions_source, recipe.conditions_source)):
         shutil.copyfile(made[source], figures / target)
     print(f"\nwrote {figures}/: {recipe.prototype_source}, {recipe.compare_source}, prototype_{recipe.name}_mujoco"
           f".json, {recipe.own_start_source}, {recipe.gains_source}, {recipe.own_gains_source}, "
-          f"{recipe.inset_source}; the table: python "
+          f"{recipe.inset_source}, {recipe.conditions_source}; the table: python "
           f"tools/make_readme_tables.py --table {recipe.name}")
     return 0
 

@@ -23,7 +23,7 @@ def reference_labels(reference: str) -> tuple[str, str]:
 SEARCHED_SAVING, VS_SEARCHED = reference_labels(SEARCHED)
 
 
-def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) -> list[str] | None:
+def saving_cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) -> list[str] | None:
     """The battery saving of `trajectory`'s walks at each speed (with the walks that did not count), None if it
     has none."""
     by = {r["speed_mps"]: r for r in ps.summary_rows(walks) if r["robot"] == robot and r["trajectory"] == trajectory}
@@ -33,14 +33,14 @@ def _cells(walks: list[dict], trajectory: str, robot: str, speeds: list[float]) 
             for v in speeds]
 
 
-def _searched_rows(walks: list[dict], robot: str, speeds: list[float], reference: str = SEARCHED
+def reference_rows(walks: list[dict], robot: str, speeds: list[float], reference: str = SEARCHED
                    ) -> list[tuple[str, list[str]]]:
     """The reference's own saving and the learned paths' against it (`reference_labels(reference)`), where the
     walks hold the prototype run's reference row (`ps.REFERENCE`, walked under the same gains)."""
     rows = {(r["trajectory"], r["speed_mps"]): r for r in ps.summary_rows(walks) if r["robot"] == robot}
     if not any(t == ps.REFERENCE for t, _ in rows):
         return []
-    searched = _cells(walks, ps.REFERENCE, robot, speeds) or []
+    searched = saving_cells(walks, ps.REFERENCE, robot, speeds) or []
     vs = ["–" if ("learned", v) not in rows else mean_ci(rows["learned", v], "battery_vs_searched_pct", ".1f", " %",
                                                          sign=True) for v in speeds]
     return list(zip(reference_labels(reference), (searched, vs)))
@@ -61,16 +61,16 @@ def gains_rows(walks: list[dict], default_walks: list[dict], robot: str = "hardw
     for gain, scale in factors:
         at = [w for w in walks if (w["gain"], w["gain_scale"]) == (gain, scale)]
         for matched in (False, True):  # as commanded, then re-commanded
-            cells = _cells([w for w in at if bool(w["pd_matched"]) == matched], "learned", robot, speeds)
+            cells = saving_cells([w for w in at if bool(w["pd_matched"]) == matched], "learned", robot, speeds)
             if cells is not None:
                 label = f"{gain} {scale:g}×, {'re-commanded' if matched else 'as commanded'}"
                 rows.append((f"**{label}**", [f"**{c}**" for c in cells]) if matched else (label, cells))
             if not matched:  # where the run walked the searched shape under the same gains: both against it
                 rows += [(f"{gain} {scale:g}×, as commanded: {label}", cells)
-                         for label, cells in _searched_rows([w for w in at if not w["pd_matched"]], robot, speeds,
+                         for label, cells in reference_rows([w for w in at if not w["pd_matched"]], robot, speeds,
                                                             reference)]
         # the policies against the common trajectories as commanded
-        policy = _cells([w for w in at if not w["pd_matched"]], "policy", robot, speeds)
+        policy = saving_cells([w for w in at if not w["pd_matched"]], "policy", robot, speeds)
         if policy:
             rows.append((f"{gain} {scale:g}×, {POLICY_ROW}", policy))
     return rows
@@ -89,7 +89,7 @@ def gains_markdown(walks: list[dict], default_walks: list[dict], robot: str = "h
                if r["robot"] == robot and r["trajectory"] == "learned"}
     lines = _header("battery saving against the cheaper common trajectory", speeds)
     lines.append(_line(GAINS_DEFAULT_ROW, [mean_ci(default[v], "battery_saving_pct", ".1f", " %") for v in speeds]))
-    policy = _cells(default_policy_walks or [], "policy", robot, speeds)
+    policy = saving_cells(default_policy_walks or [], "policy", robot, speeds)
     if policy:
         lines.append(_line(GAINS_DEFAULT_POLICY_ROW, policy))
     lines += [_line(label, cells) for label, cells in gains_rows(walks, default_walks, robot)]

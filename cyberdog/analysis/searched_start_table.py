@@ -19,7 +19,10 @@ prototype walks are shipped):
   each gain, and what the policy adds to it there;
 - `prototype_NAME_inset.json`: the prototype run with the shape searched for the battery with a narrower stance as
   its reference (`INSET_REFERENCE`, `tools/optimize_trajectory.py --foot-inset 0.03`: the cheapest shape a search
-  that also places the feet finds): the paths' lead over it.
+  that also places the feet finds): the paths' lead over it;
+- `conditions_NAME.json`: `tools/merge_walks.py conditions` over that run made with a payload or another floor
+  (`cyberdog.analysis.conditions_table`, never tuning seeds): the saving under each, the narrower-stance shape's,
+  and the paths' lead over it.
 """
 from __future__ import annotations
 
@@ -30,6 +33,7 @@ from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
+from cyberdog.analysis.conditions_table import conditions_rows
 from cyberdog.analysis.gains_table import SEARCHED, SEARCHED_SAVING, gains_rows
 from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
@@ -89,6 +93,10 @@ class Recipe:
     @property
     def inset_source(self) -> str:  # the prototype run against the shape searched with a narrower stance
         return f"prototype_{self.name}_inset.json"
+
+    @property
+    def conditions_source(self) -> str:  # the inset run with a payload or on other floors (merge_walks conditions)
+        return f"conditions_{self.name}.json"
 
     @property
     def headline(self) -> str:  # the README's table of it
@@ -200,12 +208,14 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
                             gains_walks: list[dict] | None = None, robot: str = "hardware",
                             own_start_walks: list[dict] | None = None,
                             own_start_gains_walks: list[dict] | None = None,
-                            recipe: Recipe = SEARCHED_START, inset_walks: list[dict] | None = None) -> str:
+                            recipe: Recipe = SEARCHED_START, inset_walks: list[dict] | None = None,
+                            conditions_walks: list[dict] | None = None) -> str:
     """The table: per group of seeds (never tuned on, then tuned on) the prototype rows, the row against the shape
     searched with a narrower stance (`inset_walks`: the prototype run with it as its reference), the row against
     the recipe's own start (`own_start_walks`: the same with that start as its reference) and the Eq. 7 row,
-    then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone), and
-    the own start's under the gains (`own_start_gains_walks`: the gains runs with it as the reference)."""
+    then the gains rows of the fresh seeds (`gains_table.gains_rows`, of the fresh seeds' walks alone), the own
+    start's under the gains (`own_start_gains_walks`: the gains runs with it as the reference), and the fresh
+    seeds' rows with a payload or on other floors (`conditions_walks`: `conditions_table.conditions_rows`)."""
     speeds = sorted({w["speed_mps"] for w in prototype_walks if w["trajectory"] == "learned" and w["robot"] == robot})
     if not speeds:
         raise ValueError(f"the walks hold no learned path on the {robot!r} robot")
@@ -219,19 +229,27 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
                 lines += _vs_reference_lines(reference[kind][1], row, reference[kind][0], speeds, robot)
         if kind in compared:
             lines += _eq7_lines(compared[kind][1], name, speeds)
-    lines += _gains_lines(_fresh_gains(gains_walks, groups, recipe), groups, robot, recipe)
-    lines += _gains_lines(_fresh_gains(own_start_gains_walks, groups, recipe), groups, robot, recipe,
+    lines += _gains_lines(_fresh_walks(gains_walks, groups, recipe), groups, robot, recipe)
+    lines += _gains_lines(_fresh_walks(own_start_gains_walks, groups, recipe), groups, robot, recipe,
                           reference=OWN_START)
+    lines += _conditions_lines(_fresh_walks(conditions_walks, groups, recipe), speeds, robot)
     return "\n".join(lines)
+
+
+def _conditions_lines(walks: list[dict], speeds: list[float], robot: str) -> list[str]:
+    """The conditions rows of the fresh seeds' walks (`_fresh_walks`), named by those walks' own seeds."""
+    if not (name := _seeds_of(walks)):
+        return []
+    return [line(f"{label}, {name}", cells) for label, cells in conditions_rows(walks, speeds, robot)]
 
 
 def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, recipe: Recipe,
                  reference: str = SEARCHED) -> list[str]:
-    """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks (`_fresh_gains`), named by those
+    """The gains rows (`gains_table.gains_rows`) of the fresh seeds' gains walks (`_fresh_walks`), named by those
     walks' own seeds; the default gains' walks of the fresh groups they fall in give the rows their speeds. With
     another `reference` than the searched shape, only that reference's rows (the paths' own rows are the searched
     shape's runs')."""
-    if not (name := _gains_seeds(gains_walks)):
+    if not (name := _seeds_of(gains_walks)):
         return []
     lines, default = [], [w for kind in _gains_groups(gains_walks, groups, recipe) for w in groups[kind][1]]
     for label, cells in gains_rows(gains_walks, default, robot, reference):
@@ -250,16 +268,16 @@ def _gains_groups(gains_walks: list[dict], groups: dict, recipe: Recipe) -> list
     return sorted({f"fresh{_fresh_set(w, recipe)}" for w in gains_walks if w.get("seed")} & set(groups))
 
 
-def _fresh_gains(gains_walks: list[dict] | None, groups: dict, recipe: Recipe) -> list[dict]:
-    """The gains walks of the fresh seeds whose group the table shows (a tuning seed's, or a seed of a set with no
-    prototype walks, would be counted under names that are not its own)."""
-    return [w for w in gains_walks or [] if w.get("seed") and not _is_tuned(w, recipe)
+def _fresh_walks(walks: list[dict] | None, groups: dict, recipe: Recipe) -> list[dict]:
+    """The walks (of the gains or the conditions runs) of the fresh seeds whose group the table shows (a tuning
+    seed's, or a seed of a set with no prototype walks, would be counted under names that are not its own)."""
+    return [w for w in walks or [] if w.get("seed") and not _is_tuned(w, recipe)
             and f"fresh{_fresh_set(w, recipe)}" in groups]
 
 
-def _gains_seeds(gains_walks: list[dict]) -> str | None:
-    """"seeds 20–24": the seeds the gains walks were walked on (None where there are none)."""
-    seeds = [w["seed"] for w in gains_walks if w.get("seed")]
+def _seeds_of(walks: list[dict]) -> str | None:
+    """"seeds 20–24": the seeds the walks were walked on (None where there are none)."""
+    seeds = [w["seed"] for w in walks if w.get("seed")]
     return seeds_named(seeds) if seeds else None
 
 
@@ -295,7 +313,7 @@ def headline_rows(prototype_walks: list[dict], gains_walks: list[dict] | None = 
                 for row in (SAVING_ROW, VS_SEARCHED_ROW, *([VS_INSET_ROW] if both else []))]
     room = HEADLINE_MAX_ROWS - len(required) + sum(with_inset)
     optional = [EQ7_ROW.format(seeds=fresh[0])]
-    if gains := _gains_seeds(_fresh_gains(gains_walks, groups, recipe)):
+    if gains := _seeds_of(_fresh_walks(gains_walks, groups, recipe)):
         first, *others = (GAINS_ROW.format(gains=f"{g}, as commanded", seeds=gains) for g in HEADLINE_GAINS)
         optional += [first, GAINS_SEARCHED_ROW.format(gains=f"{HEADLINE_SEARCHED_GAINS}, as commanded",
                                                       row=SEARCHED_SAVING, seeds=gains), *others]
@@ -331,4 +349,4 @@ def make_table(results: Path, recipe: Recipe = SEARCHED_START) -> str | None:
         _read(results, recipe.prototype_source), _read(results, recipe.compare_source),
         _read(results, recipe.gains_source), own_start_walks=_read(results, recipe.own_start_source),
         own_start_gains_walks=_read(results, recipe.own_gains_source), recipe=recipe,
-        inset_walks=_read(results, recipe.inset_source))
+        inset_walks=_read(results, recipe.inset_source), conditions_walks=_read(results, recipe.conditions_source))
