@@ -211,7 +211,7 @@ def test_ship_searched_quick_on_a_shipped_path(tmp_path):
     learned, results = tmp_path / "learned", tmp_path / "results"
     learned.mkdir()
     shutil.copyfile(RESULTS / "battery_searched_wide" / "paths" / "seed30_1mps.json", learned / "seed30_1mps.json")
-    # seventeen evaluate.py processes: about 3 min of CPU, several times that on a machine busy with other work
+    # twenty evaluate.py processes: about 3.5 min of CPU, several times that on a machine busy with other work
     script(tmp_path, "tools/ship_searched.py", "searched_wide", "--learned", learned, "--work", tmp_path / "work",
            "--results", results, "--workers", "1", "--quick", timeout=1800)
     figures = results / "figures_input"
@@ -223,3 +223,7 @@ def test_ship_searched_quick_on_a_shipped_path(tmp_path):
         assert rows and {r[key] for r in rows} == {1.0} and {r["seed"] for r in rows} >= {"seed30"}, name
     gains = json.loads((figures / "gains_searched_wide.json").read_text())
     assert len({(r["gain"], r["gain_scale"], r["pd_matched"]) for r in gains}) == 8  # 2 gains x 2 factors x 2 kinds
+    conditions = json.loads((figures / "conditions_searched_wide.json").read_text())
+    assert {(r["condition"], r["condition_value"]) for r in conditions} == {
+        ("robot.payload", 3.0), ("sim.ground_friction", 0.4), ("sim.ground_friction", 1.2)}
+    assert {r["seed"] for r in conditions} >= {"seed30"}
