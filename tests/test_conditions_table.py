@@ -3,16 +3,20 @@ run by the one setting it changed, the table's rows are each condition's own wal
 and the shipped walks hold what the README says of them."""
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 from pathlib import Path
 
 import pytest
+import yaml
 
+from cyberdog import config as C
 from cyberdog.analysis import conditions_table as ct
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import searched_start_table as sst
 from cyberdog.analysis.markdown_cells import mean_ci
+from cyberdog.config.walked import WalkedRobot
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = ROOT / "results" / "figures_input"
@@ -66,6 +70,10 @@ def test_the_recipes_table_holds_the_fresh_seeds_conditions_rows_alone():
     assert table["the saving with a 3 kg payload, seeds 1–4"] == _saving(fresh)
     assert not any("seed0" in k or "seeds 0–4" in k for k in table)
     assert "the saving with a 3 kg payload, seeds 1–4" not in _rows(sst.searched_start_markdown(walks))
+    fewer = _at([w for w in fresh if w["seed"] != "seed4"], "sim.ground_friction", 0.4)  # a run over fewer seeds
+    table = _rows(sst.searched_start_markdown(walks, conditions_walks=_at(fresh, "robot.payload", 3.0) + fewer))
+    named = {"the saving with a 3 kg payload, seeds 1–4", "the saving with floor friction 0.4, seeds 1–3"}
+    assert named <= set(table)
 
 
 def _run(folder: Path, config: dict) -> Path:
@@ -73,6 +81,36 @@ def _run(folder: Path, config: dict) -> Path:
     (folder / "config.yaml").write_text(json.dumps(config))  # (YAML reads JSON)
     (folder / "prototype.json").write_text(json.dumps([{"trajectory": "learned", "seed": "seed20"}]))
     return folder
+
+
+def _walked(folder: Path, *settings: str) -> Path:
+    """A run folder whose config.yaml is written as `evaluate.py prototype` writes it (every section, the gains per
+    joint, a hardware model), with `settings` (`section.field=value`) changed."""
+    walk = C.WalkConfig()
+    for setting in settings:
+        key, value = setting.split("=")
+        section, field = key.split(".")
+        value = yaml.safe_load(value)
+        value = tuple(value) if isinstance(value, list) else float(value)
+        walk = dataclasses.replace(walk, **{section: dataclasses.replace(getattr(walk, section), **{field: value})})
+    C.save_walked(WalkedRobot(walk, C.HardwareConfig()), folder / "config.yaml")
+    (folder / "prototype.json").write_text(json.dumps([{"trajectory": "learned", "seed": "seed20"}]))
+    return folder
+
+
+def test_runs_written_as_evaluate_writes_them_merge_and_must_agree_beyond_their_condition(tmp_path):
+    heavy = _walked(tmp_path / "heavy", "robot.payload=3.0")
+    slippery = _walked(tmp_path / "slippery", "sim.ground_friction=0.4")
+    assert [(w["condition"], w["condition_value"]) for w in merge.conditions_walks([heavy, slippery])] == [
+        ("robot.payload", 3.0), ("sim.ground_friction", 0.4)]
+    mujoco = _walked(tmp_path / "mujoco", "sim.ground_friction=1.2")
+    config = yaml.safe_load((mujoco / "config.yaml").read_text())
+    config["sim"]["engine"] = "mujoco"
+    (mujoco / "config.yaml").write_text(yaml.safe_dump(config))
+    with pytest.raises(ValueError, match="differ beyond their conditions"):
+        merge.conditions_walks([heavy, mujoco])
+    with pytest.raises(ValueError, match="gains"):
+        merge.conditions_walks([_walked(tmp_path / "kd2", "robot.payload=3.0", "pid.kd=[4.0,4.0,4.0]")])
 
 
 def test_the_merge_labels_each_run_by_the_one_setting_it_changed(tmp_path, capsys):

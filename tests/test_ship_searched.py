@@ -101,7 +101,8 @@ def test_the_walks_are_the_documented_steps_joined_into_the_tables_inputs(tmp_pa
     assert "--pd-matched-from-default" in recommanded and "--no-prototype-reference" in recommanded
     assert after(by_folder["gains_own_kd0.5"], "--prototype-reference") == [own]
     assert after(by_folder["inset"], "--prototype-reference") == [tool.INSET_REFERENCE]
-    for tag, setting in (("payload3", "robot.payload=3.0"), ("friction0.4", "sim.ground_friction=0.4")):
+    for tag, setting in (("payload3", "robot.payload=3.0"), ("friction0.4", "sim.ground_friction=0.4"),
+                         ("friction1.2", "sim.ground_friction=1.2")):
         assert after(by_folder[f"conditions_{tag}"], "--prototype-reference") == [tool.INSET_REFERENCE]
         assert after(by_folder[f"conditions_{tag}"], "--set") == [setting]
 

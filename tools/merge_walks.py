@@ -29,13 +29,15 @@ conditions: a searched-start recipe's conditions rows' walks from `evaluate.py p
   of `cyberdog.analysis.conditions_table.CONDITIONS` (a payload, the floor's friction) set apart from its default
   and the drivers' gains at theirs, read from its `config.yaml`: each run's walks labelled `condition` (the setting)
   and `condition_value`, into one JSON file (`results/figures_input/conditions_NAME.json`). A run that changes none
-  of them, several, or the gains is refused, as is a setting and value given twice. Exit 2 on a refused run or an
-  existing --out.
+  of them, several, or the gains is refused, as are a setting and value given twice and runs whose settings differ
+  beyond their conditions (another engine, robot or trot); the reference shape is not in `config.yaml`: each run
+  must walk the table's (step 8 of `tools/ship_searched.py`). Exit 2 on a refused run or an existing --out.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -139,33 +141,57 @@ def gains_walks(folders: list[Path]) -> list[dict]:
 
 
 # ---- conditions -----------------------------------------------------------------------------------------------
-def run_condition(folder: Path) -> tuple[str, float]:
-    """(setting, value) of the one condition a prototype run folder's config changes; ValueError otherwise."""
+def _gains_are_default(pid: dict) -> bool:
+    """The drivers' kp and kd of a run's `pid` section are PIDConfig()'s (per joint)."""
+    default = PIDConfig()
+    try:
+        return all([float(v) for v in pid.get(g, getattr(default, g))] == [float(v) for v in getattr(default, g)]
+                   for g in ("kp", "kd"))
+    except (TypeError, ValueError):  # a gain that is not a number per joint
+        return False
+
+
+def run_condition(folder: Path) -> tuple[str, float, dict]:
+    """(setting, value) of the one condition a prototype run folder's config changes, and the rest of its config
+    (the condition taken out: what every run of one table must share); ValueError otherwise."""
     config = yaml.safe_load((folder / "config.yaml").read_text()) or {}
-    default = WalkConfig()
-    changed = {}
+    if not isinstance(config, dict):
+        raise ValueError(f"{folder}: its config.yaml is not a mapping of sections")
+    default, changed, rest = WalkConfig(), {}, json.loads(json.dumps(config))
     for setting in CONDITIONS:
         section, field = setting.split(".")
-        value = float((config.get(section) or {}).get(field, getattr(getattr(default, section), field)))
-        if value != getattr(getattr(default, section), field):
+        base = getattr(getattr(default, section), field)
+        raw = (config.get(section) or {}).get(field, base)
+        try:
+            value = round(float(raw), 6)  # as the rows print it
+        except (TypeError, ValueError):
+            raise ValueError(f"{folder}: {setting} = {raw!r} is not a number") from None
+        if not math.isclose(value, base):
             changed[setting] = value
-    pid = config.get("pid") or {}
-    if any([float(v) for v in pid.get(g, getattr(default.pid, g))] != list(getattr(default.pid, g))
-           for g in ("kp", "kd")):
+        (rest.get(section) or {}).pop(field, None)
+        if rest.get(section) == {}:  # a section that held the condition alone
+            rest.pop(section)
+    if not _gains_are_default(config.get("pid") or {}):
         raise ValueError(f"{folder}: its drivers' gains are not the defaults (a gains run: merge_walks.py gains)")
     if len(changed) != 1:
         raise ValueError(f"{folder}: a conditions run changes one of {', '.join(CONDITIONS)}, this one changes "
                          f"{', '.join(sorted(changed)) or 'none'}")
-    return next(iter(changed.items()))
+    return (*next(iter(changed.items())), rest)
 
 
 def conditions_walks(folders: list[Path]) -> list[dict]:
-    walks, seen = [], {}
+    """The runs' walks labelled by their condition; ValueError on a condition given twice or runs whose settings
+    differ beyond their conditions (another engine, robot or trot: not one table's)."""
+    walks, seen, shared = [], {}, None
     for folder in folders:
-        setting, value = run_condition(folder)
+        setting, value, rest = run_condition(folder)
         if (setting, value) in seen:
             raise ValueError(f"{folder}: {setting} = {value:g} is also {seen[setting, value]}")
+        if shared is not None and rest != shared[1]:
+            other = sorted(k for k in {*rest, *shared[1]} if rest.get(k) != shared[1].get(k))
+            raise ValueError(f"{folder} and {shared[0]} differ beyond their conditions (in {', '.join(other)})")
         seen[setting, value] = folder
+        shared = shared or (folder, rest)
         rows = json.loads((folder / "prototype.json").read_text())
         walks += [dict(r, condition=setting, condition_value=value) for r in rows]
     return walks

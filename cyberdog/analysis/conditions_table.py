@@ -12,7 +12,7 @@ from cyberdog.analysis.gains_table import reference_rows, saving_cells
 
 # the settings a conditions run may change (`--set SETTING=VALUE`), each with how a row names its value
 CONDITIONS = {"robot.payload": "a {:g} kg payload", "sim.ground_friction": "floor friction {:g}"}
-INSET_SHAPE = "the shape searched with a narrower stance"  # the conditions runs' reference, as their rows name it
+INSET_SHAPE = "the shape searched for the battery with a narrower stance"  # the runs' reference, as rows name it
 
 
 def condition_label(setting: str, value: float) -> str:
@@ -22,16 +22,21 @@ def condition_label(setting: str, value: float) -> str:
     return CONDITIONS[setting].format(value)
 
 
+def conditions_of(walks: list[dict]) -> list[tuple[str, float]]:
+    """The (setting, value) runs the walks hold, in `CONDITIONS`' order and then by value; ValueError for a setting
+    not in `CONDITIONS`."""
+    runs = {(w["condition"], w["condition_value"]) for w in walks}
+    for setting, value in runs:
+        condition_label(setting, value)
+    return sorted(runs, key=lambda c: (list(CONDITIONS).index(c[0]), c[1]))
+
+
 def conditions_rows(walks: list[dict], speeds: list[float], robot: str = "hardware"
                     ) -> list[tuple[str, list[str]]]:
-    """(label, cells) per condition, in `CONDITIONS`' order and then by value: the paths' saving with it
-    ("with a 3 kg payload"), then the reference's saving and the paths' lead over it where the run walked the
-    reference (`INSET_SHAPE`)."""
-    order = list(CONDITIONS)
-    runs = sorted({(w["condition"], w["condition_value"]) for w in walks},
-                  key=lambda c: (order.index(c[0]) if c[0] in order else len(order), c[0], c[1]))
+    """(label, cells) per condition (`conditions_of`' order): the paths' saving with it ("with a 3 kg payload"),
+    then the reference's saving and the paths' lead over it where the run walked the reference (`INSET_SHAPE`)."""
     rows = []
-    for setting, value in runs:
+    for setting, value in conditions_of(walks):
         label = condition_label(setting, value)
         at = [w for w in walks if (w["condition"], w["condition_value"]) == (setting, value)]
         cells = saving_cells(at, "learned", robot, speeds)

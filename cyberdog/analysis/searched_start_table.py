@@ -33,7 +33,7 @@ from pathlib import Path
 
 from cyberdog.analysis import prototype_summary as ps
 from cyberdog.analysis import table5
-from cyberdog.analysis.conditions_table import conditions_rows
+from cyberdog.analysis.conditions_table import conditions_of, conditions_rows
 from cyberdog.analysis.gains_table import SEARCHED, SEARCHED_SAVING, gains_rows
 from cyberdog.analysis.markdown_cells import fewer_seeds, header, line, mean_ci, missed_walks, seeds_named
 
@@ -237,10 +237,13 @@ def searched_start_markdown(prototype_walks: list[dict], compare_walks: list[dic
 
 
 def _conditions_lines(walks: list[dict], speeds: list[float], robot: str) -> list[str]:
-    """The conditions rows of the fresh seeds' walks (`_fresh_walks`), named by those walks' own seeds."""
-    if not (name := _seeds_of(walks)):
-        return []
-    return [line(f"{label}, {name}", cells) for label, cells in conditions_rows(walks, speeds, robot)]
+    """The conditions rows of the fresh seeds' walks (`_fresh_walks`), each condition's named by the seeds it
+    walked."""
+    lines = []
+    for run in conditions_of(walks):
+        at = [w for w in walks if (w["condition"], w["condition_value"]) == run]
+        lines += [line(f"{label}, {_seeds_of(at)}", cells) for label, cells in conditions_rows(at, speeds, robot)]
+    return lines
 
 
 def _gains_lines(gains_walks: list[dict], groups: dict, robot: str, recipe: Recipe,
