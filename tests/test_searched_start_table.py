@@ -112,6 +112,8 @@ def test_the_readme_headline_names_the_fresh_seeds_and_holds_their_rows(tmp_path
     gains = [w for g, k in (("kp", 0.5), ("kp", 2.0), ("kd", 2.0)) for w in _gains(walks, g, k)]
     gains += [{**w, "pd_matched": True} for w in _gains(walks, "kd", 2.0)]
     recipe = sst.SEARCHED_START
+    for name in (recipe.inset_source, recipe.conditions_source):  # the shipped seeds' runs: not these walks'
+        (tmp_path / name).unlink(missing_ok=True)
     for name, rows in ((recipe.prototype_source, walks), (recipe.compare_source, compared),
                        (recipe.gains_source, gains),
                        (recipe.own_start_source, walks)):  # the own start: here the same reference as the prototype's
